@@ -1,0 +1,574 @@
+//! Frequency responses: exact (linear and passive models), by numerical linearisation of the
+//! twin at rest (Jacobian → state space → delay applied on jω), and by simulation (sine
+//! dwell, first harmonic). Plus the |T| = 1 crossings and the delay from the phase slope.
+//!
+//! Two responses matter (section 4 and 6 of the paper):
+//! * the valve/actuator Bode `u̇/V_in` (G(s) for the linear model), open loop, platform still;
+//! * the transmissibility `T = ÿ/ẍ` with the controller `V = Kp·u + (Ki/s)·ẍ` in the loop.
+
+use crate::experiments;
+use crate::model::linear::{LinearModel, g_of};
+use crate::model::passive::PassiveModel;
+use crate::model::twin::Twin;
+use crate::model::{Inputs, Model, ModelKind};
+use crate::params::{ControllerParams, Params};
+use crate::scenario::{CommandSignal, PlatformMotion, PlatformSine};
+use crate::simulation::{Drive, SimError, step_for_rate};
+use nalgebra::{DMatrix, DVector};
+use num_complex::Complex64;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// One point of a frequency response.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct FrequencyPoint {
+    /// Frequency [Hz].
+    pub freq_hz: f64,
+    /// Complex response (SI ratio, e.g. [m/(s·V)] or [-]).
+    pub value: Complex64Ser,
+}
+
+/// A serialisable complex number.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Complex64Ser {
+    /// Real part.
+    pub re: f64,
+    /// Imaginary part.
+    pub im: f64,
+}
+
+impl From<Complex64> for Complex64Ser {
+    fn from(c: Complex64) -> Self {
+        Self { re: c.re, im: c.im }
+    }
+}
+
+impl FrequencyPoint {
+    /// Builds a point.
+    pub fn new(freq_hz: f64, value: Complex64) -> Self {
+        Self {
+            freq_hz,
+            value: value.into(),
+        }
+    }
+    /// The complex value.
+    pub fn complex(&self) -> Complex64 {
+        Complex64::new(self.value.re, self.value.im)
+    }
+    /// Magnitude.
+    pub fn mag(&self) -> f64 {
+        self.complex().norm()
+    }
+    /// Phase [rad] in (−π, π].
+    pub fn phase(&self) -> f64 {
+        self.complex().arg()
+    }
+}
+
+/// Unwraps a phase sequence [rad] so that consecutive values differ by less than π.
+pub fn unwrap_phase(phases: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(phases.len());
+    let mut offset = 0.0;
+    for (i, &p) in phases.iter().enumerate() {
+        if i > 0 {
+            let prev = phases[i - 1];
+            let d = p - prev;
+            if d > PI {
+                offset -= 2.0 * PI;
+            } else if d < -PI {
+                offset += 2.0 * PI;
+            }
+        }
+        out.push(p + offset);
+    }
+    out
+}
+
+/// Logarithmically spaced frequencies [Hz].
+pub fn log_space(f_lo: f64, f_hi: f64, n: usize) -> Vec<f64> {
+    if n < 2 {
+        return vec![f_lo];
+    }
+    let (a, b) = (f_lo.ln(), f_hi.ln());
+    (0..n)
+        .map(|i| (a + (b - a) * i as f64 / (n - 1) as f64).exp())
+        .collect()
+}
+
+/// Closed-loop transmissibility from the open-loop plant responses at one frequency.
+///
+/// The plant maps `[V_valve, ẍ]` to `[u, ÿ]`; `V_valve = e^(−jωτ)·V` and
+/// `V = Kp·u + Ki·ẍ/(jω)`. Eliminating V gives `T = ÿ/ẍ`.
+fn close_loop(
+    omega: f64,
+    tau: f64,
+    c: &ControllerParams,
+    u_v: Complex64,
+    u_x: Complex64,
+    y_v: Complex64,
+    y_x: Complex64,
+) -> Complex64 {
+    let jw = Complex64::new(0.0, omega);
+    let e = (-jw * tau).exp();
+    let v_per_x = (c.kp_v_per_m * u_x + c.ki_v_s_per_m / jw) / (1.0 - c.kp_v_per_m * u_v * e);
+    y_v * e * v_per_x + y_x
+}
+
+/// Transmissibility of the linear model with the controller, exact [-].
+pub fn linear_transmissibility(params: &Params, freq_hz: f64) -> Complex64 {
+    let w = 2.0 * PI * freq_hz;
+    let jw = Complex64::new(0.0, w);
+    // G without its delay; u = G/s·V_valve, ü = s·G·V_valve; ÿ = ẍ + ü.
+    let mut l = params.linear;
+    let tau = l.tau_s;
+    l.tau_s = 0.0;
+    let g = g_of(&l, w);
+    close_loop(
+        w,
+        tau,
+        &params.controller,
+        g / jw,
+        Complex64::new(0.0, 0.0),
+        g * jw,
+        Complex64::new(1.0, 0.0),
+    )
+}
+
+/// Transmissibility of the passive reference, exact [-].
+pub fn passive_transmissibility(params: &Params, freq_hz: f64) -> Complex64 {
+    PassiveModel::new(params).transmissibility(2.0 * PI * freq_hz)
+}
+
+/// `G(jω)` of the linear model, exact, with its delay [m/(s·V)].
+pub fn linear_bode(params: &Params, freq_hz: f64) -> Complex64 {
+    LinearModel::new(params).g(2.0 * PI * freq_hz)
+}
+
+/// A model linearised at a state: `ẏ = A·y + b_v·V_valve + b_x·ẍ`.
+#[derive(Debug, Clone)]
+pub struct LinearisedModel {
+    /// State matrix.
+    pub a: DMatrix<f64>,
+    /// Input column of the (delayed) valve command.
+    pub b_v: DVector<f64>,
+    /// Input column of the platform acceleration.
+    pub b_x: DVector<f64>,
+    /// Index of the relative position `u` in the state.
+    pub u_index: usize,
+    /// Index of the relative velocity `u̇` in the state.
+    pub du_index: usize,
+    /// Pure delay of the command [s].
+    pub tau_s: f64,
+    /// Characteristic scale of each state: the solves run on `D⁻¹·A·D` with `D = diag(scales)`,
+    /// which has the same eigenvalues but entries of similar size (the raw A spans 1e-7…1e14).
+    pub scales: Vec<f64>,
+}
+
+/// Characteristic scale of each twin state, for finite-difference steps.
+const TWIN_SCALES: [f64; 10] = [1e-2, 1e-1, 1e6, 1e6, 1e-4, 1e-4, 1e6, 1e6, 1e-4, 1e-1];
+
+/// Numerical Jacobian (central differences) of a model at state `y0` with zero inputs.
+pub fn linearise<M: Model<N>, const N: usize>(
+    model: &M,
+    y0: &[f64; N],
+    scales: &[f64; N],
+    tau_s: f64,
+) -> LinearisedModel {
+    let inputs = Inputs::default();
+    let mut a = DMatrix::zeros(N, N);
+    for j in 0..N {
+        let h = 1e-6 * scales[j];
+        let mut yp = *y0;
+        let mut ym = *y0;
+        yp[j] += h;
+        ym[j] -= h;
+        let fp = model.derivatives(0.0, &yp, &inputs);
+        let fm = model.derivatives(0.0, &ym, &inputs);
+        for i in 0..N {
+            a[(i, j)] = (fp[i] - fm[i]) / (2.0 * h);
+        }
+    }
+    let column = |make: &dyn Fn(f64) -> Inputs, h: f64| {
+        let fp = model.derivatives(0.0, y0, &make(h));
+        let fm = model.derivatives(0.0, y0, &make(-h));
+        DVector::from_iterator(N, (0..N).map(|i| (fp[i] - fm[i]) / (2.0 * h)))
+    };
+    let b_v = column(
+        &|v| Inputs {
+            v_valve: v,
+            xdd: 0.0,
+        },
+        1e-4,
+    );
+    let b_x = column(
+        &|x| Inputs {
+            v_valve: 0.0,
+            xdd: x,
+        },
+        1e-4,
+    );
+    LinearisedModel {
+        a,
+        b_v,
+        b_x,
+        u_index: 0,
+        du_index: 1,
+        tau_s,
+        scales: scales.to_vec(),
+    }
+}
+
+/// The twin linearised at rest.
+pub fn linearise_twin(params: &Params) -> LinearisedModel {
+    let twin = Twin::new(*params);
+    let y0 = twin.rest_state();
+    linearise(&twin, &y0, &TWIN_SCALES, params.valve.tau_s)
+}
+
+impl LinearisedModel {
+    /// `(jωI − A)⁻¹·[b_v b_x]` evaluated at ω: the state response to each input.
+    fn state_responses(&self, omega: f64) -> Option<(DVector<Complex64>, DVector<Complex64>)> {
+        let n = self.a.nrows();
+        let jw = Complex64::new(0.0, omega);
+        let a = self.scaled_a();
+        let m = DMatrix::from_fn(n, n, |i, j| {
+            let d = if i == j { jw } else { Complex64::new(0.0, 0.0) };
+            d - Complex64::new(a[(i, j)], 0.0)
+        });
+        let lu = m.lu();
+        let scale_in = |b: &DVector<f64>| {
+            DVector::from_iterator(
+                n,
+                (0..n).map(|i| Complex64::new(b[i] / self.scales[i], 0.0)),
+            )
+        };
+        let scale_out = |mut z: DVector<Complex64>| {
+            for i in 0..n {
+                z[i] *= self.scales[i];
+            }
+            z
+        };
+        Some((
+            scale_out(lu.solve(&scale_in(&self.b_v))?),
+            scale_out(lu.solve(&scale_in(&self.b_x))?),
+        ))
+    }
+
+    /// `D⁻¹·A·D`: similar to A, well scaled.
+    fn scaled_a(&self) -> DMatrix<f64> {
+        let n = self.a.nrows();
+        DMatrix::from_fn(n, n, |i, j| {
+            self.a[(i, j)] * self.scales[j] / self.scales[i]
+        })
+    }
+
+    /// `u̇/V_in` including the delay [m/(s·V)].
+    pub fn bode(&self, freq_hz: f64) -> Complex64 {
+        let w = 2.0 * PI * freq_hz;
+        match self.state_responses(w) {
+            Some((xv, _)) => xv[self.du_index] * (Complex64::new(0.0, -w * self.tau_s)).exp(),
+            None => Complex64::new(f64::NAN, f64::NAN),
+        }
+    }
+
+    /// Closed-loop transmissibility `ÿ/ẍ` with the controller [-].
+    pub fn transmissibility(&self, c: &ControllerParams, freq_hz: f64) -> Complex64 {
+        let w = 2.0 * PI * freq_hz;
+        let Some((sv, sx)) = self.state_responses(w) else {
+            return Complex64::new(f64::NAN, f64::NAN);
+        };
+        let jw = Complex64::new(0.0, w);
+        // ÿ = ü + ẍ and ü = jω·u̇.
+        let (u, du) = (self.u_index, self.du_index);
+        close_loop(
+            w,
+            self.tau_s,
+            c,
+            sv[u],
+            sx[u],
+            jw * sv[du],
+            jw * sx[du] + 1.0,
+        )
+    }
+
+    /// Eigenvalues of A [1/s].
+    pub fn eigenvalues(&self) -> Vec<Complex64> {
+        self.scaled_a()
+            .complex_eigenvalues()
+            .iter()
+            .copied()
+            .collect()
+    }
+}
+
+/// First harmonic `(2/T)·∫ s(t)·e^(−jωt) dt` of uniformly sampled data over an integer number
+/// of periods ending at the last sample (trapezoidal rule).
+pub fn first_harmonic(values: &[f64], dt: f64, t0: f64, freq_hz: f64, periods: usize) -> Complex64 {
+    let w = 2.0 * PI * freq_hz;
+    let t_window = periods as f64 / freq_hz;
+    let n_window = (t_window / dt).round() as usize;
+    if values.len() < n_window + 1 || n_window == 0 {
+        return Complex64::new(f64::NAN, f64::NAN);
+    }
+    let start = values.len() - 1 - n_window;
+    let mut acc = Complex64::new(0.0, 0.0);
+    for (k, v) in values[start..].iter().enumerate() {
+        let t = t0 + (start + k) as f64 * dt;
+        let weight = if k == 0 || k == n_window { 0.5 } else { 1.0 };
+        acc += weight * v * Complex64::new(0.0, -w * t).exp();
+    }
+    acc * 2.0 * dt / (n_window as f64 * dt)
+}
+
+/// Options of a simulated sine dwell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DwellOptions {
+    /// Settling time before the analysis window [s].
+    pub settle_s: f64,
+    /// Minimum analysis window [s] (rounded up to whole periods, at least 2).
+    pub min_window_s: f64,
+}
+
+impl Default for DwellOptions {
+    fn default() -> Self {
+        Self {
+            settle_s: 0.25,
+            min_window_s: 0.5,
+        }
+    }
+}
+
+fn dwell_periods(freq_hz: f64, opt: &DwellOptions) -> usize {
+    ((opt.min_window_s * freq_hz).ceil() as usize).max(2)
+}
+
+/// `u̇/V_in` of a model by an open-loop sine dwell `V = A·cos(2πft)`, platform still.
+pub fn simulated_bode(
+    params: &Params,
+    kind: ModelKind,
+    freq_hz: f64,
+    amplitude_v: f64,
+    opt: &DwellOptions,
+) -> Result<Complex64, SimError> {
+    let periods = dwell_periods(freq_hz, opt);
+    let t_end = opt.settle_s + periods as f64 / freq_hz;
+    let rate = 1.0 / step_for_rate(params.numerics.max_step_s, 1.0 / params.numerics.max_step_s);
+    let trace = experiments::valve_sine(params, kind, freq_hz, amplitude_v, t_end, rate)?;
+    let dt = 1.0 / rate;
+    let du = trace.channel(|s| s.du);
+    let v = trace.channel(|s| s.v_in);
+    let du1 = first_harmonic(&du, dt, 0.0, freq_hz, periods);
+    let v1 = first_harmonic(&v, dt, 0.0, freq_hz, periods);
+    Ok(du1 / v1)
+}
+
+/// Platform acceleration amplitude of a transmissibility dwell [m/s²]: 0.5 m/s², reduced at
+/// low frequency so the platform moves at most 5 mm (keeps the stroke far from its stops).
+pub fn dwell_platform_acceleration(freq_hz: f64) -> f64 {
+    let w = 2.0 * PI * freq_hz;
+    0.5_f64.min(w * w * 0.005)
+}
+
+/// `ÿ/ẍ` of a model by a closed-loop platform sine dwell (fade-in 1 s, then settle).
+pub fn simulated_transmissibility(
+    params: &Params,
+    kind: ModelKind,
+    freq_hz: f64,
+    opt: &DwellOptions,
+) -> Result<Complex64, SimError> {
+    let w = 2.0 * PI * freq_hz;
+    let amp = dwell_platform_acceleration(freq_hz) / (w * w);
+    let periods = dwell_periods(freq_hz, opt).max((1.0 * freq_hz).ceil() as usize);
+    let fade = 1.0;
+    let t_end = fade + 2.0 + opt.settle_s + periods as f64 / freq_hz;
+    let h = step_for_rate(params.numerics.max_step_s, 1000.0);
+    let platform = PlatformMotion::Sine(PlatformSine {
+        amplitude_m: amp,
+        freq_hz,
+        fade_in_s: fade,
+    });
+    let trace = experiments::run(
+        params,
+        kind,
+        experiments::closed_loop(params),
+        platform,
+        t_end,
+        1.0 / h,
+    )?;
+    let ydd = trace.channel(|s| s.ydd);
+    let xdd = trace.channel(|s| s.xdd);
+    Ok(first_harmonic(&ydd, h, 0.0, freq_hz, periods)
+        / first_harmonic(&xdd, h, 0.0, freq_hz, periods))
+}
+
+/// Runs `f` on every item in parallel (rayon), keeping the order.
+pub fn sweep<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync + Send) -> Vec<R> {
+    items.par_iter().map(f).collect()
+}
+
+/// A frequency where |T| crosses 1.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Crossing {
+    /// Frequency [Hz] (log-linear interpolation between the bracketing points).
+    pub freq_hz: f64,
+    /// True where |T| rises through 1 (the end of an isolation band).
+    pub rising: bool,
+}
+
+/// All |T| = 1 crossings of a sampled magnitude curve.
+pub fn unity_crossings(freqs_hz: &[f64], mags: &[f64]) -> Vec<Crossing> {
+    let mut out = Vec::new();
+    for i in 1..freqs_hz.len().min(mags.len()) {
+        let (a, b) = (mags[i - 1].ln(), mags[i].ln());
+        if !(a.is_finite() && b.is_finite()) {
+            continue;
+        }
+        if (a < 0.0) != (b < 0.0) {
+            let (fa, fb) = (freqs_hz[i - 1].ln(), freqs_hz[i].ln());
+            let f = fa + (fb - fa) * (0.0 - a) / (b - a);
+            out.push(Crossing {
+                freq_hz: f.exp(),
+                rising: b > a,
+            });
+        }
+    }
+    out
+}
+
+/// The upper edge of the first isolation band (|T| < 1) of an active suspension: the first
+/// rising crossing. `None` if |T| never rises back through 1 in the range.
+pub fn isolation_upper_edge(freqs_hz: &[f64], mags: &[f64]) -> Option<f64> {
+    unity_crossings(freqs_hz, mags)
+        .into_iter()
+        .find(|c| c.rising)
+        .map(|c| c.freq_hz)
+}
+
+/// The start of isolation of a passive suspension: the first falling crossing.
+pub fn isolation_lower_edge(freqs_hz: &[f64], mags: &[f64]) -> Option<f64> {
+    unity_crossings(freqs_hz, mags)
+        .into_iter()
+        .find(|c| !c.rising)
+        .map(|c| c.freq_hz)
+}
+
+/// Pure delay estimated from the phase slope, as in section 4.1: least-squares fit of the
+/// unwrapped phase [rad] against ω, `τ = −dφ/dω` [s].
+pub fn delay_from_phase_slope(freqs_hz: &[f64], phases_rad: &[f64]) -> f64 {
+    let ph = unwrap_phase(phases_rad);
+    let n = freqs_hz.len().min(ph.len()) as f64;
+    if n < 2.0 {
+        return f64::NAN;
+    }
+    let w: Vec<f64> = freqs_hz.iter().map(|f| 2.0 * PI * f).collect();
+    let mw = w.iter().sum::<f64>() / n;
+    let mp = ph.iter().sum::<f64>() / n;
+    let sxy: f64 = w.iter().zip(&ph).map(|(a, b)| (a - mw) * (b - mp)).sum();
+    let sxx: f64 = w.iter().map(|a| (a - mw).powi(2)).sum();
+    -sxy / sxx
+}
+
+/// Stability of the closed loop from the linearised twin: the largest real part of the
+/// delay-free closed-loop eigenvalues is not enough with a delay, so this evaluates the
+/// Nyquist-style margin of the position loop `L(jω) = −Kp·e^(−jωτ)·u/V` instead.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct LoopMargins {
+    /// Gain margin [-] (how much |Kp| could grow), ∞ if the phase never reaches −180°.
+    pub gain_margin: f64,
+    /// Frequency of the gain margin [Hz].
+    pub gain_margin_freq_hz: f64,
+    /// Phase margin [deg] at the loop's unity-gain frequency.
+    pub phase_margin_deg: f64,
+    /// Unity-gain frequency [Hz].
+    pub crossover_hz: f64,
+}
+
+impl LoopMargins {
+    /// Stable if both margins are positive.
+    pub fn stable(&self) -> bool {
+        self.gain_margin > 1.0 && self.phase_margin_deg > 0.0
+    }
+}
+
+/// Margins of the position loop for a `u/V_valve` response function (without the delay).
+pub fn loop_margins(
+    u_per_v: impl Fn(f64) -> Complex64,
+    tau_s: f64,
+    kp_v_per_m: f64,
+) -> LoopMargins {
+    if kp_v_per_m > 0.0 {
+        // Positive feedback around an integrating plant: unstable at any gain.
+        return LoopMargins {
+            gain_margin: 0.0,
+            gain_margin_freq_hz: 0.0,
+            phase_margin_deg: f64::NEG_INFINITY,
+            crossover_hz: f64::NAN,
+        };
+    }
+    let freqs = log_space(0.01, 200.0, 2000);
+    let loop_gain: Vec<Complex64> = freqs
+        .iter()
+        .map(|&f| {
+            let w = 2.0 * PI * f;
+            // Negative feedback form: V = Kp·u with Kp < 0 ⇒ L = −Kp·P.
+            -kp_v_per_m * u_per_v(f) * Complex64::new(0.0, -w * tau_s).exp()
+        })
+        .collect();
+    let mags: Vec<f64> = loop_gain.iter().map(|l| l.norm()).collect();
+    let phases = unwrap_phase(&loop_gain.iter().map(|l| l.arg()).collect::<Vec<_>>());
+    let mut m = LoopMargins {
+        gain_margin: f64::INFINITY,
+        gain_margin_freq_hz: f64::NAN,
+        phase_margin_deg: f64::INFINITY,
+        crossover_hz: f64::NAN,
+    };
+    for i in 1..freqs.len() {
+        if m.crossover_hz.is_nan() && (mags[i - 1] - 1.0) * (mags[i] - 1.0) <= 0.0 {
+            m.crossover_hz = freqs[i];
+            m.phase_margin_deg = 180.0 + phases[i].to_degrees();
+        }
+        let (pa, pb) = (phases[i - 1] + PI, phases[i] + PI);
+        if m.gain_margin_freq_hz.is_nan() && pa * pb <= 0.0 && pa != pb {
+            m.gain_margin_freq_hz = freqs[i];
+            m.gain_margin = 1.0 / mags[i];
+        }
+    }
+    m
+}
+
+/// Position-loop margins of the linear model.
+pub fn linear_margins(params: &Params) -> LoopMargins {
+    let mut l = params.linear;
+    let tau = l.tau_s;
+    l.tau_s = 0.0;
+    loop_margins(
+        |f| {
+            let w = 2.0 * PI * f;
+            g_of(&l, w) / Complex64::new(0.0, w)
+        },
+        tau,
+        params.controller.kp_v_per_m,
+    )
+}
+
+/// Position-loop margins of the twin linearised at rest.
+pub fn twin_margins(lin: &LinearisedModel, kp_v_per_m: f64) -> LoopMargins {
+    loop_margins(
+        |f| match lin.state_responses(2.0 * PI * f) {
+            Some((sv, _)) => sv[lin.u_index],
+            None => Complex64::new(f64::NAN, f64::NAN),
+        },
+        lin.tau_s,
+        kp_v_per_m,
+    )
+}
+
+/// A valve chirp on the twin (platform still): useful for a quick Bode by FFT.
+pub fn chirp_drive(amplitude_v: f64, f0_hz: f64, f1_hz: f64, duration_s: f64) -> Drive {
+    Drive::OpenLoop(CommandSignal::Chirp {
+        amplitude_v,
+        f0_hz,
+        f1_hz,
+        duration_s,
+    })
+}

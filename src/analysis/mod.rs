@@ -1,0 +1,4 @@
+//! Analysis of models and traces: frequency responses and vibration metrics.
+
+pub mod frequency_response;
+pub mod metrics;

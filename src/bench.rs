@@ -1,0 +1,158 @@
+//! `seat-twin bench`: real-time factors, accuracy against a 10× finer step and the Table 1
+//! sweep time, measured on this machine. (The criterion benches in `benches/` measure the same
+//! kernels with statistics.)
+
+use crate::analysis::frequency_response as fr;
+use crate::experiments;
+use crate::model::ModelKind;
+use crate::params::Params;
+use crate::scenario::{PlatformMotion, RandomRide};
+use crate::simulation::{SimError, Trace};
+use std::fmt::Write;
+use std::time::Instant;
+
+/// Accuracy of a run against the same run at a 10× finer step.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Accuracy {
+    /// Step of the run [s].
+    pub step_s: f64,
+    /// Largest |ÿ − ÿ_fine| over the record [m/s²].
+    pub max_ydd_error: f64,
+    /// RMS of ÿ − ÿ_fine [m/s²].
+    pub rms_ydd_error: f64,
+    /// Largest |u − u_fine| [m].
+    pub max_u_error: f64,
+}
+
+/// The random ride used by the bench (10 s, seed 1, paper's band and level).
+pub fn bench_ride(duration_s: f64) -> PlatformMotion {
+    PlatformMotion::Sampled(
+        RandomRide {
+            duration_s,
+            fade_in_s: 1.0,
+            ..Default::default()
+        }
+        .generate(),
+    )
+}
+
+/// Runs the closed-loop random ride on `kind` with internal step `step_s`, recorded at 1 kHz.
+pub fn ride_run(
+    params: &Params,
+    kind: ModelKind,
+    ride: &PlatformMotion,
+    duration_s: f64,
+    step_s: f64,
+) -> Result<Trace, SimError> {
+    let mut p = *params;
+    p.numerics.max_step_s = step_s;
+    experiments::run(
+        &p,
+        kind,
+        experiments::closed_loop(&p),
+        ride.clone(),
+        duration_s,
+        1000.0,
+    )
+}
+
+/// Compares a run at `step_s` with one at `step_s / 10` (both recorded at 1 kHz).
+pub fn accuracy(
+    params: &Params,
+    ride: &PlatformMotion,
+    duration_s: f64,
+    step_s: f64,
+) -> Result<Accuracy, SimError> {
+    let coarse = ride_run(params, ModelKind::Twin, ride, duration_s, step_s)?;
+    let fine = ride_run(params, ModelKind::Twin, ride, duration_s, step_s / 10.0)?;
+    let mut max_e: f64 = 0.0;
+    let mut sum2 = 0.0;
+    let mut max_u: f64 = 0.0;
+    let n = coarse.samples.len().min(fine.samples.len());
+    for (a, b) in coarse.samples.iter().zip(&fine.samples) {
+        let e = a.ydd - b.ydd;
+        max_e = max_e.max(e.abs());
+        sum2 += e * e;
+        max_u = max_u.max((a.u - b.u).abs());
+    }
+    Ok(Accuracy {
+        step_s,
+        max_ydd_error: max_e,
+        rms_ydd_error: (sum2 / n.max(1) as f64).sqrt(),
+        max_u_error: max_u,
+    })
+}
+
+fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+    let mut best = f64::INFINITY;
+    let mut last = None;
+    for _ in 0..n {
+        let t0 = Instant::now();
+        let r = f();
+        best = best.min(t0.elapsed().as_secs_f64());
+        last = Some(r);
+    }
+    (best, last.expect("n ≥ 1"))
+}
+
+/// Runs the benchmark and returns a Markdown summary.
+pub fn run_bench(params: &Params) -> Result<String, SimError> {
+    let mut out = String::new();
+    let duration = 10.0;
+    let ride = bench_ride(duration);
+    let h = params.numerics.max_step_s;
+    let _ = writeln!(
+        out,
+        "# seat-twin bench\n\nmachine: {} logical cores; preset step {:.1e} s; ride 10 s \
+         (closed loop, paper controller)\n",
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+        h
+    );
+    let _ = writeln!(
+        out,
+        "| model | wall for 10 s simulated | real-time factor | RHS evaluations |\n|---|---|---|---|"
+    );
+    for kind in [ModelKind::Twin, ModelKind::Linear, ModelKind::Passive] {
+        let (wall, trace) = best_of(5, || ride_run(params, kind, &ride, duration, h));
+        let trace = trace?;
+        let _ = writeln!(
+            out,
+            "| {} | {:.2} ms | {:.0}× | {} |",
+            kind.name(),
+            wall * 1e3,
+            duration / wall,
+            trace.stats.rhs_evals
+        );
+    }
+    let _ = writeln!(
+        out,
+        "\n## Accuracy of the twin against a 10× finer step (same ride)\n\n\
+         | step | max abs ÿ error | RMS ÿ error | max abs u error |\n|---|---|---|---|"
+    );
+    for step in [h, 2.0 * h] {
+        if step > params.rk4_step_limit_s() {
+            continue;
+        }
+        let a = accuracy(params, &ride, duration, step)?;
+        let _ = writeln!(
+            out,
+            "| {:.1e} s | {:.2e} m/s² | {:.2e} m/s² | {:.2e} m |",
+            a.step_s, a.max_ydd_error, a.rms_ydd_error, a.max_u_error
+        );
+    }
+    let tests = experiments::table1();
+    let opt = fr::DwellOptions::default();
+    let (wall, results) = best_of(3, || {
+        fr::sweep(&tests, |&(f, a)| {
+            fr::simulated_bode(params, ModelKind::Twin, f, a, &opt)
+        })
+    });
+    let failures = results.iter().filter(|r| r.is_err()).count();
+    let _ = writeln!(
+        out,
+        "\n## Table 1 sweep on the twin\n\n69 sine dwells (settle {:.2} s + ≥ {:.1} s of whole \
+         periods each), parallel with rayon: **{:.3} s** wall ({} failed)",
+        opt.settle_s, opt.min_window_s, wall, failures
+    );
+    Ok(out)
+}

@@ -1,0 +1,516 @@
+//! The worker thread behind the app: it steps the twin, the linear model and the passive
+//! reference side by side on the same platform excitation, paced to wall-clock time, and
+//! streams batches of samples back. Commands in, events out; parameters travel by value.
+//!
+//! ```text
+//!   UI ──Command──► engine thread ──Event──► UI   (the waker asks the UI to repaint)
+//! ```
+//!
+//! A numerical blow-up or a panic inside a step is caught, reported as
+//! [`Event::Error`] and leaves the thread alive, waiting for [`Command::Reset`].
+
+use crate::model::linear::LinearModel;
+use crate::model::passive::PassiveModel;
+use crate::model::twin::Twin;
+use crate::params::Params;
+use crate::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, SampledMotion};
+use crate::simulation::{ContactEvent, Drive, Sample, SimError, Simulation, step_for_rate};
+use serde::{Deserialize, Serialize};
+use std::panic::AssertUnwindSafe;
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Rate at which samples are streamed to the UI [Hz].
+pub const STREAM_RATE_HZ: f64 = 500.0;
+
+/// How fast simulated time runs against wall-clock time.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Speed {
+    /// 0.1× real time.
+    Slow,
+    /// Real time.
+    RealTime,
+    /// 10× real time.
+    Fast,
+    /// As fast as the machine allows.
+    Max,
+}
+
+impl Speed {
+    /// Factor of simulated over wall-clock time (∞ for `Max`).
+    pub fn factor(self) -> f64 {
+        match self {
+            Speed::Slow => 0.1,
+            Speed::RealTime => 1.0,
+            Speed::Fast => 10.0,
+            Speed::Max => f64::INFINITY,
+        }
+    }
+
+    /// Label for the UI.
+    pub fn label(self) -> &'static str {
+        match self {
+            Speed::Slow => "0.1×",
+            Speed::RealTime => "1×",
+            Speed::Fast => "10×",
+            Speed::Max => "max",
+        }
+    }
+}
+
+/// What the platform does in the live simulation.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Excitation {
+    /// Band-limited random ride; a new seed starts when the record ends.
+    Random(RandomRide),
+    /// A cycloidal bump (repeated every `period_s`, alternating up and down).
+    Cycloid {
+        /// The bump.
+        bump: Cycloid,
+        /// Repeat period [s].
+        period_s: f64,
+    },
+    /// Platform sine: acceleration amplitude [m/s²] and frequency [Hz].
+    Sine {
+        /// Acceleration amplitude [m/s²].
+        accel_m_s2: f64,
+        /// Frequency [Hz].
+        freq_hz: f64,
+    },
+    /// A loaded platform record (replayed from the start when it ends).
+    Record(SampledMotion),
+    /// Platform still; open-loop valve sine `A·cos(2πft)` on the active models.
+    ValveSine {
+        /// Amplitude [V].
+        amplitude_v: f64,
+        /// Frequency [Hz].
+        freq_hz: f64,
+    },
+}
+
+impl Default for Excitation {
+    fn default() -> Self {
+        Excitation::Random(RandomRide {
+            duration_s: 300.0,
+            ..Default::default()
+        })
+    }
+}
+
+impl Excitation {
+    /// The platform motion and the drive of the active models, and how long it lasts [s].
+    fn build(&self, params: &Params) -> (PlatformMotion, Drive, f64) {
+        let closed = Drive::ClosedLoop(params.controller);
+        match self {
+            Excitation::Random(r) => (PlatformMotion::Sampled(r.generate()), closed, r.duration_s),
+            Excitation::Cycloid { bump, period_s } => {
+                // Build one up-and-down cycle as a sampled record so it can repeat.
+                let period = period_s.max(2.0 * (bump.start_s + bump.rise_time_s));
+                let dt = 1e-3;
+                let n = (2.0 * period / dt) as usize + 1;
+                let down = Cycloid {
+                    height_m: -bump.height_m,
+                    start_s: bump.start_s + period,
+                    ..*bump
+                };
+                let (mut x, mut xd, mut xdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+                for i in 0..n {
+                    let t = i as f64 * dt;
+                    let (a, b) = (bump.at(t), down.at(t));
+                    x[i] = a.x + b.x;
+                    xd[i] = a.xd + b.xd;
+                    xdd[i] = a.xdd + b.xdd;
+                }
+                (
+                    PlatformMotion::Sampled(SampledMotion::new(dt, x, xd, xdd)),
+                    closed,
+                    2.0 * period,
+                )
+            }
+            Excitation::Sine {
+                accel_m_s2,
+                freq_hz,
+            } => {
+                let w = 2.0 * std::f64::consts::PI * freq_hz;
+                (
+                    PlatformMotion::Sine(crate::scenario::PlatformSine {
+                        amplitude_m: accel_m_s2 / (w * w),
+                        freq_hz: *freq_hz,
+                        fade_in_s: 1.0,
+                    }),
+                    closed,
+                    f64::INFINITY,
+                )
+            }
+            Excitation::Record(m) => (PlatformMotion::Sampled(m.clone()), closed, m.duration_s()),
+            Excitation::ValveSine {
+                amplitude_v,
+                freq_hz,
+            } => (
+                PlatformMotion::Still,
+                Drive::OpenLoop(CommandSignal::Sine {
+                    amplitude_v: *amplitude_v,
+                    freq_hz: *freq_hz,
+                }),
+                f64::INFINITY,
+            ),
+        }
+    }
+}
+
+/// Commands to the engine.
+#[derive(Debug, Clone)]
+pub enum Command {
+    /// New parameters (gains, Cd, τ, mass, …) take effect at once, keeping the state.
+    SetParams(Box<Params>),
+    /// New excitation: restarts from rest.
+    SetExcitation(Box<Excitation>),
+    /// Pacing.
+    SetSpeed(Speed),
+    /// Run.
+    Run,
+    /// Pause.
+    Pause,
+    /// Back to rest at t = 0 (also clears an error).
+    Reset,
+    /// End the thread.
+    Shutdown,
+}
+
+/// A batch of samples of the three models at the same instants.
+#[derive(Debug, Clone, Default)]
+pub struct Batch {
+    /// Twin samples.
+    pub twin: Vec<Sample>,
+    /// Linear-model samples.
+    pub linear: Vec<Sample>,
+    /// Passive samples.
+    pub passive: Vec<Sample>,
+}
+
+/// Events from the engine.
+#[derive(Debug, Clone)]
+pub enum Event {
+    /// New samples.
+    Samples(Batch),
+    /// Progress and pacing.
+    Status {
+        /// Simulated time [s].
+        t: f64,
+        /// Achieved simulated/wall time over the last second.
+        realtime_factor: f64,
+        /// Running or paused.
+        running: bool,
+        /// The parameters in use (echo, so the UI and tests can see what was applied).
+        params: Box<Params>,
+    },
+    /// A new end-stop contact of the twin.
+    Contact(ContactEvent),
+    /// The run stopped: a divergence or a panic. The engine waits for `Reset`.
+    Error(String),
+    /// The excitation ended and restarted from rest (new seed for the random ride).
+    Restarted,
+}
+
+/// The handle the UI holds.
+pub struct EngineHandle {
+    /// Send commands here.
+    pub commands: Sender<Command>,
+    /// Receive events here (drain without blocking each frame).
+    pub events: Receiver<Event>,
+    join: Option<JoinHandle<()>>,
+}
+
+impl EngineHandle {
+    /// Sends a command; returns false if the engine thread is gone.
+    pub fn send(&self, c: Command) -> bool {
+        self.commands.send(c).is_ok()
+    }
+}
+
+impl Drop for EngineHandle {
+    fn drop(&mut self) {
+        let _ = self.commands.send(Command::Shutdown);
+        if let Some(j) = self.join.take() {
+            let _ = j.join();
+        }
+    }
+}
+
+struct Sims {
+    twin: Simulation<Twin, 10>,
+    linear: Simulation<LinearModel, 3>,
+    passive: Simulation<PassiveModel, 2>,
+    every: u64,
+    duration: f64,
+    contacts_seen: usize,
+}
+
+impl Sims {
+    fn new(params: &Params, excitation: &Excitation) -> Self {
+        let (platform, drive, duration) = excitation.build(params);
+        let h = step_for_rate(params.numerics.max_step_s, STREAM_RATE_HZ);
+        let every = ((1.0 / STREAM_RATE_HZ) / h).round() as u64;
+        Self {
+            twin: Simulation::new(Twin::new(*params), h, drive.clone(), platform.clone()),
+            linear: Simulation::new(LinearModel::new(params), h, drive.clone(), platform.clone()),
+            passive: Simulation::new(PassiveModel::new(params), h, drive, platform),
+            every,
+            duration,
+            contacts_seen: 0,
+        }
+    }
+
+    fn set_params(&mut self, params: &Params) {
+        self.twin.set_model(Twin::new(*params));
+        self.linear.set_model(LinearModel::new(params));
+        self.passive.set_model(PassiveModel::new(params));
+        for d in [
+            &mut self.twin as &mut dyn DriveTarget,
+            &mut self.linear,
+            &mut self.passive,
+        ] {
+            d.update_gains(params);
+        }
+    }
+
+    fn time(&self) -> f64 {
+        self.twin.time()
+    }
+
+    /// Advances all three until `t_end`, appending streamed samples.
+    fn advance(&mut self, t_end: f64, batch: &mut Batch) -> Result<(), SimError> {
+        let every = self.every;
+        self.twin.run_until(t_end, every, |s| batch.twin.push(s))?;
+        self.linear
+            .run_until(t_end, every, |s| batch.linear.push(s))?;
+        self.passive
+            .run_until(t_end, every, |s| batch.passive.push(s))?;
+        Ok(())
+    }
+}
+
+trait DriveTarget {
+    fn update_gains(&mut self, params: &Params);
+}
+
+impl<M, const N: usize> DriveTarget for Simulation<M, N>
+where
+    M: crate::model::Model<N> + crate::simulation::CommandPath,
+{
+    fn update_gains(&mut self, params: &Params) {
+        if let Drive::ClosedLoop(_) = self.drive() {
+            self.set_drive(Drive::ClosedLoop(params.controller));
+        }
+    }
+}
+
+/// Starts the engine thread. `waker` is called after events are sent (the app passes
+/// `ctx.request_repaint()`; tests pass a no-op).
+pub fn spawn(params: Params, waker: impl Fn() + Send + 'static) -> EngineHandle {
+    let (cmd_tx, cmd_rx) = channel::<Command>();
+    let (ev_tx, ev_rx) = channel::<Event>();
+    let join = std::thread::Builder::new()
+        .name("seat-twin-engine".into())
+        .spawn(move || engine_loop(params, cmd_rx, ev_tx, waker))
+        .ok();
+    EngineHandle {
+        commands: cmd_tx,
+        events: ev_rx,
+        join,
+    }
+}
+
+struct Loop<W: Fn()> {
+    params: Params,
+    excitation: Excitation,
+    speed: Speed,
+    running: bool,
+    failed: bool,
+    sims: Sims,
+    events: Sender<Event>,
+    waker: W,
+    wall_anchor: Instant,
+    sim_anchor: f64,
+    rtf_window: (Instant, f64),
+    rtf: f64,
+    seed_bump: u64,
+}
+
+fn engine_loop<W: Fn()>(
+    params: Params,
+    commands: Receiver<Command>,
+    events: Sender<Event>,
+    waker: W,
+) {
+    let excitation = Excitation::default();
+    let sims = Sims::new(&params, &excitation);
+    let mut l = Loop {
+        params,
+        excitation,
+        speed: Speed::RealTime,
+        running: true,
+        failed: false,
+        sims,
+        events,
+        waker,
+        wall_anchor: Instant::now(),
+        sim_anchor: 0.0,
+        rtf_window: (Instant::now(), 0.0),
+        rtf: 0.0,
+        seed_bump: 0,
+    };
+    let tick = Duration::from_millis(10);
+    loop {
+        // Commands: block while idle, poll while running.
+        let first = if l.running && !l.failed {
+            commands.try_recv().ok()
+        } else {
+            match commands.recv_timeout(Duration::from_millis(100)) {
+                Ok(c) => Some(c),
+                Err(RecvTimeoutError::Timeout) => None,
+                Err(RecvTimeoutError::Disconnected) => return,
+            }
+        };
+        let mut pending: Vec<Command> = first.into_iter().collect();
+        pending.extend(commands.try_iter());
+        for c in pending {
+            if !l.handle(c) {
+                return;
+            }
+        }
+        if l.running && !l.failed {
+            l.step_paced();
+            if l.speed != Speed::Max {
+                std::thread::sleep(tick);
+            }
+        } else {
+            l.status();
+        }
+    }
+}
+
+impl<W: Fn()> Loop<W> {
+    fn send(&self, e: Event) {
+        let _ = self.events.send(e);
+    }
+
+    fn reanchor(&mut self) {
+        self.wall_anchor = Instant::now();
+        self.sim_anchor = self.sims.time();
+    }
+
+    fn restart(&mut self) {
+        let excitation = match &self.excitation {
+            Excitation::Random(r) => Excitation::Random(RandomRide {
+                seed: r.seed.wrapping_add(self.seed_bump),
+                ..*r
+            }),
+            other => other.clone(),
+        };
+        self.sims = Sims::new(&self.params, &excitation);
+        self.failed = false;
+        self.reanchor();
+    }
+
+    /// Handles one command; false ends the thread.
+    fn handle(&mut self, c: Command) -> bool {
+        match c {
+            Command::SetParams(p) => {
+                if p.validate().is_ok() {
+                    self.params = *p;
+                    self.sims.set_params(&self.params);
+                } else if let Err(e) = p.validate() {
+                    self.send(Event::Error(format!("parameters refused: {e}")));
+                }
+            }
+            Command::SetExcitation(e) => {
+                self.excitation = *e;
+                self.seed_bump = 0;
+                self.restart();
+            }
+            Command::SetSpeed(s) => {
+                self.speed = s;
+                self.reanchor();
+            }
+            Command::Run => {
+                self.running = true;
+                self.reanchor();
+            }
+            Command::Pause => self.running = false,
+            Command::Reset => {
+                self.seed_bump = 0;
+                self.restart();
+            }
+            Command::Shutdown => return false,
+        }
+        self.status();
+        true
+    }
+
+    fn status(&self) {
+        self.send(Event::Status {
+            t: self.sims.time(),
+            realtime_factor: self.rtf,
+            running: self.running && !self.failed,
+            params: Box::new(self.params),
+        });
+        (self.waker)();
+    }
+
+    fn step_paced(&mut self) {
+        let now = Instant::now();
+        let target = if self.speed == Speed::Max {
+            self.sims.time() + 0.05
+        } else {
+            let wall = now.duration_since(self.wall_anchor).as_secs_f64();
+            let t = self.sim_anchor + wall * self.speed.factor();
+            // Never try to catch up more than 0.25 s of simulated time in one tick.
+            t.min(self.sims.time() + 0.25)
+        };
+        let t_end = target.min(self.sims.duration);
+        let mut batch = Batch::default();
+        let sims = &mut self.sims;
+        let result = std::panic::catch_unwind(AssertUnwindSafe(|| sims.advance(t_end, &mut batch)));
+        if !batch.twin.is_empty() {
+            self.send(Event::Samples(batch));
+        }
+        match result {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => {
+                self.failed = true;
+                self.send(Event::Error(format!("{e}. Press Reset to start again.")));
+            }
+            Err(panic) => {
+                let msg = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_else(|| "unknown panic".into());
+                self.failed = true;
+                self.send(Event::Error(format!(
+                    "the engine stopped on an internal error: {msg}. Press Reset to start again."
+                )));
+            }
+        }
+        let contacts = self.sims.twin.contacts();
+        for c in &contacts[self.sims.contacts_seen..] {
+            self.send(Event::Contact(*c));
+        }
+        self.sims.contacts_seen = contacts.len();
+        // Real-time factor over ~1 s windows.
+        let (w0, s0) = self.rtf_window;
+        let dt_wall = now.duration_since(w0).as_secs_f64();
+        if dt_wall > 1.0 {
+            self.rtf = (self.sims.time() - s0) / dt_wall;
+            self.rtf_window = (now, self.sims.time());
+        }
+        if self.sims.time() >= self.sims.duration - 1e-9 && self.sims.duration.is_finite() {
+            self.seed_bump += 1;
+            self.restart();
+            self.send(Event::Restarted);
+        }
+        self.status();
+    }
+}

@@ -1,0 +1,110 @@
+//! The paper's experiments as one-call functions, shared by the CLI, the report, the app and
+//! the tests.
+
+use crate::model::ModelKind;
+use crate::model::linear::LinearModel;
+use crate::model::passive::PassiveModel;
+use crate::model::twin::Twin;
+use crate::params::Params;
+use crate::scenario::{CommandSignal, Cycloid, PlatformMotion};
+use crate::simulation::{Drive, SimError, Simulation, Trace, step_for_rate};
+
+/// Runs `kind` from rest under `drive` and `platform` until `duration_s`, recording at `rate_hz`.
+pub fn run(
+    params: &Params,
+    kind: ModelKind,
+    drive: Drive,
+    platform: PlatformMotion,
+    duration_s: f64,
+    rate_hz: f64,
+) -> Result<Trace, SimError> {
+    let h = step_for_rate(params.numerics.max_step_s, rate_hz);
+    match kind {
+        ModelKind::Twin => {
+            Simulation::new(Twin::new(*params), h, drive, platform).run_trace(duration_s, rate_hz)
+        }
+        ModelKind::Linear => Simulation::new(LinearModel::new(params), h, drive, platform)
+            .run_trace(duration_s, rate_hz),
+        ModelKind::Passive => Simulation::new(PassiveModel::new(params), h, drive, platform)
+            .run_trace(duration_s, rate_hz),
+    }
+}
+
+/// Closed loop with the preset's controller (the passive model ignores it).
+pub fn closed_loop(params: &Params) -> Drive {
+    Drive::ClosedLoop(params.controller)
+}
+
+/// The cycloidal bump of Figs. 13–14 in closed loop.
+pub fn cycloid(
+    params: &Params,
+    kind: ModelKind,
+    bump: &Cycloid,
+    duration_s: f64,
+    rate_hz: f64,
+) -> Result<Trace, SimError> {
+    run(
+        params,
+        kind,
+        closed_loop(params),
+        PlatformMotion::Cycloid(*bump),
+        duration_s,
+        rate_hz,
+    )
+}
+
+/// A valve sine test (platform still, open loop): `V_in = A·cos(2πft)`.
+pub fn valve_sine(
+    params: &Params,
+    kind: ModelKind,
+    freq_hz: f64,
+    amplitude_v: f64,
+    duration_s: f64,
+    rate_hz: f64,
+) -> Result<Trace, SimError> {
+    run(
+        params,
+        kind,
+        Drive::OpenLoop(CommandSignal::Sine {
+            amplitude_v,
+            freq_hz,
+        }),
+        PlatformMotion::Still,
+        duration_s,
+        rate_hz,
+    )
+}
+
+/// Table 1 of the paper: the 69 (frequency [Hz], amplitude [V]) valve sine tests.
+pub fn table1() -> Vec<(f64, f64)> {
+    const AMPS: [f64; 7] = [0.72, 1.10, 2.10, 3.00, 4.50, 6.40, 8.00];
+    let rows: [(f64, usize); 13] = [
+        (0.5, 1),
+        (1.0, 2),
+        (2.0, 3),
+        (3.0, 4),
+        (4.0, 5),
+        (5.0, 6),
+        (6.0, 7),
+        (7.0, 7),
+        (8.0, 7),
+        (9.0, 7),
+        (10.0, 7),
+        (15.0, 7),
+        (20.0, 6),
+    ];
+    rows.iter()
+        .flat_map(|&(f, n)| AMPS[..n].iter().map(move |&a| (f, a)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn table1_has_69_tests_and_no_8v_at_20hz() {
+        let t = super::table1();
+        assert_eq!(t.len(), 69);
+        assert!(!t.contains(&(20.0, 8.0)));
+        assert!(t.contains(&(15.0, 8.0)));
+    }
+}

@@ -1,0 +1,484 @@
+//! `seat-twin`: with no subcommand it opens the desktop app (feature `gui`); the subcommands
+//! run the same engine headless.
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand, ValueEnum};
+use seat_twin::analysis::frequency_response as fr;
+use seat_twin::dataset::{self, RecordKind};
+use seat_twin::experiments;
+use seat_twin::model::ModelKind;
+use seat_twin::params::Params;
+use seat_twin::preset;
+use seat_twin::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, SampledMotion};
+use seat_twin::simulation::{Drive, Trace};
+use std::path::{Path, PathBuf};
+
+#[derive(Parser)]
+#[command(
+    name = "seat-twin",
+    version,
+    about = "Digital twin and gain-tuning tool for a hydraulic active seat suspension",
+    long_about = "Without a subcommand, opens the desktop app (when built with the `gui` feature).\n\
+                  The subcommands run the same engine headless; all files are SI unless a column \
+                  name says otherwise."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ModelArg {
+    Twin,
+    Linear,
+    Passive,
+}
+
+impl From<ModelArg> for ModelKind {
+    fn from(m: ModelArg) -> Self {
+        match m {
+            ModelArg::Twin => ModelKind::Twin,
+            ModelArg::Linear => ModelKind::Linear,
+            ModelArg::Passive => ModelKind::Passive,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ScenarioArg {
+    /// Cycloidal platform rise (30 mm in 0.5 s by default), closed loop.
+    Cycloid,
+    /// Band-limited random platform acceleration (0.5–5 Hz, S0 = 0.05), closed loop.
+    Random,
+    /// Valve sine test, platform still, open loop: V_in = A·cos(2πft).
+    Sine,
+    /// Valve linear chirp from --f0 to --f1, platform still, open loop.
+    Chirp,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    /// Closed form (linear and passive models).
+    Exact,
+    /// Sine dwell by simulation, first harmonic.
+    Simulated,
+    /// Numerical linearisation at rest, evaluated on jω (twin).
+    Linearised,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Reproduce the paper's sections 4–6: report.md, numbers.json and PNG+SVG plots.
+    Report {
+        /// Preset file or shipped preset name.
+        #[arg(long, default_value = "paper")]
+        preset: String,
+        /// Output directory.
+        #[arg(long, default_value = "out/report")]
+        out: PathBuf,
+    },
+    /// Simulate one model on one scenario and write a CSV trace (SI columns).
+    Simulate {
+        #[arg(long, value_enum)]
+        model: ModelArg,
+        #[arg(long, default_value = "paper")]
+        preset: String,
+        #[arg(long, value_enum, conflicts_with = "excitation")]
+        scenario: Option<ScenarioArg>,
+        /// Seed of the random ride.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Duration [s] (default: cycloid 5, random 60, sine max(3 s, 6 periods), chirp 10).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Sine frequency [Hz].
+        #[arg(long, default_value_t = 5.0)]
+        freq: f64,
+        /// Sine/chirp amplitude [V].
+        #[arg(long, default_value_t = 2.1)]
+        amp: f64,
+        /// Chirp start frequency [Hz].
+        #[arg(long, default_value_t = 0.5)]
+        f0: f64,
+        /// Chirp end frequency [Hz].
+        #[arg(long, default_value_t = 20.0)]
+        f1: f64,
+        /// A platform record (CSV: `t` and `x` and/or `xdd`, SI); runs closed loop on it.
+        #[arg(long)]
+        excitation: Option<PathBuf>,
+        /// Output sample rate [Hz].
+        #[arg(long, default_value_t = 1000.0)]
+        rate: f64,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Bode of u̇/V_in: columns freq_hz, mag_mm_per_s_v, phase_deg.
+    Bode {
+        #[arg(long, value_enum)]
+        model: ModelArg,
+        #[arg(long, default_value = "paper")]
+        preset: String,
+        /// Command amplitude of the sine dwell [V] (twin).
+        #[arg(long, default_value_t = 0.72)]
+        amp: f64,
+        /// Comma-separated frequencies [Hz].
+        #[arg(long, value_delimiter = ',', required = true)]
+        freqs: Vec<f64>,
+        /// Default: simulated for the twin, exact for the linear model.
+        #[arg(long, value_enum)]
+        method: Option<MethodArg>,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Transmissibility ÿ/ẍ with the controller: columns freq_hz, mag, phase_deg.
+    Transmissibility {
+        #[arg(long, value_enum)]
+        model: ModelArg,
+        #[arg(long, default_value = "paper")]
+        preset: String,
+        /// Comma-separated frequencies [Hz].
+        #[arg(long, value_delimiter = ',', required = true)]
+        freqs: Vec<f64>,
+        /// Default: simulated for the twin, exact for linear and passive.
+        #[arg(long, value_enum)]
+        method: Option<MethodArg>,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Real-time factors, accuracy against a 10× finer step, and the Table 1 sweep time.
+    Bench {
+        /// Preset file or shipped preset name.
+        #[arg(long, default_value = "paper")]
+        preset: String,
+    },
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => open_app(),
+        Some(cmd) => run(cmd),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+#[cfg(feature = "gui")]
+fn open_app() -> Result<()> {
+    seat_twin::gui::run_native().map_err(|e| anyhow::anyhow!("the app could not start: {e}"))
+}
+
+#[cfg(not(feature = "gui"))]
+fn open_app() -> Result<()> {
+    use clap::CommandFactory;
+    Cli::command().print_help()?;
+    println!("\n\n(built without the `gui` feature: use a subcommand)");
+    Ok(())
+}
+
+fn load_params(name: &str) -> Result<Params> {
+    Ok(preset::resolve(name)?.params)
+}
+
+fn run(cmd: Command) -> Result<()> {
+    match cmd {
+        Command::Report { preset, out } => {
+            let params = load_params(&preset)?;
+            let summary = seat_twin::report::write_report(&params, &preset, &out)?;
+            println!("{summary}");
+            println!("report written to {}", out.join("report.md").display());
+            Ok(())
+        }
+        Command::Simulate {
+            model,
+            preset,
+            scenario,
+            seed,
+            duration,
+            freq,
+            amp,
+            f0,
+            f1,
+            excitation,
+            rate,
+            out,
+        } => {
+            let params = load_params(&preset)?;
+            if !(rate.is_finite() && (1.0..=100_000.0).contains(&rate)) {
+                bail!("--rate {rate} is outside the allowed range [1, 100000] Hz");
+            }
+            let kind: ModelKind = model.into();
+            let (drive, platform, default_duration, label) = match (scenario, &excitation) {
+                (_, Some(path)) => {
+                    let rec = dataset::read_record(path, RecordKind::Excitation)?;
+                    let dt = rec.dt;
+                    let motion = match (rec.xdd.clone(), rec.x.clone()) {
+                        (Some(xdd), Some(x)) => {
+                            // xdd drives the dynamics; x is only reported.
+                            SampledMotion::from_acceleration(dt, xdd).with_reported_position(x)
+                        }
+                        (Some(xdd), None) => SampledMotion::from_acceleration(dt, xdd),
+                        (None, Some(x)) => SampledMotion::from_position(dt, x),
+                        (None, None) => bail!("{}: no `x` or `xdd` column", path.display()),
+                    };
+                    let d = motion.duration_s();
+                    (
+                        experiments::closed_loop(&params),
+                        PlatformMotion::Sampled(motion),
+                        d,
+                        format!("excitation {}", path.display()),
+                    )
+                }
+                (Some(ScenarioArg::Cycloid), None) => (
+                    experiments::closed_loop(&params),
+                    PlatformMotion::Cycloid(Cycloid::default()),
+                    5.0,
+                    "cycloid 30 mm in 0.5 s".to_string(),
+                ),
+                (Some(ScenarioArg::Random), None) => {
+                    let ride = RandomRide {
+                        seed,
+                        duration_s: duration.unwrap_or(60.0),
+                        ..Default::default()
+                    };
+                    ride.validate()?;
+                    (
+                        experiments::closed_loop(&params),
+                        PlatformMotion::Sampled(ride.generate()),
+                        ride.duration_s,
+                        format!("random ride seed {seed}"),
+                    )
+                }
+                (Some(ScenarioArg::Sine), None) => {
+                    check_range("--freq", freq, 0.01, 1000.0, "Hz")?;
+                    check_range("--amp", amp, 0.0, 100.0, "V")?;
+                    (
+                        Drive::OpenLoop(CommandSignal::Sine {
+                            amplitude_v: amp,
+                            freq_hz: freq,
+                        }),
+                        PlatformMotion::Still,
+                        (6.0 / freq).max(3.0),
+                        format!("valve sine {freq} Hz {amp} V"),
+                    )
+                }
+                (Some(ScenarioArg::Chirp), None) => {
+                    check_range("--f0", f0, 0.01, 1000.0, "Hz")?;
+                    check_range("--f1", f1, 0.01, 1000.0, "Hz")?;
+                    let d = duration.unwrap_or(10.0);
+                    (
+                        fr::chirp_drive(amp, f0, f1, d),
+                        PlatformMotion::Still,
+                        d,
+                        format!("valve chirp {f0}–{f1} Hz {amp} V"),
+                    )
+                }
+                (None, None) => {
+                    bail!("give --scenario cycloid|random|sine|chirp or --excitation FILE.csv")
+                }
+            };
+            let duration = duration.unwrap_or(default_duration);
+            check_range("--duration", duration, 1e-3, 36_000.0, "s")?;
+            let trace = experiments::run(&params, kind, drive, platform, duration, rate)?;
+            write_trace(&out, &trace, &preset, &label)?;
+            report_contacts(&trace);
+            println!(
+                "{} samples of the {} model written to {}",
+                trace.samples.len(),
+                kind.name(),
+                out.display()
+            );
+            Ok(())
+        }
+        Command::Bode {
+            model,
+            preset,
+            amp,
+            freqs,
+            method,
+            out,
+        } => {
+            let params = load_params(&preset)?;
+            check_freqs(&freqs)?;
+            let kind: ModelKind = model.into();
+            let method = method.unwrap_or(match kind {
+                ModelKind::Twin => MethodArg::Simulated,
+                _ => MethodArg::Exact,
+            });
+            let values: Vec<num_complex::Complex64> = match (kind, method) {
+                (ModelKind::Passive, _) => {
+                    bail!("the passive model has no valve: no Bode of u̇/V_in")
+                }
+                (ModelKind::Linear, MethodArg::Exact) => {
+                    freqs.iter().map(|&f| fr::linear_bode(&params, f)).collect()
+                }
+                (ModelKind::Twin, MethodArg::Linearised) => {
+                    let lin = fr::linearise_twin(&params);
+                    freqs.iter().map(|&f| lin.bode(f)).collect()
+                }
+                (_, MethodArg::Simulated) => {
+                    let opt = fr::DwellOptions::default();
+                    fr::sweep(&freqs, |&f| fr::simulated_bode(&params, kind, f, amp, &opt))
+                        .into_iter()
+                        .collect::<Result<_, _>>()?
+                }
+                (k, _) => bail!("method not available for the {} model", k.name()),
+            };
+            let rows = freqs
+                .iter()
+                .zip(&values)
+                .map(|(f, v)| vec![*f, v.norm() * 1000.0, v.arg().to_degrees()]);
+            dataset::write_csv_atomic(
+                &out,
+                &["freq_hz", "mag_mm_per_s_v", "phase_deg"],
+                &[
+                    ("model".into(), kind.name().into()),
+                    ("preset".into(), preset.clone()),
+                    ("amplitude_v".into(), amp.to_string()),
+                ],
+                rows,
+            )
+            .with_context(|| format!("writing {}", out.display()))?;
+            println!("{} points written to {}", freqs.len(), out.display());
+            Ok(())
+        }
+        Command::Transmissibility {
+            model,
+            preset,
+            freqs,
+            method,
+            out,
+        } => {
+            let params = load_params(&preset)?;
+            check_freqs(&freqs)?;
+            let kind: ModelKind = model.into();
+            let method = method.unwrap_or(match kind {
+                ModelKind::Twin => MethodArg::Simulated,
+                _ => MethodArg::Exact,
+            });
+            let values: Vec<num_complex::Complex64> = match (kind, method) {
+                (ModelKind::Linear, MethodArg::Exact) => freqs
+                    .iter()
+                    .map(|&f| fr::linear_transmissibility(&params, f))
+                    .collect(),
+                (ModelKind::Passive, MethodArg::Exact) => freqs
+                    .iter()
+                    .map(|&f| fr::passive_transmissibility(&params, f))
+                    .collect(),
+                (ModelKind::Twin, MethodArg::Linearised) => {
+                    let lin = fr::linearise_twin(&params);
+                    freqs
+                        .iter()
+                        .map(|&f| lin.transmissibility(&params.controller, f))
+                        .collect()
+                }
+                (_, MethodArg::Simulated) => {
+                    let opt = fr::DwellOptions::default();
+                    fr::sweep(&freqs, |&f| {
+                        fr::simulated_transmissibility(&params, kind, f, &opt)
+                    })
+                    .into_iter()
+                    .collect::<Result<_, _>>()?
+                }
+                (k, _) => bail!("method not available for the {} model", k.name()),
+            };
+            let rows = freqs
+                .iter()
+                .zip(&values)
+                .map(|(f, v)| vec![*f, v.norm(), v.arg().to_degrees()]);
+            dataset::write_csv_atomic(
+                &out,
+                &["freq_hz", "mag", "phase_deg"],
+                &[
+                    ("model".into(), kind.name().into()),
+                    ("preset".into(), preset.clone()),
+                ],
+                rows,
+            )
+            .with_context(|| format!("writing {}", out.display()))?;
+            println!("{} points written to {}", freqs.len(), out.display());
+            Ok(())
+        }
+        Command::Bench { preset } => {
+            let params = load_params(&preset)?;
+            let text = seat_twin::bench::run_bench(&params)?;
+            println!("{text}");
+            Ok(())
+        }
+    }
+}
+
+fn check_range(name: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<()> {
+    if v.is_finite() && v >= min && v <= max {
+        Ok(())
+    } else {
+        bail!("{name} {v} is outside the allowed range [{min}, {max}] {unit}")
+    }
+}
+
+fn check_freqs(freqs: &[f64]) -> Result<()> {
+    if freqs.is_empty() {
+        bail!("--freqs needs at least one frequency");
+    }
+    for &f in freqs {
+        check_range("--freqs value", f, 0.01, 1000.0, "Hz")?;
+    }
+    Ok(())
+}
+
+/// Writes a trace with the columns its model has.
+fn write_trace(out: &Path, trace: &Trace, preset: &str, label: &str) -> Result<()> {
+    let hyd = trace.model.has_hydraulics();
+    let cmd = trace.model.has_command();
+    let mut header = vec!["t", "x", "xdd", "u", "ydd"];
+    if cmd {
+        header.push("v_in");
+    }
+    if hyd {
+        header.extend(["xv", "p1", "p2", "q1", "q2"]);
+    }
+    let rows = trace.samples.iter().map(|s| {
+        let mut r = vec![s.t, s.x, s.xdd, s.u, s.ydd];
+        if cmd {
+            r.push(s.v_in);
+        }
+        if hyd {
+            r.extend([s.xv, s.p1, s.p2, s.q1, s.q2]);
+        }
+        r
+    });
+    let comments = vec![
+        ("model".to_string(), trace.model.name().to_string()),
+        ("preset".to_string(), preset.to_string()),
+        ("scenario".to_string(), label.to_string()),
+        (
+            "end_stop_contacts".to_string(),
+            trace.contacts.len().to_string(),
+        ),
+        (
+            "units".to_string(),
+            "t s, x m, xdd m/s^2, u m, ydd m/s^2, v_in V, xv m, p1 Pa, p2 Pa, q1 m^3/s, q2 m^3/s"
+                .to_string(),
+        ),
+    ];
+    dataset::write_csv_atomic(out, &header, &comments, rows)
+        .with_context(|| format!("writing {}", out.display()))
+}
+
+fn report_contacts(trace: &Trace) {
+    if trace.contacts.is_empty() {
+        return;
+    }
+    let what = if trace.model.has_hydraulics() {
+        "end-stop contact"
+    } else {
+        "stroke overrun (this model has no end stops)"
+    };
+    eprintln!(
+        "warning: {} {what} event(s); first at t = {:.3} s",
+        trace.contacts.len(),
+        trace.contacts[0].t_start
+    );
+}

@@ -1,0 +1,392 @@
+//! The 10-state nonlinear multi-physics twin of section 3.
+//!
+//! States ([`TwinState`]): relative position and velocity of the body, the two chamber
+//! pressures, the two hose flows, the two pressures at the valve ports, spool position and
+//! velocity. Equations (numbers as in the paper):
+//!
+//! ```text
+//! (1)  m·ÿ = −k·u − p1·A1 + p2·A2 − F_friction(u̇) − F_stop(u, u̇)        (ü = ÿ − ẍ)
+//! (2)  I1·Q̇1 = p1 − p1v − R1·Q1
+//! (3)  I2·Q̇2 = p2v − p2 − R2·Q2
+//! (4)  C1c·ṗ1 = u̇·A1 − Q1 − Q_leak
+//! (5)  C2c·ṗ2 = Q2 − u̇·A2 + Q_leak        (sign corrected, MODEL_NOTES 1)
+//! (6)  C1·ṗ1v = Q1 − Q1v
+//! (7)  C2·ṗ2v = Q2v − Q2
+//! (12) Q1v = Cd·ka·xv·√(2/ρ·(p1v − p0)) for xv > 0, √(2/ρ·(pA − p1v)) otherwise
+//! (13) Q2v = Cd·ka·xv·√(2/ρ·(pA − p2v)) for xv > 0, √(2/ρ·(p2v − p0)) otherwise
+//! (14) ẍv + 2ζs·ωn·ẋv + ωn²·xv = ωn²·kv·V(t − τ)
+//! ```
+//!
+//! The square roots are signed, with a laminar core of width `laminar_core_pa`
+//! (`√Δp ≈ Δp / (Δp² + δ²)^¼`), so the Jacobian stays finite at Δp = 0. The spool is clamped
+//! to `±xv,max` by projection after each step; the end stops at `±Lc/2` are a stiff,
+//! damped, push-only contact. Friction, overlap, offset, leakage, compliance and supply sag
+//! are the optional effects of [`crate::params::EffectsParams`].
+
+use super::{Inputs, Model, ModelKind, Outputs};
+use crate::params::{Derived, Params, derived};
+
+/// The ten states of the twin, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TwinState {
+    /// Relative position `u = y − x` [m].
+    pub u: f64,
+    /// Relative velocity `u̇` [m/s].
+    pub du: f64,
+    /// Upper chamber pressure `p1` [Pa].
+    pub p1: f64,
+    /// Lower chamber pressure `p2` [Pa].
+    pub p2: f64,
+    /// Hose-1 flow `Q1`, chamber 1 → valve [m³/s].
+    pub q1: f64,
+    /// Hose-2 flow `Q2`, valve → chamber 2 [m³/s].
+    pub q2: f64,
+    /// Pressure at valve port 1 `p1v` [Pa].
+    pub p1v: f64,
+    /// Pressure at valve port 2 `p2v` [Pa].
+    pub p2v: f64,
+    /// Spool position `xv` [m].
+    pub xv: f64,
+    /// Spool velocity `ẋv` [m/s].
+    pub dxv: f64,
+}
+
+impl TwinState {
+    /// Flattens to the integrator's array (order of [`Twin::STATE_NAMES`]).
+    pub fn to_array(&self) -> [f64; 10] {
+        [
+            self.u, self.du, self.p1, self.p2, self.q1, self.q2, self.p1v, self.p2v, self.xv,
+            self.dxv,
+        ]
+    }
+
+    /// Reads the integrator's array.
+    pub fn from_array(y: &[f64; 10]) -> Self {
+        let [u, du, p1, p2, q1, q2, p1v, p2v, xv, dxv] = *y;
+        Self {
+            u,
+            du,
+            p1,
+            p2,
+            q1,
+            q2,
+            p1v,
+            p2v,
+            xv,
+            dxv,
+        }
+    }
+}
+
+/// The multi-physics twin with its parameters and precomputed constants.
+#[derive(Debug, Clone)]
+pub struct Twin {
+    params: Params,
+    d: Derived,
+    /// `Cd·ka·√(2/ρ)` [m^(3/2)·kg^(-1/2)… per m of spool], the orifice gain per metre of spool.
+    orifice_gain: f64,
+    core_sq: f64,
+}
+
+/// Valve port flows and the effective opening, for reporting and tests.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ValveFlows {
+    /// Flow at port 1, line 1 → valve [m³/s].
+    pub q1v: f64,
+    /// Flow at port 2, valve → line 2 [m³/s].
+    pub q2v: f64,
+}
+
+/// Signed square root with a laminar core: `Δ/(Δ² + δ²)^¼`, ≈ sign(Δ)·√|Δ| for |Δ| ≫ δ.
+#[inline(always)]
+pub fn signed_sqrt(delta: f64, core_sq: f64) -> f64 {
+    delta / (delta * delta + core_sq).sqrt().sqrt()
+}
+
+impl Twin {
+    /// Builds the twin. The parameters should have been validated.
+    pub fn new(params: Params) -> Self {
+        let d = derived(&params);
+        let orifice_gain =
+            params.valve.cd * params.valve.ka_m * (2.0 / params.fluid.density_kg_m3).sqrt();
+        Self {
+            params,
+            d,
+            orifice_gain,
+            core_sq: params.valve.laminar_core_pa.powi(2),
+        }
+    }
+
+    /// The parameters in use.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Lumped hydraulic quantities in use.
+    pub fn derived(&self) -> &Derived {
+        &self.d
+    }
+
+    /// Valve opening seen by the orifices [m]: spool clamped to its travel, minus overlap.
+    #[inline(always)]
+    fn opening(&self, xv: f64) -> f64 {
+        let xmax = self.params.valve.xv_max_m;
+        let x = xv.clamp(-xmax, xmax);
+        let ov = &self.params.effects.valve_overlap;
+        if ov.enabled {
+            x.signum() * (x.abs() - ov.overlap_m).max(0.0)
+        } else {
+            x
+        }
+    }
+
+    /// Supply pressure seen by the metering edge [Pa] when a flow is drawn through an
+    /// orifice of gain `a = g·|x|` from a line at `p_line` (supply-sag effect).
+    #[inline(always)]
+    fn supply_pressure(&self, a: f64, p_line: f64) -> f64 {
+        let pa = self.params.supply.supply_pressure_pa;
+        let sag = &self.params.effects.supply_sag;
+        if !sag.enabled || sag.droop_pa_per_m3_s == 0.0 {
+            return pa;
+        }
+        let dp = pa - p_line;
+        if dp <= 0.0 || a == 0.0 {
+            return pa;
+        }
+        // Q = a·√(pA − r·Q − p)  ⇒  Q² + a²r·Q − a²Δp = 0.
+        let r = sag.droop_pa_per_m3_s;
+        let a2 = a * a;
+        let q = 0.5 * (-a2 * r + (a2 * a2 * r * r + 4.0 * a2 * dp).sqrt());
+        pa - r * q
+    }
+
+    /// Valve port flows, Eqs. (12)–(13), for a spool position and the two port pressures.
+    #[inline(always)]
+    pub fn valve_flows(&self, xv: f64, p1v: f64, p2v: f64) -> ValveFlows {
+        let x = self.opening(xv);
+        let p0 = self.params.supply.return_pressure_pa;
+        let g = self.orifice_gain * x;
+        if x > 0.0 {
+            let pa = self.supply_pressure(g, p2v);
+            ValveFlows {
+                q1v: g * signed_sqrt(p1v - p0, self.core_sq),
+                q2v: g * signed_sqrt(pa - p2v, self.core_sq),
+            }
+        } else {
+            let pa = self.supply_pressure(-g, p1v);
+            ValveFlows {
+                q1v: g * signed_sqrt(pa - p1v, self.core_sq),
+                q2v: g * signed_sqrt(p2v - p0, self.core_sq),
+            }
+        }
+    }
+
+    /// Friction force on the body, opposing `du` [N] (0 unless the effect is enabled).
+    #[inline(always)]
+    pub fn friction_force(&self, du: f64) -> f64 {
+        let f = &self.params.effects.friction;
+        if !f.enabled {
+            return 0.0;
+        }
+        let r = du / f.stribeck_velocity_m_s;
+        (f.coulomb_n + f.stribeck_n * (-r * r).exp()) * (du / f.smoothing_velocity_m_s).tanh()
+            + f.viscous_n_s_per_m * du
+    }
+
+    /// End-stop force on the body [N]: push-only spring–damper beyond ±Lc/2.
+    #[inline(always)]
+    pub fn end_stop_force(&self, u: f64, du: f64) -> f64 {
+        let c = &self.params.cylinder;
+        let pen = u.abs() - 0.5 * c.stroke_m;
+        if pen <= 0.0 {
+            return 0.0;
+        }
+        let s = u.signum();
+        let push = c.end_stop_stiffness_n_per_m * pen + c.end_stop_damping_n_s_per_m * du * s;
+        -s * push.max(0.0)
+    }
+
+    /// Net force on the body [N] (springs, pistons, friction, end stops).
+    #[inline(always)]
+    fn body_force(&self, s: &TwinState) -> f64 {
+        let a = self.d.area;
+        -self.params.body.stiffness_n_per_m * s.u - s.p1 * a + s.p2 * a - self.friction_force(s.du)
+            + self.end_stop_force(s.u, s.du)
+    }
+
+    /// Internal leakage flow chamber 1 → chamber 2 [m³/s].
+    #[inline(always)]
+    fn leakage(&self, s: &TwinState) -> f64 {
+        let l = &self.params.effects.leakage;
+        if l.enabled {
+            l.coefficient_m3_per_s_pa * (s.p1 - s.p2)
+        } else {
+            0.0
+        }
+    }
+
+    /// Command at the spool after the offset effect [V].
+    #[inline(always)]
+    fn spool_command(&self, v_valve: f64) -> f64 {
+        let o = &self.params.effects.valve_offset;
+        if o.enabled {
+            v_valve + o.bias_v
+        } else {
+            v_valve
+        }
+    }
+}
+
+impl Model<10> for Twin {
+    const KIND: ModelKind = ModelKind::Twin;
+    const STATE_NAMES: [&'static str; 10] = [
+        "u [m]",
+        "du [m/s]",
+        "p1 [Pa]",
+        "p2 [Pa]",
+        "Q1 [m3/s]",
+        "Q2 [m3/s]",
+        "p1v [Pa]",
+        "p2v [Pa]",
+        "xv [m]",
+        "dxv [m/s]",
+    ];
+
+    #[inline]
+    fn derivatives(&self, _t: f64, y: &[f64; 10], inputs: &Inputs) -> [f64; 10] {
+        let s = TwinState::from_array(y);
+        let d = &self.d;
+        let a = d.area;
+        let ydd = self.body_force(&s) / self.params.body.mass_kg;
+        let flows = self.valve_flows(s.xv, s.p1v, s.p2v);
+        let q_leak = self.leakage(&s);
+        let v = &self.params.valve;
+        let wn = v.omega_n_rad_s;
+        let target = v.kv_m_per_v * self.spool_command(inputs.v_valve);
+        TwinState {
+            u: s.du,
+            du: ydd - inputs.xdd,
+            p1: (s.du * a - s.q1 - q_leak) / d.c_chamber,
+            p2: (s.q2 - s.du * a + q_leak) / d.c_chamber,
+            q1: (s.p1 - s.p1v - d.resistance * s.q1) / d.inertance,
+            q2: (s.p2v - s.p2 - d.resistance * s.q2) / d.inertance,
+            p1v: (s.q1 - flows.q1v) / d.c_hose,
+            p2v: (flows.q2v - s.q2) / d.c_hose,
+            xv: s.dxv,
+            dxv: wn * wn * (target - s.xv) - 2.0 * v.zeta * wn * s.dxv,
+        }
+        .to_array()
+    }
+
+    fn rest_state(&self) -> [f64; 10] {
+        let p_mid =
+            0.5 * (self.params.supply.supply_pressure_pa + self.params.supply.return_pressure_pa);
+        TwinState {
+            p1: p_mid,
+            p2: p_mid,
+            p1v: p_mid,
+            p2v: p_mid,
+            ..TwinState::default()
+        }
+        .to_array()
+    }
+
+    fn outputs(&self, y: &[f64; 10], _inputs: &Inputs) -> Outputs {
+        let s = TwinState::from_array(y);
+        Outputs {
+            u: s.u,
+            du: s.du,
+            ydd: self.body_force(&s) / self.params.body.mass_kg,
+            xv: s.xv,
+            p1: s.p1,
+            p2: s.p2,
+            q1: s.q1,
+            q2: s.q2,
+            end_stop_force: self.end_stop_force(s.u, s.du),
+        }
+    }
+
+    #[inline(always)]
+    fn relative_position(&self, y: &[f64; 10]) -> f64 {
+        y[0]
+    }
+
+    #[inline(always)]
+    fn project(&self, y: &mut [f64; 10]) {
+        let xmax = self.params.valve.xv_max_m;
+        if y[8] > xmax {
+            y[8] = xmax;
+            y[9] = y[9].min(0.0);
+        } else if y[8] < -xmax {
+            y[8] = -xmax;
+            y[9] = y[9].max(0.0);
+        }
+    }
+
+    fn half_stroke(&self) -> f64 {
+        0.5 * self.params.cylinder.stroke_m
+    }
+
+    fn state_bound(&self, index: usize) -> f64 {
+        match index {
+            0 => 1.0,
+            1 => 100.0,
+            2 | 3 | 6 | 7 => 1.0e9,
+            4 | 5 => 1.0,
+            8 => 1.0,
+            _ => 1.0e4,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn signed_sqrt_matches_sqrt_away_from_core() {
+        let core = 1e4_f64.powi(2);
+        for dp in [1e6, 4.5e6, 9e6] {
+            assert!((signed_sqrt(dp, core) / dp.sqrt() - 1.0).abs() < 1e-4);
+            assert!((signed_sqrt(-dp, core) / -(dp.sqrt()) - 1.0).abs() < 1e-4);
+        }
+        assert_eq!(signed_sqrt(0.0, core), 0.0);
+    }
+
+    #[test]
+    fn rest_is_an_equilibrium() {
+        let twin = Twin::new(Params::paper());
+        let y = twin.rest_state();
+        let dy = twin.derivatives(0.0, &y, &Inputs::default());
+        for (i, v) in dy.iter().enumerate() {
+            assert!(
+                v.abs() < 1e-9,
+                "state {} drifts at rest: {v}",
+                Twin::STATE_NAMES[i]
+            );
+        }
+    }
+
+    #[test]
+    fn full_opening_flow_matches_eq12_hand_value() {
+        // Cd = 0.1074 at full opening and Δp = 100 bar gives the valve's 20 L/min (MODEL_NOTES 4).
+        let mut p = Params::paper();
+        p.valve.cd = 0.1074;
+        p.supply.return_pressure_pa = 0.0;
+        let twin = Twin::new(p);
+        // xv < 0 connects supply to line 1: drop pA − p1v = 100 bar with p1v = 0.
+        let f = twin.valve_flows(-p.valve.xv_max_m, 0.0, 0.0);
+        let l_per_min = -f.q1v * 60_000.0;
+        assert!((l_per_min - 20.0).abs() < 0.1, "{l_per_min} L/min");
+    }
+
+    #[test]
+    fn end_stop_pushes_back_only() {
+        let twin = Twin::new(Params::paper());
+        assert_eq!(twin.end_stop_force(0.0349, 0.0), 0.0);
+        assert!(twin.end_stop_force(0.036, 0.0) < 0.0);
+        assert!(twin.end_stop_force(-0.036, 0.0) > 0.0);
+        // Leaving the stop fast: the damper would pull, the contact does not.
+        assert_eq!(twin.end_stop_force(0.0351, -10.0), 0.0);
+    }
+}

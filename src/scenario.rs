@@ -1,0 +1,518 @@
+//! Excitations: platform (seat-base) motions and open-loop valve commands.
+//!
+//! Platform motions give `x`, `ẋ`, `ẍ` at any time; all start from rest. Commands give
+//! `V_in(t)` for open-loop tests (the valve sine tests of Table 1, chirps, replayed records).
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use realfft::RealFftPlanner;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+/// Platform position, velocity and acceleration at one instant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlatformSample {
+    /// Position `x` [m].
+    pub x: f64,
+    /// Velocity `ẋ` [m/s].
+    pub xd: f64,
+    /// Acceleration `ẍ` [m/s²].
+    pub xdd: f64,
+}
+
+/// Cycloidal rise of the platform (Fig. 13): `height` in `duration`, starting at `start`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Cycloid {
+    /// Rise [m], −0.2 ..= 0.2. Paper: 0.030.
+    pub height_m: f64,
+    /// Rise time [s], 0.01 ..= 10. Paper: 0.5.
+    pub rise_time_s: f64,
+    /// Start of the rise [s], 0 ..= 1000.
+    pub start_s: f64,
+}
+
+impl Default for Cycloid {
+    fn default() -> Self {
+        Self {
+            height_m: 0.030,
+            rise_time_s: 0.5,
+            start_s: 0.5,
+        }
+    }
+}
+
+impl Cycloid {
+    /// Motion at time `t` (exact cycloidal law).
+    pub fn at(&self, t: f64) -> PlatformSample {
+        let (h, tr) = (self.height_m, self.rise_time_s);
+        let s = (t - self.start_s) / tr;
+        if s <= 0.0 {
+            PlatformSample::default()
+        } else if s >= 1.0 {
+            PlatformSample {
+                x: h,
+                ..Default::default()
+            }
+        } else {
+            let a = 2.0 * PI * s;
+            PlatformSample {
+                x: h * (s - a.sin() / (2.0 * PI)),
+                xd: h / tr * (1.0 - a.cos()),
+                xdd: 2.0 * PI * h / (tr * tr) * a.sin(),
+            }
+        }
+    }
+}
+
+/// Band-limited Gaussian white-noise platform acceleration (section 6).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RandomRide {
+    /// One-sided PSD level `S0` [(m/s²)²/Hz], 0 ..= 10. Paper: 0.05.
+    pub s0: f64,
+    /// Lower band edge [Hz], 0.05 ..= 100. Paper: 0.5.
+    pub f_low_hz: f64,
+    /// Upper band edge [Hz], > lower, ..= 200. Paper: 5.
+    pub f_high_hz: f64,
+    /// Duration of the record [s], 1 ..= 3600.
+    pub duration_s: f64,
+    /// Smooth (quintic) fade-in at the start [s], 0 ..= duration/2, so that it starts from rest.
+    pub fade_in_s: f64,
+    /// Seed of the random generator (ChaCha8): same seed, same record, bit for bit.
+    pub seed: u64,
+}
+
+impl Default for RandomRide {
+    fn default() -> Self {
+        Self {
+            s0: 0.05,
+            f_low_hz: 0.5,
+            f_high_hz: 5.0,
+            duration_s: 60.0,
+            fade_in_s: 2.0,
+            seed: 1,
+        }
+    }
+}
+
+/// A platform motion sampled on a uniform grid, read with Catmull–Rom cubic interpolation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampledMotion {
+    dt: f64,
+    x: Arc<Vec<f64>>,
+    xd: Arc<Vec<f64>>,
+    xdd: Arc<Vec<f64>>,
+}
+
+#[inline(always)]
+fn catmull_rom(v: &[f64], s: f64) -> f64 {
+    let n = v.len();
+    if n == 0 {
+        return 0.0;
+    }
+    if s <= 0.0 {
+        return v[0];
+    }
+    let i = s.floor() as usize;
+    if i + 1 >= n {
+        return v[n - 1];
+    }
+    let f = s - i as f64;
+    let p0 = v[i.saturating_sub(1)];
+    let (p1, p2) = (v[i], v[i + 1]);
+    let p3 = v[(i + 2).min(n - 1)];
+    p1 + 0.5
+        * f
+        * (p2 - p0 + f * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + f * (3.0 * (p1 - p2) + p3 - p0)))
+}
+
+impl SampledMotion {
+    /// From uniformly sampled `x`, `ẋ`, `ẍ` (equal lengths, ≥ 2 samples) with step `dt` [s].
+    pub fn new(dt: f64, x: Vec<f64>, xd: Vec<f64>, xdd: Vec<f64>) -> Self {
+        Self {
+            dt,
+            x: Arc::new(x),
+            xd: Arc::new(xd),
+            xdd: Arc::new(xdd),
+        }
+    }
+
+    /// From a sampled acceleration only: velocity and position by trapezoidal integration
+    /// from rest.
+    pub fn from_acceleration(dt: f64, xdd: Vec<f64>) -> Self {
+        let mut xd = vec![0.0; xdd.len()];
+        let mut x = vec![0.0; xdd.len()];
+        for i in 1..xdd.len() {
+            xd[i] = xd[i - 1] + 0.5 * dt * (xdd[i - 1] + xdd[i]);
+            x[i] = x[i - 1] + 0.5 * dt * (xd[i - 1] + xd[i]);
+        }
+        Self::new(dt, x, xd, xdd)
+    }
+
+    /// From a sampled position only: velocity and acceleration by central differences.
+    pub fn from_position(dt: f64, x: Vec<f64>) -> Self {
+        let n = x.len();
+        let diff = |v: &[f64]| -> Vec<f64> {
+            (0..n)
+                .map(|i| {
+                    let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
+                    if b > a {
+                        (v[b] - v[a]) / ((b - a) as f64 * dt)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        };
+        let xd = diff(&x);
+        let xdd = diff(&xd);
+        Self::new(dt, x, xd, xdd)
+    }
+
+    /// Replaces the position channel by a measured one (reported only: the dynamics and the
+    /// controller use the acceleration). Lengths must match; otherwise the record is kept.
+    pub fn with_reported_position(mut self, x: Vec<f64>) -> Self {
+        if x.len() == self.x.len() {
+            self.x = Arc::new(x);
+        }
+        self
+    }
+
+    /// Sample step [s].
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// Duration covered [s].
+    pub fn duration_s(&self) -> f64 {
+        (self.xdd.len().saturating_sub(1)) as f64 * self.dt
+    }
+
+    /// Motion at `t` (held at the last sample after the end).
+    #[inline]
+    pub fn at(&self, t: f64) -> PlatformSample {
+        let s = t / self.dt;
+        PlatformSample {
+            x: catmull_rom(&self.x, s),
+            xd: catmull_rom(&self.xd, s),
+            xdd: catmull_rom(&self.xdd, s),
+        }
+    }
+
+    /// Acceleration only (the hot path of the simulation).
+    #[inline(always)]
+    pub fn xdd_at(&self, t: f64) -> f64 {
+        catmull_rom(&self.xdd, t / self.dt)
+    }
+}
+
+/// A platform sine dwell `x = X·sin(ωt)` under a quintic fade-in, for transmissibility.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlatformSine {
+    /// Position amplitude [m].
+    pub amplitude_m: f64,
+    /// Frequency [Hz].
+    pub freq_hz: f64,
+    /// Fade-in duration [s].
+    pub fade_in_s: f64,
+}
+
+/// Quintic smooth step `w(t)` on `[0, T]` and its first two derivatives (w, w', w'' = 0 at 0).
+fn smoothstep(t: f64, t_fade: f64) -> (f64, f64, f64) {
+    if t_fade <= 0.0 || t >= t_fade {
+        return (1.0, 0.0, 0.0);
+    }
+    if t <= 0.0 {
+        return (0.0, 0.0, 0.0);
+    }
+    let s = t / t_fade;
+    let w = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+    let w1 = 30.0 * s * s * (1.0 - s) * (1.0 - s) / t_fade;
+    let w2 = 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s) / (t_fade * t_fade);
+    (w, w1, w2)
+}
+
+/// Applies a fade-in window to a motion by the product rule, so x, ẋ, ẍ stay consistent.
+fn faded(t: f64, t_fade: f64, m: PlatformSample) -> PlatformSample {
+    let (w, w1, w2) = smoothstep(t, t_fade);
+    PlatformSample {
+        x: w * m.x,
+        xd: w1 * m.x + w * m.xd,
+        xdd: w2 * m.x + 2.0 * w1 * m.xd + w * m.xdd,
+    }
+}
+
+impl PlatformSine {
+    /// Motion at `t`.
+    pub fn at(&self, t: f64) -> PlatformSample {
+        let w = 2.0 * PI * self.freq_hz;
+        let a = self.amplitude_m;
+        let (s, c) = (w * t).sin_cos();
+        faded(
+            t,
+            self.fade_in_s,
+            PlatformSample {
+                x: a * s,
+                xd: a * w * c,
+                xdd: -a * w * w * s,
+            },
+        )
+    }
+}
+
+/// What the platform does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PlatformMotion {
+    /// Platform still (valve tests).
+    Still,
+    /// Cycloidal bump.
+    Cycloid(Cycloid),
+    /// Sine dwell (transmissibility by simulation).
+    Sine(PlatformSine),
+    /// Sampled record (random ride, CSV excitation).
+    Sampled(SampledMotion),
+}
+
+impl PlatformMotion {
+    /// Motion at time `t`.
+    #[inline]
+    pub fn at(&self, t: f64) -> PlatformSample {
+        match self {
+            PlatformMotion::Still => PlatformSample::default(),
+            PlatformMotion::Cycloid(c) => c.at(t),
+            PlatformMotion::Sine(s) => s.at(t),
+            PlatformMotion::Sampled(s) => s.at(t),
+        }
+    }
+
+    /// Acceleration at time `t` (hot path).
+    #[inline(always)]
+    pub fn xdd_at(&self, t: f64) -> f64 {
+        match self {
+            PlatformMotion::Still => 0.0,
+            PlatformMotion::Sampled(s) => s.xdd_at(t),
+            other => other.at(t).xdd,
+        }
+    }
+}
+
+/// Generation rate of the random ride [Hz] (the band is ≤ 200 Hz; interpolation is cubic).
+pub const RANDOM_RIDE_RATE_HZ: f64 = 1000.0;
+
+impl RandomRide {
+    /// Checks the ride's fields.
+    pub fn validate(&self) -> Result<(), crate::params::ParamError> {
+        use crate::params::check;
+        check("random.s0", self.s0, 0.0, 10.0, "(m/s²)²/Hz")?;
+        check("random.f_low_hz", self.f_low_hz, 0.05, 100.0, "Hz")?;
+        check(
+            "random.f_high_hz",
+            self.f_high_hz,
+            self.f_low_hz + 1e-3,
+            200.0,
+            "Hz",
+        )?;
+        check("random.duration_s", self.duration_s, 1.0, 3600.0, "s")?;
+        check(
+            "random.fade_in_s",
+            self.fade_in_s,
+            0.0,
+            self.duration_s / 2.0,
+            "s",
+        )?;
+        Ok(())
+    }
+
+    /// Generates the record: Gaussian Fourier coefficients on the record's frequency grid
+    /// within the band (one-sided PSD `S0`), exact spectral integration to velocity and
+    /// position, then a quintic fade-in applied by the product rule so the platform starts
+    /// at rest with consistent x, ẋ, ẍ.
+    pub fn generate(&self) -> SampledMotion {
+        let fs = RANDOM_RIDE_RATE_HZ;
+        let n = ((self.duration_s * fs).ceil() as usize + 4).max(16);
+        let n = n + (n % 2); // even length for the real FFT
+        let df = fs / n as f64;
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let mut planner = RealFftPlanner::<f64>::new();
+        let c2r = planner.plan_fft_inverse(n);
+        let mut spec_a = c2r.make_input_vec();
+        let mut spec_v = c2r.make_input_vec();
+        let mut spec_x = c2r.make_input_vec();
+        let sigma = (self.s0 * df).sqrt();
+        for (k, ((a, v), x)) in spec_a
+            .iter_mut()
+            .zip(spec_v.iter_mut())
+            .zip(spec_x.iter_mut())
+            .enumerate()
+        {
+            let f = k as f64 * df;
+            // Draw for every bin so that the band edges do not shift the random stream.
+            let ca: f64 = StandardNormal.sample(&mut rng);
+            let cb: f64 = StandardNormal.sample(&mut rng);
+            if f < self.f_low_hz || f > self.f_high_hz || k == 0 || 2 * k == n {
+                continue;
+            }
+            // term = a·cos + b·sin with a, b ~ N(0, σ²) ⇒ X_k = (a − i b)/2.
+            let xk = num_complex::Complex64::new(ca * sigma / 2.0, -cb * sigma / 2.0);
+            let w = 2.0 * PI * f;
+            let jw = num_complex::Complex64::new(0.0, w);
+            *a = xk;
+            *v = xk / jw;
+            *x = xk / (jw * jw);
+        }
+        let inverse = |spec: &mut Vec<num_complex::Complex64>| -> Vec<f64> {
+            let mut out = c2r.make_output_vec();
+            // The spectrum is valid by construction (zero DC and Nyquist), so this cannot fail.
+            if c2r.process(spec, &mut out).is_err() {
+                out.iter_mut().for_each(|v| *v = 0.0);
+            }
+            out
+        };
+        let xdd = inverse(&mut spec_a);
+        let xd = inverse(&mut spec_v);
+        let x = inverse(&mut spec_x);
+        let dt = 1.0 / fs;
+        let mut fx = Vec::with_capacity(n);
+        let mut fxd = Vec::with_capacity(n);
+        let mut fxdd = Vec::with_capacity(n);
+        for i in 0..n {
+            let m = faded(
+                i as f64 * dt,
+                self.fade_in_s,
+                PlatformSample {
+                    x: x[i],
+                    xd: xd[i],
+                    xdd: xdd[i],
+                },
+            );
+            fx.push(m.x);
+            fxd.push(m.xd);
+            fxdd.push(m.xdd);
+        }
+        SampledMotion::new(dt, fx, fxd, fxdd)
+    }
+}
+
+/// An open-loop valve command `V_in(t)` [V]; zero before t = 0.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CommandSignal {
+    /// No command.
+    Zero,
+    /// `A·cos(2πft)` from t = 0 (the sine tests; cosine so the stroke stays centred).
+    Sine {
+        /// Amplitude [V].
+        amplitude_v: f64,
+        /// Frequency [Hz].
+        freq_hz: f64,
+    },
+    /// Linear chirp `A·cos(2π(f0·t + (f1 − f0)·t²/(2T)))` for `0 ≤ t ≤ T`, then zero.
+    Chirp {
+        /// Amplitude [V].
+        amplitude_v: f64,
+        /// Start frequency [Hz].
+        f0_hz: f64,
+        /// End frequency [Hz].
+        f1_hz: f64,
+        /// Sweep duration [s].
+        duration_s: f64,
+    },
+    /// A sampled command, linearly interpolated (replayed records).
+    Sampled {
+        /// Sample step [s].
+        dt: f64,
+        /// Samples from t = 0 [V].
+        values: Arc<Vec<f64>>,
+    },
+}
+
+impl CommandSignal {
+    /// Command at `t` [V].
+    #[inline]
+    pub fn at(&self, t: f64) -> f64 {
+        if t < 0.0 {
+            return 0.0;
+        }
+        match self {
+            CommandSignal::Zero => 0.0,
+            CommandSignal::Sine {
+                amplitude_v,
+                freq_hz,
+            } => amplitude_v * (2.0 * PI * freq_hz * t).cos(),
+            CommandSignal::Chirp {
+                amplitude_v,
+                f0_hz,
+                f1_hz,
+                duration_s,
+            } => {
+                if t > *duration_s {
+                    0.0
+                } else {
+                    let phase = f0_hz * t + (f1_hz - f0_hz) * t * t / (2.0 * duration_s);
+                    amplitude_v * (2.0 * PI * phase).cos()
+                }
+            }
+            CommandSignal::Sampled { dt, values } => {
+                let s = t / dt;
+                let i = s.floor() as usize;
+                match (values.get(i), values.get(i + 1)) {
+                    (Some(a), Some(b)) => a + (s - i as f64) * (b - a),
+                    (Some(a), None) => *a,
+                    _ => values.last().copied().unwrap_or(0.0),
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cycloid_is_consistent_and_reaches_height() {
+        let c = Cycloid::default();
+        assert_eq!(c.at(0.4), PlatformSample::default());
+        assert!((c.at(1.2).x - 0.03).abs() < 1e-15);
+        // Peak acceleration 2πH/T² at mid-rise.
+        assert!((c.at(0.625).xdd - 2.0 * PI * 0.03 / 0.25).abs() < 1e-12);
+        // ẋ is the derivative of x.
+        let (t, h) = (0.7, 1e-6);
+        let num = (c.at(t + h).x - c.at(t - h).x) / (2.0 * h);
+        assert!((num - c.at(t).xd).abs() < 1e-8);
+    }
+
+    #[test]
+    fn random_ride_has_the_requested_rms_and_starts_at_rest() {
+        let ride = RandomRide {
+            duration_s: 200.0,
+            ..Default::default()
+        };
+        let m = ride.generate();
+        let p0 = m.at(0.0);
+        assert!(p0.x.abs() < 1e-12 && p0.xd.abs() < 1e-12 && p0.xdd.abs() < 1e-12);
+        let fs = RANDOM_RIDE_RATE_HZ;
+        let start = (ride.fade_in_s * fs) as usize;
+        let a = &m.xdd[start..(ride.duration_s * fs) as usize];
+        let rms = (a.iter().map(|v| v * v).sum::<f64>() / a.len() as f64).sqrt();
+        // √(S0·B) = √(0.05·4.5) = 0.474 m/s²; a 200 s Gaussian record is within a few %.
+        assert!((rms / 0.4743 - 1.0).abs() < 0.06, "rms {rms}");
+        // Velocity is the integral of acceleration (spectral integration is exact).
+        let i = 50_000;
+        let num = (m.xd[i + 1] - m.xd[i - 1]) * fs / 2.0;
+        assert!((num - m.xdd[i]).abs() < 1e-3, "{num} vs {}", m.xdd[i]);
+    }
+
+    #[test]
+    fn same_seed_same_record() {
+        let r = RandomRide {
+            duration_s: 5.0,
+            ..Default::default()
+        };
+        assert_eq!(r.generate(), r.generate());
+        let other = RandomRide { seed: 2, ..r }.generate();
+        assert_ne!(r.generate(), other);
+    }
+}

@@ -1,0 +1,432 @@
+//! A model, its command path (controller or open-loop signal, saturation, pure delay) and an
+//! excitation stepped together on one fixed grid, with recorded traces.
+//!
+//! ```text
+//!  platform ẍ(t) ──────────────┬──────────────────────────────► model ──► u, ÿ, p, Q …
+//!                              │ ∫                                ▲
+//!  u ─► V = Kp·u + Ki·∫ẍ ─► sat(±Vmax) ─► delay τ ─► V(t − τ) ────┘
+//!       (or an open-loop V_in(t))
+//! ```
+
+use crate::delay::DelayLine;
+use crate::integrate::{StepStats, rk4_step};
+use crate::model::{Inputs, Model, ModelKind, Outputs};
+use crate::params::{ControllerParams, MAX_DELAY_S};
+use crate::scenario::{CommandSignal, PlatformMotion};
+
+/// Where the valve command comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Drive {
+    /// The paper's controller, Eq. (16), in closed loop.
+    ClosedLoop(ControllerParams),
+    /// An open-loop command (sine tests, replay).
+    OpenLoop(CommandSignal),
+}
+
+/// A numerical failure of a run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimError {
+    /// A state became non-finite or left its physical bound: the run diverged.
+    #[error(
+        "{model} model diverged at t = {t:.6} s: state {state} = {value:e} (bound ±{bound:e}); \
+         check the gains (an unstable loop) or reduce numerics.max_step_s"
+    )]
+    Diverged {
+        /// Which model.
+        model: &'static str,
+        /// Time of detection [s].
+        t: f64,
+        /// Name of the offending state.
+        state: &'static str,
+        /// Its value.
+        value: f64,
+        /// Its bound.
+        bound: f64,
+    },
+}
+
+/// One recorded instant (SI). Fields a model lacks are NaN.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Time [s].
+    pub t: f64,
+    /// Platform position [m].
+    pub x: f64,
+    /// Platform velocity [m/s].
+    pub xd: f64,
+    /// Platform acceleration [m/s²].
+    pub xdd: f64,
+    /// Relative displacement [m].
+    pub u: f64,
+    /// Relative velocity [m/s].
+    pub du: f64,
+    /// Body acceleration [m/s²].
+    pub ydd: f64,
+    /// Command as sent (before the delay), saturated [V]. NaN for the passive model.
+    pub v_in: f64,
+    /// Spool position [m].
+    pub xv: f64,
+    /// Upper chamber pressure [Pa].
+    pub p1: f64,
+    /// Lower chamber pressure [Pa].
+    pub p2: f64,
+    /// Hose-1 flow [m³/s].
+    pub q1: f64,
+    /// Hose-2 flow [m³/s].
+    pub q2: f64,
+    /// Body beyond ±Lc/2 (end-stop contact for the twin, stroke overrun for the others).
+    pub contact: bool,
+}
+
+/// One end-stop contact (twin) or stroke overrun (linear, passive models).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ContactEvent {
+    /// Start [s].
+    pub t_start: f64,
+    /// End [s] (the run's end if still in contact).
+    pub t_end: f64,
+    /// +1 upper stop (u > 0), −1 lower stop.
+    pub side: i8,
+    /// Largest penetration beyond ±Lc/2 [m].
+    pub max_penetration_m: f64,
+}
+
+/// A recorded run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trace {
+    /// Which model produced it.
+    pub model: ModelKind,
+    /// Samples at the output rate.
+    pub samples: Vec<Sample>,
+    /// End-stop contacts / stroke overruns.
+    pub contacts: Vec<ContactEvent>,
+    /// Integrator work.
+    pub stats: StepStats,
+}
+
+impl Trace {
+    /// One channel as a vector.
+    pub fn channel(&self, f: impl Fn(&Sample) -> f64) -> Vec<f64> {
+        self.samples.iter().map(f).collect()
+    }
+}
+
+/// A model stepped with its command path and excitation.
+#[derive(Debug, Clone)]
+pub struct Simulation<M: Model<N>, const N: usize> {
+    model: M,
+    y: [f64; N],
+    t: f64,
+    steps: u64,
+    h: f64,
+    tau: f64,
+    v_max: f64,
+    drive: Drive,
+    platform: PlatformMotion,
+    /// Controller integral `∫ẍ dt` [m/s].
+    xdd_integral: f64,
+    history: DelayLine,
+    stats: StepStats,
+    contacts: Vec<ContactEvent>,
+    in_contact: bool,
+}
+
+/// Command delay and saturation a model sees: `(τ [s], Vmax [V])`.
+pub trait CommandPath {
+    /// Pure delay of the command [s].
+    fn command_delay(&self) -> f64;
+    /// Saturation of the command [V].
+    fn command_limit(&self) -> f64;
+}
+
+impl CommandPath for crate::model::twin::Twin {
+    fn command_delay(&self) -> f64 {
+        self.params().valve.tau_s
+    }
+    fn command_limit(&self) -> f64 {
+        self.params().valve.v_max_v
+    }
+}
+
+impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
+    /// A run from rest at t = 0 with internal step `h` [s].
+    pub fn new(model: M, h: f64, drive: Drive, platform: PlatformMotion) -> Self {
+        let y = model.rest_state();
+        let tau = model.command_delay();
+        let v_max = model.command_limit();
+        let mut history = DelayLine::new(h, MAX_DELAY_S + h, 0.0);
+        let mut sim = Self {
+            model,
+            y,
+            t: 0.0,
+            steps: 0,
+            h,
+            tau,
+            v_max,
+            drive,
+            platform,
+            xdd_integral: 0.0,
+            history: DelayLine::new(h, 0.0, 0.0),
+            stats: StepStats::default(),
+            contacts: Vec::new(),
+            in_contact: false,
+        };
+        history.push(sim.command_now());
+        sim.history = history;
+        sim
+    }
+
+    /// Current time [s].
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// Internal step [s].
+    pub fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    /// The model.
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
+    /// The raw state array (for linearisation and tests).
+    pub fn state(&self) -> &[f64; N] {
+        &self.y
+    }
+
+    /// Integrator work so far.
+    pub fn stats(&self) -> StepStats {
+        self.stats
+    }
+
+    /// Contacts so far.
+    pub fn contacts(&self) -> &[ContactEvent] {
+        &self.contacts
+    }
+
+    /// Replaces the model (e.g. new parameters from a slider) keeping the state and time.
+    pub fn set_model(&mut self, model: M) {
+        self.tau = model.command_delay();
+        self.v_max = model.command_limit();
+        self.model = model;
+    }
+
+    /// The drive in use.
+    pub fn drive(&self) -> &Drive {
+        &self.drive
+    }
+
+    /// Replaces the drive (e.g. new gains) keeping the state and time.
+    pub fn set_drive(&mut self, drive: Drive) {
+        self.drive = drive;
+    }
+
+    #[inline(always)]
+    fn saturate(&self, v: f64) -> f64 {
+        v.clamp(-self.v_max, self.v_max)
+    }
+
+    /// Command as sent at the current time (before the delay) [V].
+    #[inline]
+    pub fn command_now(&self) -> f64 {
+        self.command_for(self.t, &self.y, self.xdd_integral)
+    }
+
+    #[inline(always)]
+    fn command_for(&self, t: f64, y: &[f64; N], integral: f64) -> f64 {
+        match &self.drive {
+            Drive::ClosedLoop(c) => self.saturate(
+                c.kp_v_per_m * self.model.relative_position(y) + c.ki_v_s_per_m * integral,
+            ),
+            Drive::OpenLoop(sig) => self.saturate(sig.at(t)),
+        }
+    }
+
+    /// Command at the valve at stage time `ts` with stage state `ys` [V].
+    #[inline(always)]
+    fn valve_command(&self, ts: f64, ys: &[f64; N], xdd0: f64, xdds: f64) -> f64 {
+        let tq = ts - self.tau;
+        match &self.drive {
+            Drive::OpenLoop(sig) => self.saturate(sig.at(tq)),
+            Drive::ClosedLoop(_) => {
+                let t_last = self.history.last_time();
+                if tq <= t_last + 1e-12 * self.h {
+                    self.history.value_at(tq)
+                } else {
+                    // τ shorter than the stage offset: blend the newest stored command with
+                    // the command of the stage state itself (exact for τ = 0).
+                    let z = self.xdd_integral + 0.5 * (ts - self.t) * (xdd0 + xdds);
+                    let v_now = self.command_for(ts, ys, z);
+                    let span = ts - t_last;
+                    let w = if span > 0.0 {
+                        (tq - t_last) / span
+                    } else {
+                        1.0
+                    };
+                    self.history.last_value() + w * (v_now - self.history.last_value())
+                }
+            }
+        }
+    }
+
+    /// Advances one internal step.
+    #[inline]
+    pub fn step(&mut self) -> Result<(), SimError> {
+        let (t, h) = (self.t, self.h);
+        let xdd0 = self.platform.xdd_at(t);
+        let xdd_mid = self.platform.xdd_at(t + 0.5 * h);
+        let xdd1 = self.platform.xdd_at(t + h);
+        let mut y = self.y;
+        let this = &*self;
+        rk4_step(t, h, &mut y, |ts, ys| {
+            let xdds = if ts == t {
+                xdd0
+            } else if ts == t + h {
+                xdd1
+            } else {
+                xdd_mid
+            };
+            let inputs = Inputs {
+                v_valve: this.valve_command(ts, ys, xdd0, xdds),
+                xdd: xdds,
+            };
+            this.model.derivatives(ts, ys, &inputs)
+        });
+        self.model.project(&mut y);
+        self.stats.steps += 1;
+        self.stats.rhs_evals += 4;
+        self.steps += 1;
+        self.t = self.steps as f64 * h;
+        self.y = y;
+        self.xdd_integral += h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1);
+        self.check_state()?;
+        let v = self.command_now();
+        self.history.push(v);
+        self.track_contact();
+        Ok(())
+    }
+
+    fn check_state(&self) -> Result<(), SimError> {
+        for (i, v) in self.y.iter().enumerate() {
+            let bound = self.model.state_bound(i);
+            if !v.is_finite() || v.abs() > bound {
+                return Err(SimError::Diverged {
+                    model: M::KIND.name(),
+                    t: self.t,
+                    state: M::STATE_NAMES[i],
+                    value: *v,
+                    bound,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn track_contact(&mut self) {
+        let u = self.model.relative_position(&self.y);
+        let half = self.model.half_stroke();
+        let pen = u.abs() - half;
+        if pen > 0.0 {
+            if !self.in_contact {
+                self.contacts.push(ContactEvent {
+                    t_start: self.t,
+                    t_end: self.t,
+                    side: if u > 0.0 { 1 } else { -1 },
+                    max_penetration_m: pen,
+                });
+                self.in_contact = true;
+            } else if let Some(c) = self.contacts.last_mut() {
+                c.t_end = self.t;
+                c.max_penetration_m = c.max_penetration_m.max(pen);
+            }
+        } else {
+            self.in_contact = false;
+        }
+    }
+
+    /// Inputs at the current time (for outputs).
+    fn inputs_now(&self) -> Inputs {
+        Inputs {
+            v_valve: match &self.drive {
+                Drive::OpenLoop(sig) => self.saturate(sig.at(self.t - self.tau)),
+                Drive::ClosedLoop(_) => self.history.value_at(self.t - self.tau),
+            },
+            xdd: self.platform.xdd_at(self.t),
+        }
+    }
+
+    /// Model outputs at the current time.
+    pub fn outputs(&self) -> Outputs {
+        self.model.outputs(&self.y, &self.inputs_now())
+    }
+
+    /// The current instant as a recorded sample.
+    pub fn sample(&self) -> Sample {
+        let o = self.outputs();
+        let p = self.platform.at(self.t);
+        Sample {
+            t: self.t,
+            x: p.x,
+            xd: p.xd,
+            xdd: p.xdd,
+            u: o.u,
+            du: o.du,
+            ydd: o.ydd,
+            v_in: if M::KIND.has_command() {
+                self.history.last_value()
+            } else {
+                f64::NAN
+            },
+            xv: o.xv,
+            p1: o.p1,
+            p2: o.p2,
+            q1: o.q1,
+            q2: o.q2,
+            contact: o.u.abs() > self.model.half_stroke(),
+        }
+    }
+
+    /// Runs until `t_end` [s], calling `record` every `every` steps (and at the start if
+    /// t = 0).
+    pub fn run_until(
+        &mut self,
+        t_end: f64,
+        every: u64,
+        mut record: impl FnMut(Sample),
+    ) -> Result<(), SimError> {
+        let every = every.max(1);
+        if self.steps == 0 {
+            record(self.sample());
+        }
+        let n_end = (t_end / self.h - 1e-9).ceil() as u64;
+        while self.steps < n_end {
+            self.step()?;
+            if self.steps.is_multiple_of(every) {
+                record(self.sample());
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs from the current state to `t_end` and returns the recorded trace at `rate_hz`.
+    pub fn run_trace(&mut self, t_end: f64, rate_hz: f64) -> Result<Trace, SimError> {
+        let every = ((1.0 / rate_hz) / self.h).round().max(1.0) as u64;
+        let mut samples = Vec::with_capacity((t_end * rate_hz) as usize + 2);
+        self.run_until(t_end, every, |s| samples.push(s))?;
+        Ok(Trace {
+            model: M::KIND,
+            samples,
+            contacts: self.contacts.clone(),
+            stats: self.stats,
+        })
+    }
+}
+
+/// Largest step ≤ `max_step` [s] that divides the output interval `1/rate_hz` exactly.
+pub fn step_for_rate(max_step: f64, rate_hz: f64) -> f64 {
+    let dt_out = 1.0 / rate_hz;
+    let n = (dt_out / max_step - 1e-9).ceil().max(1.0);
+    dt_out / n
+}

@@ -1,0 +1,259 @@
+//! Property tests of the CSV record reader and writer (`dataset`).
+
+use proptest::prelude::*;
+use seat_twin::dataset::{
+    RecordKind, parse_record, parse_record_bytes, read_record, write_csv, write_csv_atomic,
+};
+use std::path::Path;
+
+const FILE: &str = "props/ride.csv";
+
+fn path() -> &'static Path {
+    Path::new(FILE)
+}
+
+fn kind() -> impl Strategy<Value = RecordKind> {
+    prop_oneof![Just(RecordKind::Measured), Just(RecordKind::Excitation)]
+}
+
+/// Parses and checks the outcome is a record or an error with a message naming the file.
+fn parse_never_panics(text: &str, kind: RecordKind) -> Result<(), TestCaseError> {
+    match parse_record(text, path(), kind) {
+        Ok(r) => {
+            prop_assert!(r.len() >= 2);
+            prop_assert!(r.dt > 0.0 && r.dt.is_finite());
+            for name in ["t", "v_in", "u", "x", "xdd", "ydd", "p1", "p2"] {
+                if let Some(c) = r.column(name) {
+                    prop_assert_eq!(c.len(), r.len());
+                    prop_assert!(c.iter().all(|v| v.is_finite()));
+                }
+            }
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            prop_assert!(!msg.is_empty());
+            prop_assert!(
+                msg.starts_with(FILE),
+                "message does not name the file: {}",
+                msg
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Finite numbers of every scale, including ±0 and subnormals.
+fn value() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        3 => -1e3..1e3f64,
+        1 => any::<f64>().prop_filter("finite", |v| v.is_finite()),
+        1 => Just(0.0),
+        1 => Just(-0.0),
+        1 => Just(5e-324),
+    ]
+}
+
+/// A valid record: kind, rate [Hz], start time [s], header, metadata and rows.
+#[derive(Debug, Clone)]
+struct Valid {
+    kind: RecordKind,
+    rate_hz: f64,
+    header: Vec<&'static str>,
+    metadata: Vec<(String, String)>,
+    rows: Vec<Vec<f64>>,
+}
+
+impl Valid {
+    fn text(&self) -> String {
+        let mut out = Vec::new();
+        write_csv(
+            &mut out,
+            &self.header,
+            &self.metadata,
+            self.rows.clone().into_iter(),
+        )
+        .expect("a valid record is written");
+        String::from_utf8(out).expect("the writer writes UTF-8")
+    }
+}
+
+fn valid() -> impl Strategy<Value = Valid> {
+    (
+        kind(),
+        0.0..1.0f64,
+        -100.0..100.0f64,
+        2usize..200,
+        proptest::sample::subsequence(
+            vec!["v_in", "u", "x", "xdd", "ydd", "p1", "p2", "extra"],
+            0..=8,
+        ),
+        any::<bool>(),
+        proptest::collection::vec(("[a-z_]{1,12}", "[!-~]([ -~]{0,20}[!-~])?"), 0..4),
+        any::<u64>(),
+    )
+        .prop_flat_map(
+            |(kind, rate_frac, t0, n, optional, pick_x, metadata, seed)| {
+                let (lo, hi) = kind.rate_range_hz();
+                // Log-uniform over the allowed range.
+                let rate_hz = lo * (hi / lo).powf(rate_frac);
+                let mut header: Vec<&'static str> = vec!["t"];
+                match kind {
+                    RecordKind::Measured => header.extend(["v_in", "u"]),
+                    RecordKind::Excitation => header.push(if pick_x { "x" } else { "xdd" }),
+                }
+                for c in optional {
+                    if !header.contains(&c) {
+                        header.push(c);
+                    }
+                }
+                // Shuffle the column order deterministically from the seed.
+                let mut s = seed;
+                for i in (1..header.len()).rev() {
+                    s = s
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    header.swap(i, (s >> 33) as usize % (i + 1));
+                }
+                let ncol = header.len();
+                let t_col = header.iter().position(|&h| h == "t").unwrap_or(0);
+                proptest::collection::vec(proptest::collection::vec(value(), ncol), n).prop_map(
+                    move |mut rows| {
+                        for (i, row) in rows.iter_mut().enumerate() {
+                            row[t_col] = t0 + i as f64 / rate_hz;
+                        }
+                        Valid {
+                            kind,
+                            rate_hz,
+                            header: header.clone(),
+                            metadata: metadata.clone(),
+                            rows,
+                        }
+                    },
+                )
+            },
+        )
+}
+
+/// One edit of a file's bytes.
+#[derive(Debug, Clone)]
+enum Mutation {
+    Flip { at: usize, bits: u8 },
+    Truncate { at: usize },
+    Insert { at: usize, what: &'static str },
+    Delete { at: usize, len: usize },
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    let token = proptest::sample::select(vec![
+        "nan", "NaN", "inf", "-inf", "", ",", ",,", "\n", "\r\n", "#", "# k: v\n", "-", "1e999",
+        "\"", "t", "x", "\u{feff}", "é", " ",
+    ]);
+    prop_oneof![
+        (any::<usize>(), 1u8..=255).prop_map(|(at, bits)| Mutation::Flip { at, bits }),
+        any::<usize>().prop_map(|at| Mutation::Truncate { at }),
+        (any::<usize>(), token).prop_map(|(at, what)| Mutation::Insert { at, what }),
+        (any::<usize>(), 1usize..20).prop_map(|(at, len)| Mutation::Delete { at, len }),
+    ]
+}
+
+fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
+    let n = bytes.len();
+    match *m {
+        Mutation::Flip { at, bits } => {
+            if n > 0 {
+                bytes[at % n] ^= bits;
+            }
+        }
+        Mutation::Truncate { at } => bytes.truncate(at % (n + 1)),
+        Mutation::Insert { at, what } => {
+            let at = at % (n + 1);
+            bytes.splice(at..at, what.bytes());
+        }
+        Mutation::Delete { at, len } => {
+            let at = at % (n + 1);
+            bytes.drain(at..(at + len).min(n));
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn arbitrary_strings_never_panic(text in any::<String>(), kind in kind()) {
+        parse_never_panics(&text, kind)?;
+    }
+
+    #[test]
+    fn csv_like_strings_never_panic(
+        text in "(#[ -~]{0,12}\n)?([tv_inuxdyp12,]{0,20}\n)?([-0-9.eE+,naifNI \r\n#]{0,200})",
+        kind in kind(),
+    ) {
+        parse_never_panics(&text, kind)?;
+    }
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..300), kind in kind()) {
+        match parse_record_bytes(&bytes, path(), kind) {
+            Ok(r) => prop_assert!(r.len() >= 2),
+            Err(e) => prop_assert!(e.to_string().starts_with(FILE)),
+        }
+    }
+
+    #[test]
+    fn mutated_valid_files_never_panic(
+        v in valid(),
+        mutations in proptest::collection::vec(mutation(), 1..6),
+        kind in kind(),
+    ) {
+        let mut bytes = v.text().into_bytes();
+        for m in &mutations {
+            apply(&mut bytes, m);
+        }
+        match parse_record_bytes(&bytes, path(), kind) {
+            Ok(r) => prop_assert!(r.len() >= 2),
+            Err(e) => prop_assert!(e.to_string().starts_with(FILE)),
+        }
+        parse_never_panics(&String::from_utf8_lossy(&bytes), kind)?;
+    }
+
+    #[test]
+    fn valid_records_read_back_exactly(v in valid()) {
+        let text = v.text();
+        let r = match parse_record(&text, path(), v.kind) {
+            Ok(r) => r,
+            Err(e) => return Err(TestCaseError::fail(format!("{e}\n{text}"))),
+        };
+        prop_assert_eq!(r.len(), v.rows.len());
+        prop_assert!((r.sample_rate_hz() / v.rate_hz - 1.0).abs() < 1e-6,
+            "rate {} vs {}", r.sample_rate_hz(), v.rate_hz);
+        prop_assert_eq!(&r.metadata, &v.metadata);
+        for (j, name) in v.header.iter().enumerate() {
+            let col = r.column(name);
+            if *name == "extra" {
+                prop_assert!(col.is_none());
+                continue;
+            }
+            let col = col.ok_or_else(|| TestCaseError::fail(format!("column {name} missing")))?;
+            for (i, row) in v.rows.iter().enumerate() {
+                prop_assert_eq!(col[i].to_bits(), row[j].to_bits(), "{}[{}]", name, i);
+            }
+        }
+        let unknown = r.warnings.iter().filter(|w| w.contains("unknown column")).count();
+        prop_assert_eq!(unknown, usize::from(v.header.contains(&"extra")));
+    }
+
+    #[test]
+    fn atomic_write_then_read_round_trips(v in valid()) {
+        let dir = tempfile::tempdir().expect("temporary directory");
+        let file = dir.path().join("rec.csv");
+        write_csv_atomic(&file, &v.header, &v.metadata, v.rows.clone().into_iter())
+            .expect("written");
+        let r = read_record(&file, v.kind).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        prop_assert_eq!(r.len(), v.rows.len());
+        let t_col = v.header.iter().position(|&h| h == "t").unwrap_or(0);
+        for (i, row) in v.rows.iter().enumerate() {
+            prop_assert_eq!(r.t[i].to_bits(), row[t_col].to_bits());
+        }
+    }
+}
