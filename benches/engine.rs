@@ -1,1 +1,62 @@
-fn main() {}
+//! Criterion benches of the engine kernels: 10 s of closed-loop random ride on each model, the
+//! 69 Table 1 sine dwells on the twin, and the twin's linearisation + frequency response.
+//!
+//! Run with `cargo bench --no-default-features --bench engine`. The real-time factor is
+//! 10 s divided by the reported time per iteration.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use seat_twin::analysis::frequency_response as fr;
+use seat_twin::bench::{bench_ride, ride_run};
+use seat_twin::experiments;
+use seat_twin::model::ModelKind;
+use seat_twin::params::Params;
+use std::hint::black_box;
+
+fn ride_10s(c: &mut Criterion) {
+    let params = Params::paper();
+    let ride = bench_ride(10.0);
+    let mut group = c.benchmark_group("ride_10s");
+    group.sample_size(20);
+    for kind in [ModelKind::Twin, ModelKind::Linear, ModelKind::Passive] {
+        let step = seat_twin::bench::bench_step_s(&params, kind);
+        group.bench_function(kind.name(), |b| {
+            b.iter(|| {
+                let trace = ride_run(black_box(&params), kind, &ride, 10.0, step)
+                    .expect("the paper's ride does not diverge");
+                black_box(trace.samples.len())
+            })
+        });
+    }
+    group.finish();
+}
+
+fn table1_sweep(c: &mut Criterion) {
+    let params = Params::paper();
+    let tests = experiments::table1();
+    let opt = fr::DwellOptions::default();
+    let mut group = c.benchmark_group("table1");
+    group.sample_size(10);
+    group.bench_function("twin_69_dwells", |b| {
+        b.iter(|| {
+            let r = fr::sweep(&tests, |&(f, a)| {
+                fr::simulated_bode(&params, ModelKind::Twin, f, a, &opt)
+            });
+            black_box(r.len())
+        })
+    });
+    group.finish();
+}
+
+fn linearisation(c: &mut Criterion) {
+    let params = Params::paper();
+    let freqs = fr::log_space(0.3, 30.0, 200);
+    c.bench_function("linearise_twin_and_200_point_transmissibility", |b| {
+        b.iter(|| {
+            let lin = fr::linearise_twin(black_box(&params));
+            black_box(lin.transmissibility(&params.controller, &freqs))
+        })
+    });
+}
+
+criterion_group!(benches, ride_10s, table1_sweep, linearisation);
+criterion_main!(benches);

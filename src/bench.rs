@@ -56,6 +56,15 @@ pub fn ride_run(
     )
 }
 
+/// The internal step a closed-loop run of `kind` recorded at 1 kHz uses [s]: the preset's RK4
+/// step for the twin, the exact-hold step for the linear and passive models.
+pub fn bench_step_s(params: &Params, kind: ModelKind) -> f64 {
+    match kind {
+        ModelKind::Twin => params.numerics.max_step_s,
+        ModelKind::Linear | ModelKind::Passive => experiments::LTI_MAX_STEP_S,
+    }
+}
+
 /// Compares a run at `step_s` with one at `step_s / 10` (both recorded at 1 kHz).
 pub fn accuracy(
     params: &Params,
@@ -110,17 +119,25 @@ pub fn run_bench(params: &Params) -> Result<String, SimError> {
     );
     let _ = writeln!(
         out,
-        "| model | wall for 10 s simulated | real-time factor | RHS evaluations |\n|---|---|---|---|"
+        "| model | method | step | wall for 10 s simulated | real-time factor | steps | RHS evaluations |\n|---|---|---|---|---|---|---|"
     );
     for kind in [ModelKind::Twin, ModelKind::Linear, ModelKind::Passive] {
         let (wall, trace) = best_of(5, || ride_run(params, kind, &ride, duration, h));
         let trace = trace?;
+        let method = if trace.stats.rhs_evals == 0 {
+            "exact hold"
+        } else {
+            "RK4"
+        };
         let _ = writeln!(
             out,
-            "| {} | {:.2} ms | {:.0}× | {} |",
+            "| {} | {} | {:.1e} s | {:.3} ms | {:.0}× | {} | {} |",
             kind.name(),
+            method,
+            duration / trace.stats.steps.max(1) as f64,
             wall * 1e3,
             duration / wall,
+            trace.stats.steps,
             trace.stats.rhs_evals
         );
     }

@@ -2,28 +2,34 @@
 //! read back at `t − τ` with cubic Lagrange interpolation (4th-order accurate, so the delay
 //! does not spoil RK4's order on smooth commands).
 
-use std::collections::VecDeque;
-
 /// Uniformly sampled history of a signal, `value(t_n)` for `t_n = n·h`, `n ≥ 0`.
 /// Before the first sample the signal is `initial` (the rig starts at rest).
+///
+/// Stored in a power-of-two ring buffer so that a read is a mask and four loads: the delay
+/// line is read four times per RK4 step, so it sits on the twin's hot path.
 #[derive(Debug, Clone)]
 pub struct DelayLine {
     h: f64,
-    capacity: usize,
-    first_index: u64,
-    values: VecDeque<f64>,
+    inv_h: f64,
+    /// Number of samples pushed so far (the next sample has index `len`).
+    len: u64,
+    /// Ring buffer of the newest `mask + 1` samples.
+    ring: Vec<f64>,
+    mask: u64,
     initial: f64,
 }
 
 impl DelayLine {
     /// A history with step `h` [s] long enough for delays up to `max_delay` [s].
     pub fn new(h: f64, max_delay: f64, initial: f64) -> Self {
-        let capacity = (max_delay / h).ceil() as usize + 8;
+        let needed = (max_delay / h).ceil() as usize + 8;
+        let size = needed.next_power_of_two();
         Self {
             h,
-            capacity,
-            first_index: 0,
-            values: VecDeque::with_capacity(capacity + 1),
+            inv_h: 1.0 / h,
+            len: 0,
+            ring: vec![initial; size],
+            mask: size as u64 - 1,
             initial,
         }
     }
@@ -31,51 +37,53 @@ impl DelayLine {
     /// Appends the value at the next grid time `t_n = len·h`.
     #[inline]
     pub fn push(&mut self, v: f64) {
-        self.values.push_back(v);
-        if self.values.len() > self.capacity {
-            self.values.pop_front();
-            self.first_index += 1;
-        }
+        self.ring[(self.len & self.mask) as usize] = v;
+        self.len += 1;
     }
 
     /// Time of the newest sample [s] (−h before any).
     #[inline]
     pub fn last_time(&self) -> f64 {
-        (self.first_index + self.values.len() as u64) as f64 * self.h - self.h
+        self.len as f64 * self.h - self.h
     }
 
     /// Newest sample (or the initial value).
     #[inline]
     pub fn last_value(&self) -> f64 {
-        self.values.back().copied().unwrap_or(self.initial)
+        if self.len == 0 {
+            self.initial
+        } else {
+            self.ring[((self.len - 1) & self.mask) as usize]
+        }
     }
 
     #[inline(always)]
     fn at_index(&self, n: i64) -> f64 {
-        if n < self.first_index as i64 {
-            // Before the stored window: either before t = 0 (rest) or forgotten (clamped).
-            if n < 0 {
-                self.initial
-            } else {
-                self.values.front().copied().unwrap_or(self.initial)
-            }
-        } else {
-            let i = (n - self.first_index as i64) as usize;
-            self.values
-                .get(i)
-                .copied()
-                .unwrap_or_else(|| self.last_value())
+        if n < 0 {
+            return self.initial;
         }
+        let newest = self.len as i64 - 1;
+        let oldest = (self.len as i64 - self.ring.len() as i64).max(0);
+        // Beyond the newest sample: hold it; older than the window: the oldest kept (clamped).
+        let n = n.clamp(oldest, newest.max(0));
+        if newest < 0 {
+            return self.initial;
+        }
+        self.ring[(n as u64 & self.mask) as usize]
     }
 
     /// The signal at `t` ≤ [`Self::last_time`], cubic in the interior, linear at the newest edge.
     #[inline]
     pub fn value_at(&self, t: f64) -> f64 {
-        let s = t / self.h;
-        let n = s.floor();
-        let f = s - n;
-        let n = n as i64;
-        let newest = (self.first_index + self.values.len() as u64) as i64 - 1;
+        let s = t * self.inv_h;
+        if s < 0.0 {
+            // Before t = 0 the rig was at rest.
+            return self.initial;
+        }
+        // s ≥ 0: truncation is floor (and much cheaper than a libm call).
+        let n = s as i64;
+        let f = s - n as f64;
+        let newest = self.len as i64 - 1;
         if n + 2 <= newest {
             let (a, b, c, d) = (
                 self.at_index(n - 1),

@@ -32,6 +32,7 @@ pub mod delay;
 pub mod engine;
 pub mod experiments;
 pub mod integrate;
+pub mod lti;
 pub mod model;
 pub mod params;
 pub mod preset;

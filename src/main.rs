@@ -238,9 +238,12 @@ fn run(cmd: Command) -> Result<()> {
                     "cycloid 30 mm in 0.5 s".to_string(),
                 ),
                 (Some(ScenarioArg::Random), None) => {
+                    let duration_s = duration.unwrap_or(60.0);
                     let ride = RandomRide {
                         seed,
-                        duration_s: duration.unwrap_or(60.0),
+                        duration_s,
+                        // The paper's 2 s fade-in, shortened for short runs.
+                        fade_in_s: (duration_s / 4.0).min(2.0),
                         ..Default::default()
                     };
                     ride.validate()?;

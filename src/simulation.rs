@@ -245,11 +245,17 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     }
 
     /// Command at the valve at stage time `ts` with stage state `ys` [V].
+    ///
+    /// `side` is +1 for the first stage of a step, −1 for the last and 0 in between: an
+    /// open-loop command that jumps on a grid point (a sine test starting at t = τ) is read
+    /// as its right limit at the start of a step and its left limit at the end, whatever the
+    /// rounding of `t − τ`. Without this, RK4 drops to first order on such tests
+    /// (`tests/integrator.rs`).
     #[inline(always)]
-    fn valve_command(&self, ts: f64, ys: &[f64; N], xdd0: f64, xdds: f64) -> f64 {
+    fn valve_command(&self, ts: f64, side: f64, ys: &[f64; N], xdd0: f64, xdds: f64) -> f64 {
         let tq = ts - self.tau;
         match &self.drive {
-            Drive::OpenLoop(sig) => self.saturate(sig.at(tq)),
+            Drive::OpenLoop(sig) => self.saturate(sig.at(tq + side * 1e-6 * self.h)),
             Drive::ClosedLoop(_) => {
                 let t_last = self.history.last_time();
                 if tq <= t_last + 1e-12 * self.h {
@@ -281,15 +287,15 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         let mut y = self.y;
         let this = &*self;
         rk4_step(t, h, &mut y, |ts, ys| {
-            let xdds = if ts == t {
-                xdd0
+            let (xdds, side) = if ts == t {
+                (xdd0, 1.0)
             } else if ts == t + h {
-                xdd1
+                (xdd1, -1.0)
             } else {
-                xdd_mid
+                (xdd_mid, 0.0)
             };
             let inputs = Inputs {
-                v_valve: this.valve_command(ts, ys, xdd0, xdds),
+                v_valve: this.valve_command(ts, side, ys, xdd0, xdds),
                 xdd: xdds,
             };
             this.model.derivatives(ts, ys, &inputs)

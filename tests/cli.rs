@@ -1,0 +1,333 @@
+//! The headless CLI on real files: the stable interface of issue 2 (column names, units,
+//! errors that name the file/line/column, exit codes, no partial output files).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_seat-twin"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("the binary runs")
+}
+
+fn tmp() -> tempfile::TempDir {
+    tempfile::tempdir().expect("a temporary directory")
+}
+
+/// Header and rows of a CSV written by the CLI (comment lines skipped).
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).expect("the output exists");
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<String> = lines
+        .next()
+        .expect("a header")
+        .split(',')
+        .map(str::to_owned)
+        .collect();
+    let rows = lines
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse::<f64>().expect("a number"))
+                .collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+fn column(header: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
+    let i = header
+        .iter()
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("column {name} in {header:?}"));
+    rows.iter().map(|r| r[i]).collect()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn simulate_twin_cycloid_writes_the_documented_columns() {
+    let dir = tmp();
+    let out = dir.path().join("c.csv");
+    let o = run(&[
+        "simulate",
+        "--model",
+        "twin",
+        "--scenario",
+        "cycloid",
+        "--duration",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (header, rows) = read_csv(&out);
+    assert_eq!(
+        header,
+        [
+            "t", "x", "xdd", "u", "ydd", "v_in", "xv", "p1", "p2", "q1", "q2"
+        ]
+    );
+    assert_eq!(rows.len(), 2001, "1 kHz for 2 s, both ends");
+    // The platform ends 30 mm up (SI metres), the body acceleration stays below the platform's.
+    let x = column(&header, &rows, "x");
+    assert!((x.last().unwrap() - 0.030).abs() < 1e-9);
+    let peak = |v: &[f64]| v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    let ydd = column(&header, &rows, "ydd");
+    let xdd = column(&header, &rows, "xdd");
+    assert!(peak(&ydd) < 0.5 * peak(&xdd));
+    // Pressures are in Pa: the rest pressure is (pA + p0)/2 = 55 bar.
+    let p1 = column(&header, &rows, "p1");
+    assert!((p1[0] - 55e5).abs() < 1.0);
+}
+
+#[test]
+fn simulate_passive_leaves_out_the_columns_it_lacks() {
+    let dir = tmp();
+    let out = dir.path().join("p.csv");
+    let o = run(&[
+        "simulate",
+        "--model",
+        "passive",
+        "--scenario",
+        "random",
+        "--duration",
+        "3",
+        "--seed",
+        "4",
+        "--rate",
+        "200",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (header, rows) = read_csv(&out);
+    assert_eq!(header, ["t", "x", "xdd", "u", "ydd"]);
+    assert_eq!(rows.len(), 601);
+}
+
+#[test]
+fn simulate_with_an_excitation_file_runs_the_controller_on_it() {
+    let dir = tmp();
+    let exc = dir.path().join("base.csv");
+    // 2 s of a 1 Hz platform sine of 0.5 m/s² amplitude, starting from rest (sin² ramp-free:
+    // acceleration a·sin(ωt) integrates to a velocity that starts at 0).
+    let mut text = String::from("# recorded: by hand\nt,xdd\n");
+    for n in 0..=2000 {
+        let t = n as f64 * 1e-3;
+        text.push_str(&format!(
+            "{t:.3},{}\n",
+            0.5 * (2.0 * std::f64::consts::PI * t).sin()
+        ));
+    }
+    std::fs::write(&exc, text).unwrap();
+    let out = dir.path().join("r.csv");
+    let o = run(&[
+        "simulate",
+        "--model",
+        "linear",
+        "--excitation",
+        exc.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (header, rows) = read_csv(&out);
+    let xdd = column(&header, &rows, "xdd");
+    let v_in = column(&header, &rows, "v_in");
+    assert!(
+        (xdd[250] - 0.5).abs() < 1e-3,
+        "the record drives the platform"
+    );
+    assert!(
+        v_in.iter().any(|v| v.abs() > 1e-3),
+        "the controller acts on the record"
+    );
+}
+
+#[test]
+fn a_bad_excitation_file_names_file_line_and_column_and_writes_nothing() {
+    let dir = tmp();
+    let exc = dir.path().join("bad.csv");
+    std::fs::write(&exc, "t,xdd\n0,0\n0.001,0.1\n0.002,abc\n").unwrap();
+    let out = dir.path().join("never.csv");
+    let o = run(&[
+        "simulate",
+        "--model",
+        "twin",
+        "--excitation",
+        exc.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("bad.csv"), "{err}");
+    assert!(err.contains("line 4"), "{err}");
+    assert!(err.contains("xdd"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.exists(), "no partial output");
+}
+
+#[test]
+fn bode_of_g_at_low_frequency_is_the_paper_gain() {
+    let dir = tmp();
+    let out = dir.path().join("b.csv");
+    let o = run(&[
+        "bode",
+        "--model",
+        "linear",
+        "--freqs",
+        "0.1,1,10",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (header, rows) = read_csv(&out);
+    assert_eq!(header, ["freq_hz", "mag_mm_per_s_v", "phase_deg"]);
+    // Kg = 133.25 mm/(s·V); the delay alone gives −360·f·τ degrees at low frequency.
+    assert!((rows[0][1] - 133.25).abs() < 0.2, "{:?}", rows[0]);
+    assert!(
+        (rows[0][2] + 360.0 * 0.1 * 0.0175).abs() < 0.2,
+        "{:?}",
+        rows[0]
+    );
+}
+
+#[test]
+fn simulated_twin_bode_is_close_to_g_at_1_hz() {
+    let dir = tmp();
+    let out = dir.path().join("tb.csv");
+    let o = run(&[
+        "bode",
+        "--model",
+        "twin",
+        "--amp",
+        "0.72",
+        "--freqs",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, rows) = read_csv(&out);
+    // Section 4: the adjusted twin matches Kg within a few % at low frequency.
+    assert!((rows[0][1] / 133.25 - 1.0).abs() < 0.03, "{:?}", rows[0]);
+}
+
+#[test]
+fn passive_transmissibility_crosses_one_at_sqrt2_fn() {
+    let dir = tmp();
+    let out = dir.path().join("t.csv");
+    // fn = √(k/m)/2π = 2.822 Hz for the paper's 3680 N/m and 11.7 kg.
+    let fc = (3680.0f64 / 11.7).sqrt() / (2.0 * std::f64::consts::PI) * 2f64.sqrt();
+    let o = run(&[
+        "transmissibility",
+        "--model",
+        "passive",
+        "--freqs",
+        &format!("0.1,{fc}"),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (header, rows) = read_csv(&out);
+    assert_eq!(header, ["freq_hz", "mag", "phase_deg"]);
+    assert!((rows[0][1] - 1.0).abs() < 0.01);
+    assert!((rows[1][1] - 1.0).abs() < 1e-6, "{:?}", rows[1]);
+}
+
+#[test]
+fn a_preset_with_an_out_of_range_value_is_refused_by_name() {
+    let dir = tmp();
+    let preset = dir.path().join("heavy.toml");
+    std::fs::write(&preset, "[body]\nmass_kg = -3.0\n").unwrap();
+    let out = dir.path().join("x.csv");
+    let o = run(&[
+        "simulate",
+        "--model",
+        "twin",
+        "--preset",
+        preset.to_str().unwrap(),
+        "--scenario",
+        "cycloid",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("heavy.toml"), "{err}");
+    assert!(err.contains("mass_kg"), "{err}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_typo_in_a_preset_is_an_error_with_its_line() {
+    let dir = tmp();
+    let preset = dir.path().join("typo.toml");
+    std::fs::write(&preset, "[valve]\ncd = 0.15\ntau_ss = 0.0175\n").unwrap();
+    let o = run(&[
+        "transmissibility",
+        "--model",
+        "linear",
+        "--preset",
+        preset.to_str().unwrap(),
+        "--freqs",
+        "1",
+        "--out",
+        dir.path().join("t.csv").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("tau_ss"), "{err}");
+    assert!(err.contains("line 3"), "{err}");
+}
+
+#[test]
+fn an_unknown_model_is_refused() {
+    let o = run(&[
+        "simulate",
+        "--model",
+        "quantum",
+        "--scenario",
+        "cycloid",
+        "--out",
+        "/tmp/never.csv",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("quantum"));
+}
+
+#[test]
+fn report_writes_markdown_numbers_and_plots() {
+    let dir = tmp();
+    let out: PathBuf = dir.path().join("report");
+    let o = run(&["report", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "report.md",
+        "numbers.json",
+        "table1_bode.png",
+        "table1_bode.svg",
+        "transmissibility.png",
+        "transmissibility.svg",
+        "cycloid.png",
+        "cycloid.svg",
+        "ride.png",
+        "ride.svg",
+    ] {
+        let p = out.join(f);
+        assert!(
+            p.metadata().map(|m| m.len() > 100).unwrap_or(false),
+            "{f} written"
+        );
+    }
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("| paper"), "the paper-vs-twin table");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("numbers.json")).unwrap()).unwrap();
+    assert!(json.is_object());
+}
