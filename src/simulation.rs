@@ -286,6 +286,16 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         let xdd1 = self.platform.xdd_at(t + h);
         let mut y = self.y;
         let this = &*self;
+        // Closed loop with τ ≥ h (the usual case): the delayed command at the three distinct
+        // stage times is already in the history, so read it once per step, not per stage.
+        let pre = match &self.drive {
+            Drive::ClosedLoop(_) if t + h - self.tau <= self.history.last_time() => Some([
+                self.history.value_at(t - self.tau),
+                self.history.value_at(t + 0.5 * h - self.tau),
+                self.history.value_at(t + h - self.tau),
+            ]),
+            _ => None,
+        };
         rk4_step(t, h, &mut y, |ts, ys| {
             let (xdds, side) = if ts == t {
                 (xdd0, 1.0)
@@ -294,10 +304,11 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             } else {
                 (xdd_mid, 0.0)
             };
-            let inputs = Inputs {
-                v_valve: this.valve_command(ts, side, ys, xdd0, xdds),
-                xdd: xdds,
+            let v_valve = match pre {
+                Some(v) => v[(1.0 - side) as usize],
+                None => this.valve_command(ts, side, ys, xdd0, xdds),
             };
+            let inputs = Inputs { v_valve, xdd: xdds };
             this.model.derivatives(ts, ys, &inputs)
         });
         self.model.project(&mut y);

@@ -682,6 +682,18 @@ mod plots {
             .collect()
     }
 
+    /// Phase of `c` [deg], each point moved by whole turns to the branch nearest `reference`
+    /// (so two curves that differ only by 360° across a deep notch are drawn on one branch).
+    fn aligned_deg(c: &[Complex64], reference: &[f64]) -> Vec<f64> {
+        c.iter()
+            .zip(reference)
+            .map(|(v, r)| {
+                let d = v.arg().to_degrees();
+                d + 360.0 * ((r - d) / 360.0).round()
+            })
+            .collect()
+    }
+
     pub fn table1_bode(
         out: &Path,
         params: &Params,
@@ -808,17 +820,37 @@ mod plots {
         );
         mag_panel.y_scale = Scale::Log10;
         mag_panel.hlines.push((1.0, "|T| = 1".into()));
+        let lin_deg = unwrapped_deg(&lin_c);
+        // Reference branch for the dwell points: G(s)'s unwrapped phase at the nearest
+        // dense frequency.
+        let dwell_ref: Vec<f64> = dwell_f
+            .iter()
+            .map(|f| {
+                let i = dense
+                    .iter()
+                    .enumerate()
+                    .min_by(|a, b| (a.1 - f).abs().total_cmp(&(b.1 - f).abs()))
+                    .map_or(0, |(i, _)| i);
+                lin_deg.get(i).copied().unwrap_or(0.0)
+            })
+            .collect();
         let phase_panel = panel(
             "Phase",
             "frequency [Hz]",
             "phase [deg]",
             Scale::Log10,
             vec![
-                line("active, G(s)", dense.to_vec(), unwrapped_deg(&lin_c), 0),
+                line("active, G(s)", dense.to_vec(), lin_deg.clone(), 0),
                 line(
                     "active, twin linearised",
                     dense.to_vec(),
-                    unwrapped_deg(twin),
+                    aligned_deg(twin, &lin_deg),
+                    1,
+                ),
+                markers(
+                    "active, twin sine dwell",
+                    dwell_f.to_vec(),
+                    aligned_deg(dwell, &dwell_ref),
                     1,
                 ),
                 line("passive", dense.to_vec(), unwrapped_deg(&pas_c), 3),
