@@ -86,6 +86,17 @@ pub struct Twin {
     /// `Cd·ka·√(2/ρ)` [m^(3/2)·kg^(-1/2)… per m of spool], the orifice gain per metre of spool.
     orifice_gain: f64,
     core_sq: f64,
+    /// Reciprocals of m, C_chamber, C_hose and I_hose: the right-hand side multiplies instead
+    /// of dividing (divisions share the square-root unit, the twin's bottleneck).
+    inv: Reciprocals,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Reciprocals {
+    mass: f64,
+    c_chamber: f64,
+    c_hose: f64,
+    inertance: f64,
 }
 
 /// Valve port flows and the effective opening, for reporting and tests.
@@ -145,6 +156,12 @@ impl Twin {
             d,
             orifice_gain,
             core_sq: params.valve.laminar_core_pa.powi(2),
+            inv: Reciprocals {
+                mass: 1.0 / params.body.mass_kg,
+                c_chamber: 1.0 / d.c_chamber,
+                c_hose: 1.0 / d.c_hose,
+                inertance: 1.0 / d.inertance,
+            },
         }
     }
 
@@ -285,7 +302,8 @@ impl Model<10> for Twin {
         let s = TwinState::from_array(y);
         let d = &self.d;
         let a = d.area;
-        let ydd = self.body_force(&s) / self.params.body.mass_kg;
+        let inv = &self.inv;
+        let ydd = self.body_force(&s) * inv.mass;
         let flows = self.valve_flows(s.xv, s.p1v, s.p2v);
         let q_leak = self.leakage(&s);
         let v = &self.params.valve;
@@ -294,12 +312,12 @@ impl Model<10> for Twin {
         TwinState {
             u: s.du,
             du: ydd - inputs.xdd,
-            p1: (s.du * a - s.q1 - q_leak) / d.c_chamber,
-            p2: (s.q2 - s.du * a + q_leak) / d.c_chamber,
-            q1: (s.p1 - s.p1v - d.resistance * s.q1) / d.inertance,
-            q2: (s.p2v - s.p2 - d.resistance * s.q2) / d.inertance,
-            p1v: (s.q1 - flows.q1v) / d.c_hose,
-            p2v: (flows.q2v - s.q2) / d.c_hose,
+            p1: (s.du * a - s.q1 - q_leak) * inv.c_chamber,
+            p2: (s.q2 - s.du * a + q_leak) * inv.c_chamber,
+            q1: (s.p1 - s.p1v - d.resistance * s.q1) * inv.inertance,
+            q2: (s.p2v - s.p2 - d.resistance * s.q2) * inv.inertance,
+            p1v: (s.q1 - flows.q1v) * inv.c_hose,
+            p2v: (flows.q2v - s.q2) * inv.c_hose,
             xv: s.dxv,
             dxv: wn * wn * (target - s.xv) - 2.0 * v.zeta * wn * s.dxv,
         }
