@@ -31,6 +31,7 @@ pub mod dataset;
 pub mod delay;
 pub mod engine;
 pub mod experiments;
+pub mod identify;
 pub mod integrate;
 pub mod lti;
 pub mod model;

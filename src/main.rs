@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use seat_twin::analysis::frequency_response as fr;
 use seat_twin::dataset::{self, RecordKind};
 use seat_twin::experiments;
+use seat_twin::identify;
 use seat_twin::model::ModelKind;
 use seat_twin::params::Params;
 use seat_twin::preset;
@@ -142,6 +143,31 @@ enum Command {
         /// Default: simulated for the twin, exact for linear and passive.
         #[arg(long, value_enum)]
         method: Option<MethodArg>,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Replay a measured record through the twin (its v_in and platform motion, open loop):
+    /// columns t,u,ydd,p1,p2,xv,q1,q2 on the record's time grid (SI).
+    Replay {
+        /// Measured record (CSV: t, v_in, u; optional x, xdd, ydd, p1, p2).
+        #[arg(long)]
+        data: PathBuf,
+        /// Preset file or shipped preset name.
+        #[arg(long, default_value = "paper")]
+        preset: String,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Calibrate the twin on measured records: Cd, τ (and the mass), then trace the residual
+    /// to a missing effect; writes report.md, report.json, calibrated.toml and plots to DIR.
+    Calibrate {
+        /// Measured records (one or more CSV files).
+        #[arg(long, num_args = 1.., required = true)]
+        data: Vec<PathBuf>,
+        /// Preset file or shipped preset name to start from.
+        #[arg(long, default_value = "paper")]
+        preset: String,
+        /// Output directory.
         #[arg(long)]
         out: PathBuf,
     },
@@ -402,6 +428,95 @@ fn run(cmd: Command) -> Result<()> {
             )
             .with_context(|| format!("writing {}", out.display()))?;
             println!("{} points written to {}", freqs.len(), out.display());
+            Ok(())
+        }
+        Command::Replay { data, preset, out } => {
+            let params = load_params(&preset)?;
+            let rec = dataset::read_record(&data, RecordKind::Measured)?;
+            for w in &rec.warnings {
+                eprintln!("warning: {}: {w}", data.display());
+            }
+            let rep = identify::replay(&params, &rec)?;
+            let s = &rep.sim;
+            let rows = (0..s.t.len()).map(|i| {
+                vec![
+                    rec.t[i], s.u[i], s.ydd[i], s.p1[i], s.p2[i], s.xv[i], s.q1[i], s.q2[i],
+                ]
+            });
+            dataset::write_csv_atomic(
+                &out,
+                &["t", "u", "ydd", "p1", "p2", "xv", "q1", "q2"],
+                &[
+                    ("model".into(), "twin".into()),
+                    ("preset".into(), preset.clone()),
+                    ("replayed".into(), data.display().to_string()),
+                    (
+                        "units".into(),
+                        "t s, u m, ydd m/s^2, p1 Pa, p2 Pa, xv m, q1 m^3/s, q2 m^3/s".into(),
+                    ),
+                ],
+                rows,
+            )
+            .with_context(|| format!("writing {}", out.display()))?;
+            let e = &rep.errors;
+            println!(
+                "{} samples replayed to {}; RMS error: du {:.3} mm/s ({:.1} %), u {:.3} mm{}",
+                s.t.len(),
+                out.display(),
+                1e3 * e.du,
+                100.0 * e.du_nrmse,
+                1e3 * e.u,
+                e.ydd
+                    .map(|y| format!(", ydd {y:.3} m/s^2"))
+                    .unwrap_or_default()
+            );
+            Ok(())
+        }
+        Command::Calibrate { data, preset, out } => {
+            let params = load_params(&preset)?;
+            let records = data
+                .iter()
+                .map(|p| dataset::read_record(p, RecordKind::Measured))
+                .collect::<Result<Vec<_>, _>>()?;
+            for r in &records {
+                for w in &r.warnings {
+                    eprintln!("warning: {}: {w}", r.path.display());
+                }
+            }
+            let started = std::time::Instant::now();
+            let last = std::sync::Mutex::new(String::new());
+            let report = identify::calibrate(
+                &params,
+                &records,
+                &identify::CalibrationOptions::default(),
+                &|p| {
+                    if let Ok(mut l) = last.lock()
+                        && *l != p.stage
+                    {
+                        eprintln!("[{:6.1} s] {}", started.elapsed().as_secs_f64(), p.stage);
+                        *l = p.stage.clone();
+                    }
+                    true
+                },
+            )?;
+            let elapsed = started.elapsed().as_secs_f64();
+            identify::report::write_all(&report, &out, Some(elapsed))?;
+            println!("verdict: {}", report.verdict.name());
+            for e in &report.effects {
+                println!("effect {}: {:?}", e.effect.name(), e.params);
+            }
+            for v in &report.calibrated {
+                println!("{} = {:.6} ± {:.2e}", v.name, v.value, v.std);
+            }
+            println!(
+                "weighted error: nominal {:.3}, before {:.3}, after {:.3}",
+                report.error_nominal.value, report.error_before.value, report.error_after.value
+            );
+            println!(
+                "calibrated in {elapsed:.1} s ({} replays); report in {}",
+                report.evaluations,
+                out.join("report.md").display()
+            );
             Ok(())
         }
         Command::Bench { preset } => {

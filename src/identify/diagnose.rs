@@ -1,0 +1,269 @@
+//! Residual diagnostics: sensor-noise estimate, whiteness, the residual's spectrum, and its
+//! correlation with the signature features of each candidate effect.
+//!
+//! | feature | signature of |
+//! |---|---|
+//! | `sign_velocity` — `sign(u̇)` of the twin | `friction` (a force step at each reversal) |
+//! | `small_command` — `sign(v)` where `|v| < 10 %` of the file's peak command | `valve_overlap` |
+//! | `constant` — a constant 1 (velocity bias, drift of `u`) | `valve_offset` |
+//! | `load_pressure` — `p1 − p2` of the twin | `leakage` |
+//! | `flow_magnitude` — `Q·|Q|` of the twin | `supply_sag` |
+//! | `high_frequency` — residual power above 30 Hz in `ÿ` | `compliance`, mass |
+
+use super::replay::{PreparedRecord, Replay, rms};
+use realfft::RealFftPlanner;
+use serde::Serialize;
+
+/// Noise RMS of a raw channel, estimated from the top of its spectrum: the power in
+/// `[0.3, 0.5]·fs` (where the rig's motion has almost nothing) extrapolated to the whole band
+/// as white noise. Includes quantisation (which is white at these levels).
+pub fn noise_rms(x: &[f64], dt: f64) -> f64 {
+    let _ = dt;
+    let n = x.len();
+    if n < 32 {
+        return 0.0;
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let mut buf: Vec<f64> = x.iter().map(|v| v - mean).collect();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    let mut spec = fft.make_output_vec();
+    if fft.process(&mut buf, &mut spec).is_err() {
+        return 0.0;
+    }
+    let m = spec.len();
+    let lo = (0.6 * (m as f64)) as usize;
+    let band: f64 = spec[lo..m].iter().map(|c| c.norm_sqr()).sum();
+    let fraction = (m - lo) as f64 / m as f64;
+    // Parseval for a real FFT: Σx² ≈ (2/n)·Σ_k |X_k|² over the half spectrum.
+    let power = 2.0 * band / (n as f64 * n as f64);
+    (power / fraction).sqrt()
+}
+
+/// Amplitude spectrum of a signal: `(frequency [Hz], RMS amplitude density)` on a Hann window.
+pub fn spectrum(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = x.len();
+    if n < 8 {
+        return (Vec::new(), Vec::new());
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let mut buf: Vec<f64> = x
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64).cos();
+            (v - mean) * w
+        })
+        .collect();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    let mut spec = fft.make_output_vec();
+    if fft.process(&mut buf, &mut spec).is_err() {
+        return (Vec::new(), Vec::new());
+    }
+    let df = 1.0 / (n as f64 * dt);
+    let scale = (2.0 * dt / (0.375 * n as f64)).sqrt();
+    let f = (0..spec.len()).map(|k| k as f64 * df).collect();
+    let a = spec.iter().map(|c| c.norm() * scale).collect();
+    (f, a)
+}
+
+/// Whiteness of a residual: its normalised autocorrelation at lags 1..=`max_lag` and the share
+/// of lags outside the 95 % band `±1.96/√n` of white noise.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Whiteness {
+    /// Lag-1 autocorrelation [-].
+    pub lag1: f64,
+    /// Share of lags 1..=max_lag outside the 95 % band [-] (≈ 0.05 for white noise).
+    pub share_outside: f64,
+    /// Ljung–Box statistic over the lags [-] (≈ max_lag for white noise).
+    pub ljung_box: f64,
+    /// Lags tested.
+    pub max_lag: usize,
+}
+
+/// Autocorrelation test of `r` (decimated residual of one or more files, concatenated).
+pub fn whiteness(r: &[f64], max_lag: usize) -> Whiteness {
+    let n = r.len();
+    let mean = r.iter().sum::<f64>() / n.max(1) as f64;
+    let c0: f64 = r
+        .iter()
+        .map(|v| (v - mean).powi(2))
+        .sum::<f64>()
+        .max(1e-300);
+    let mut outside = 0usize;
+    let mut q = 0.0;
+    let mut lag1 = 0.0;
+    let band = 1.96 / (n.max(1) as f64).sqrt();
+    let lags = max_lag.min(n.saturating_sub(2)).max(1);
+    for k in 1..=lags {
+        let ck: f64 = (k..n).map(|i| (r[i] - mean) * (r[i - k] - mean)).sum();
+        let rho = ck / c0;
+        if k == 1 {
+            lag1 = rho;
+        }
+        if rho.abs() > band {
+            outside += 1;
+        }
+        q += rho * rho / (n - k).max(1) as f64;
+    }
+    Whiteness {
+        lag1,
+        share_outside: outside as f64 / lags as f64,
+        ljung_box: n as f64 * (n as f64 + 2.0) * q,
+        max_lag: lags,
+    }
+}
+
+/// Correlation of the residual with one signature feature.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FeatureCorrelation {
+    /// Feature id (see the module table).
+    pub feature: String,
+    /// The effect it points at.
+    pub effect: String,
+    /// Correlation coefficient with the velocity residual [-1, 1] (the constant feature
+    /// reports mean/RMS of the residual instead).
+    pub velocity: f64,
+    /// Correlation with the acceleration residual (NaN without `ÿ`).
+    pub acceleration: f64,
+}
+
+/// Per-feature correlation over all records (feature and residual pooled across files).
+pub fn feature_correlations(
+    records: &[PreparedRecord],
+    replays: &[Replay],
+) -> Vec<FeatureCorrelation> {
+    type Feat = fn(&PreparedRecord, &Replay, usize, f64) -> f64;
+    let feats: [(&str, &str, Feat); 5] = [
+        ("sign_velocity", "friction", |_, r, i, _| {
+            r.twin_du[i].signum()
+        }),
+        ("small_command", "valve_overlap", |p, _, i, vpk| {
+            let v = p.v_in[i];
+            if v.abs() < 0.1 * vpk { v.signum() } else { 0.0 }
+        }),
+        ("load_pressure", "leakage", |_, r, i, _| {
+            r.sim.p1[i] - r.sim.p2[i]
+        }),
+        ("flow_magnitude", "supply_sag", |_, r, i, _| {
+            r.sim.q2[i] * r.sim.q2[i].abs()
+        }),
+        ("constant", "valve_offset", |_, _, _, _| 1.0),
+    ];
+    let mut out = Vec::new();
+    for (name, effect, f) in feats {
+        let mut v_pairs = Vec::new();
+        let mut a_pairs = Vec::new();
+        for (p, r) in records.iter().zip(replays) {
+            let vpk = p.v_in.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let sd = rms(&p.du_meas_f).max(1e-12);
+            for i in (0..p.len).step_by(p.decimate) {
+                let x = f(p, r, i, vpk);
+                v_pairs.push((x, r.residual_du[i] / sd));
+                if let (Some(ra), Some(ym)) = (&r.residual_ydd, &p.ydd_meas_f) {
+                    let sa = rms(ym).max(1e-12);
+                    a_pairs.push((x, ra[i] / sa));
+                }
+            }
+        }
+        let constant = name == "constant";
+        out.push(FeatureCorrelation {
+            feature: name.into(),
+            effect: effect.into(),
+            velocity: if constant {
+                mean_over_rms(&v_pairs)
+            } else {
+                correlation(&v_pairs)
+            },
+            acceleration: if a_pairs.is_empty() {
+                f64::NAN
+            } else if constant {
+                mean_over_rms(&a_pairs)
+            } else {
+                correlation(&a_pairs)
+            },
+        });
+    }
+    out
+}
+
+fn mean_over_rms(p: &[(f64, f64)]) -> f64 {
+    let n = p.len().max(1) as f64;
+    let m = p.iter().map(|(_, y)| y).sum::<f64>() / n;
+    let r = (p.iter().map(|(_, y)| y * y).sum::<f64>() / n).sqrt();
+    if r > 0.0 { m / r } else { 0.0 }
+}
+
+/// Pearson correlation of pairs (0 when either side is constant).
+pub fn correlation(p: &[(f64, f64)]) -> f64 {
+    let n = p.len() as f64;
+    if n < 2.0 {
+        return 0.0;
+    }
+    let mx = p.iter().map(|(x, _)| x).sum::<f64>() / n;
+    let my = p.iter().map(|(_, y)| y).sum::<f64>() / n;
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (x, y) in p {
+        sxy += (x - mx) * (y - my);
+        sxx += (x - mx) * (x - mx);
+        syy += (y - my) * (y - my);
+    }
+    if sxx <= 0.0 || syy <= 0.0 {
+        0.0
+    } else {
+        sxy / (sxx * syy).sqrt()
+    }
+}
+
+/// Share of the acceleration residual's power above `f_hz` (raw, unfiltered twin vs measured
+/// `ÿ`), pooled over files: the high-frequency signature.
+pub fn high_frequency_share(records: &[PreparedRecord], replays: &[Replay], f_hz: f64) -> f64 {
+    let (mut hi, mut all) = (0.0, 0.0);
+    for (p, r) in records.iter().zip(replays) {
+        let Some(ym) = &p.ydd else { continue };
+        let e: Vec<f64> = r.sim.ydd.iter().zip(ym).map(|(a, b)| a - b).collect();
+        let (f, a) = spectrum(&e, p.dt);
+        for (fk, ak) in f.iter().zip(&a) {
+            let pk = ak * ak;
+            all += pk;
+            if *fk > f_hz {
+                hi += pk;
+            }
+        }
+    }
+    if all > 0.0 { hi / all } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    #[test]
+    fn noise_estimate_sees_white_noise_under_a_slow_signal() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let nd = Normal::new(0.0, 0.08).unwrap();
+        let dt = 1e-3;
+        let x: Vec<f64> = (0..5000)
+            .map(|i| {
+                30.0 * (2.0 * std::f64::consts::PI * 10.0 * i as f64 * dt).sin()
+                    + nd.sample(&mut rng)
+            })
+            .collect();
+        let s = noise_rms(&x, dt);
+        assert!((s / 0.08 - 1.0).abs() < 0.1, "{s}");
+    }
+
+    #[test]
+    fn white_noise_is_white_and_a_sine_is_not() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let nd = Normal::new(0.0, 1.0).unwrap();
+        let w: Vec<f64> = (0..4000).map(|_| nd.sample(&mut rng)).collect();
+        assert!(whiteness(&w, 20).share_outside < 0.2);
+        let s: Vec<f64> = (0..4000).map(|i| (i as f64 * 0.05).sin()).collect();
+        let ws = whiteness(&s, 20);
+        assert!(ws.share_outside > 0.9 && ws.lag1 > 0.9);
+    }
+}

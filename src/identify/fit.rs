@@ -1,0 +1,426 @@
+//! Levenberg–Marquardt fit of a set of parameters ("knobs") of the twin to prepared records.
+//!
+//! Each knob maps a dimensionless unknown `θ` (order 1) to an SI parameter; non-negative
+//! parameters use `|θ|`, so the fit can start at 0 (effect off) and the model stays valid.
+//! The Jacobian is by forward differences, its columns simulated in parallel (rayon), each
+//! column's records in parallel too. The fit stops after `max_jacobians` Jacobians, at
+//! convergence, or on cancel. Uncertainties come from `(JᵀJ)⁻¹·s²`, inflated by `n/n_eff`
+//! because the residual samples are correlated (`n_eff` from the lag-1 autocorrelation).
+
+use super::IdentifyError;
+use super::replay::PreparedRecord;
+use crate::params::Params;
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use nalgebra::{DMatrix, DVector, Dyn, Owned};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// A fitted parameter of the twin, seen through a dimensionless unknown θ.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Knob {
+    /// `valve.cd` [-] = 0.1·θ.
+    Cd,
+    /// `valve.tau_s` [s] = 0.01·θ.
+    Tau,
+    /// `body.mass_kg` [kg] = 10·θ.
+    Mass,
+    /// `effects.friction.coulomb_n` [N] = 10·|θ|.
+    FrictionCoulomb,
+    /// `effects.friction.viscous_n_s_per_m` [N·s/m] = 100·|θ|.
+    FrictionViscous,
+    /// `effects.valve_overlap.overlap_m` [m] = 2e-5·|θ|.
+    Overlap,
+    /// `effects.valve_offset.bias_v` [V] = 0.02·θ.
+    Offset,
+    /// `effects.leakage.coefficient_m3_per_s_pa` [m³/(s·Pa)] = 1e-12·|θ|.
+    Leakage,
+    /// `effects.compliance.effective_bulk_modulus_pa` [Pa] = β_fluid/(1 + |θ|).
+    Compliance,
+    /// `effects.supply_sag.droop_pa_per_m3_s` [Pa/(m³/s)] = 1e10·|θ|.
+    SupplySag,
+}
+
+impl Knob {
+    /// Name with unit, as in reports (`cd`, `tau_s`, `coulomb_n`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Knob::Cd => "cd",
+            Knob::Tau => "tau_s",
+            Knob::Mass => "mass_kg",
+            Knob::FrictionCoulomb => "coulomb_n",
+            Knob::FrictionViscous => "viscous_n_s_per_m",
+            Knob::Overlap => "overlap_m",
+            Knob::Offset => "bias_v",
+            Knob::Leakage => "coefficient_m3_per_s_pa",
+            Knob::Compliance => "effective_bulk_modulus_pa",
+            Knob::SupplySag => "droop_pa_per_m3_s",
+        }
+    }
+
+    /// θ of the parameter's current value in `p`.
+    pub fn theta(self, p: &Params) -> f64 {
+        let e = &p.effects;
+        match self {
+            Knob::Cd => p.valve.cd / 0.1,
+            Knob::Tau => p.valve.tau_s / 0.01,
+            Knob::Mass => p.body.mass_kg / 10.0,
+            Knob::FrictionCoulomb if e.friction.enabled => e.friction.coulomb_n / 10.0,
+            Knob::FrictionViscous if e.friction.enabled => e.friction.viscous_n_s_per_m / 100.0,
+            Knob::Overlap if e.valve_overlap.enabled => e.valve_overlap.overlap_m / 2e-5,
+            Knob::Offset if e.valve_offset.enabled => e.valve_offset.bias_v / 0.02,
+            Knob::Leakage if e.leakage.enabled => e.leakage.coefficient_m3_per_s_pa / 1e-12,
+            Knob::Compliance if e.compliance.enabled => {
+                (p.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0).max(0.0)
+            }
+            Knob::SupplySag if e.supply_sag.enabled => e.supply_sag.droop_pa_per_m3_s / 1e10,
+            _ => 0.0,
+        }
+    }
+
+    /// Sets the parameter from θ (clamped into its valid range) and enables its effect.
+    pub fn set(self, p: &mut Params, theta: f64) {
+        let a = theta.abs();
+        let e = &mut p.effects;
+        match self {
+            Knob::Cd => p.valve.cd = (0.1 * theta).clamp(1e-3, 1.0),
+            Knob::Tau => p.valve.tau_s = (0.01 * theta).clamp(0.0, 0.1),
+            Knob::Mass => p.body.mass_kg = (10.0 * theta).clamp(1.0, 500.0),
+            Knob::FrictionCoulomb => {
+                e.friction.enabled = true;
+                e.friction.coulomb_n = (10.0 * a).min(5000.0);
+            }
+            Knob::FrictionViscous => {
+                e.friction.enabled = true;
+                e.friction.viscous_n_s_per_m = (100.0 * a).min(1e5);
+            }
+            Knob::Overlap => {
+                e.valve_overlap.enabled = true;
+                e.valve_overlap.overlap_m = (2e-5 * a).min(0.9 * p.valve.xv_max_m);
+            }
+            Knob::Offset => {
+                e.valve_offset.enabled = true;
+                e.valve_offset.bias_v = (0.02 * theta).clamp(-5.0, 5.0);
+            }
+            Knob::Leakage => {
+                e.leakage.enabled = true;
+                e.leakage.coefficient_m3_per_s_pa = (1e-12 * a).min(1e-9);
+            }
+            Knob::Compliance => {
+                e.compliance.enabled = true;
+                e.compliance.effective_bulk_modulus_pa =
+                    (p.fluid.bulk_modulus_pa / (1.0 + a)).max(1e6);
+            }
+            Knob::SupplySag => {
+                e.supply_sag.enabled = true;
+                e.supply_sag.droop_pa_per_m3_s = (1e10 * a).min(1e12);
+            }
+        }
+    }
+
+    /// SI value of the parameter in `p`.
+    pub fn value(self, p: &Params) -> f64 {
+        let e = &p.effects;
+        match self {
+            Knob::Cd => p.valve.cd,
+            Knob::Tau => p.valve.tau_s,
+            Knob::Mass => p.body.mass_kg,
+            Knob::FrictionCoulomb => e.friction.coulomb_n,
+            Knob::FrictionViscous => e.friction.viscous_n_s_per_m,
+            Knob::Overlap => e.valve_overlap.overlap_m,
+            Knob::Offset => e.valve_offset.bias_v,
+            Knob::Leakage => e.leakage.coefficient_m3_per_s_pa,
+            Knob::Compliance => p.effective_bulk_modulus_pa(),
+            Knob::SupplySag => e.supply_sag.droop_pa_per_m3_s,
+        }
+    }
+}
+
+/// A fitted parameter with its 1-σ uncertainty (SI).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FittedValue {
+    /// Which parameter.
+    pub knob: Knob,
+    /// Name with unit.
+    pub name: String,
+    /// Value [SI].
+    pub value: f64,
+    /// Standard uncertainty [SI] (NaN when the fit cannot tell).
+    pub std: f64,
+}
+
+/// Outcome of one Levenberg–Marquardt fit.
+#[derive(Debug, Clone)]
+pub struct FitResult {
+    /// The parameters with the fitted values set.
+    pub params: Params,
+    /// The fitted values and uncertainties, in knob order.
+    pub values: Vec<FittedValue>,
+    /// Sum of squared weighted residuals at the result.
+    pub rss: f64,
+    /// Number of residuals.
+    pub n: usize,
+    /// Why the optimiser stopped.
+    pub termination: String,
+    /// Residual evaluations (each one replays every record).
+    pub evaluations: usize,
+    /// Correlation matrix of the fitted values (row-major, knob order).
+    pub correlation: Vec<Vec<f64>>,
+}
+
+/// Shared evaluation context: records, progress/cancel and work counters.
+pub struct Evaluator<'a> {
+    /// The prepared records.
+    pub records: &'a [PreparedRecord],
+    /// Called after each evaluation with the running count; `false` cancels.
+    pub on_eval: &'a (dyn Fn(usize) -> bool + Sync),
+    /// Total residual evaluations so far.
+    pub evaluations: AtomicUsize,
+    /// Set once cancelled.
+    pub cancelled: AtomicBool,
+}
+
+/// Penalty residual for a diverged replay (per element).
+const DIVERGED_PENALTY: f64 = 1.0e3;
+
+impl Evaluator<'_> {
+    /// Number of residuals of the records.
+    pub fn residual_len(&self) -> usize {
+        self.records.iter().map(|r| r.residual_len()).sum()
+    }
+
+    /// Weighted residual vector of all records at `params` (diverged replays give a large
+    /// constant penalty, so the optimiser steps back). `None` once cancelled.
+    pub fn residuals(&self, params: &Params) -> Option<Vec<f64>> {
+        if self.cancelled.load(Ordering::Relaxed) {
+            return None;
+        }
+        let parts: Vec<Vec<f64>> = self
+            .records
+            .par_iter()
+            .map(|rec| {
+                let mut v = Vec::with_capacity(rec.residual_len());
+                match rec.simulate(params) {
+                    Ok(sim) => rec.weighted_residuals(&sim, &mut v),
+                    Err(_) => v.resize(rec.residual_len(), DIVERGED_PENALTY),
+                }
+                v
+            })
+            .collect();
+        let count = self.evaluations.fetch_add(1, Ordering::Relaxed) + 1;
+        if !(self.on_eval)(count) {
+            self.cancelled.store(true, Ordering::Relaxed);
+            return None;
+        }
+        Some(parts.concat())
+    }
+}
+
+struct Problem<'a, 'b> {
+    ev: &'a Evaluator<'b>,
+    base: Params,
+    knobs: &'a [Knob],
+    theta: DVector<f64>,
+    cache: Mutex<Option<(DVector<f64>, DVector<f64>)>>,
+    best: Mutex<Option<(f64, DVector<f64>)>>,
+    jacobians: AtomicUsize,
+    max_jacobians: usize,
+    last_jacobian: Mutex<Option<(DVector<f64>, DMatrix<f64>)>>,
+}
+
+fn params_at(base: &Params, knobs: &[Knob], theta: &DVector<f64>) -> Params {
+    let mut p = *base;
+    for (k, t) in knobs.iter().zip(theta.iter()) {
+        k.set(&mut p, *t);
+    }
+    p
+}
+
+impl Problem<'_, '_> {
+    fn eval(&self, theta: &DVector<f64>) -> Option<DVector<f64>> {
+        if let Some((t, r)) = self.cache.lock().ok()?.as_ref()
+            && t == theta
+        {
+            return Some(r.clone());
+        }
+        let r = DVector::from_vec(
+            self.ev
+                .residuals(&params_at(&self.base, self.knobs, theta))?,
+        );
+        let cost = r.norm_squared();
+        if let Ok(mut b) = self.best.lock()
+            && b.as_ref().is_none_or(|(c, _)| cost < *c)
+        {
+            *b = Some((cost, theta.clone()));
+        }
+        if let Ok(mut c) = self.cache.lock() {
+            *c = Some((theta.clone(), r.clone()));
+        }
+        Some(r)
+    }
+
+    fn jacobian_at(&self, theta: &DVector<f64>) -> Option<DMatrix<f64>> {
+        let r0 = self.eval(theta)?;
+        let cols: Vec<Option<DVector<f64>>> = (0..self.knobs.len())
+            .into_par_iter()
+            .map(|j| {
+                let h = 1e-2 * theta[j].abs().max(1.0);
+                let mut t = theta.clone();
+                t[j] += h;
+                let r = self.ev.residuals(&params_at(&self.base, self.knobs, &t))?;
+                Some((DVector::from_vec(r) - &r0) / h)
+            })
+            .collect();
+        let mut jac = DMatrix::zeros(r0.len(), self.knobs.len());
+        for (j, c) in cols.into_iter().enumerate() {
+            jac.set_column(j, &c?);
+        }
+        Some(jac)
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, x: &DVector<f64>) {
+        self.theta.copy_from(x);
+    }
+
+    fn params(&self) -> DVector<f64> {
+        self.theta.clone()
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        self.eval(&self.theta)
+    }
+
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        if self.jacobians.fetch_add(1, Ordering::Relaxed) >= self.max_jacobians {
+            return None;
+        }
+        let j = self.jacobian_at(&self.theta)?;
+        if let Ok(mut l) = self.last_jacobian.lock() {
+            *l = Some((self.theta.clone(), j.clone()));
+        }
+        Some(j)
+    }
+}
+
+/// Effective number of independent residuals: `n·(1 − ρ)/(1 + ρ)` with ρ the lag-1
+/// autocorrelation (AR(1) approximation), at least 1 % of `n`.
+pub fn effective_count(r: &[f64]) -> f64 {
+    let n = r.len() as f64;
+    if r.len() < 3 {
+        return n.max(1.0);
+    }
+    let c0: f64 = r.iter().map(|v| v * v).sum();
+    let c1: f64 = r.windows(2).map(|w| w[0] * w[1]).sum();
+    let rho = if c0 > 0.0 {
+        (c1 / c0).clamp(0.0, 0.999)
+    } else {
+        0.0
+    };
+    (n * (1.0 - rho) / (1.0 + rho)).max(0.01 * n).max(1.0)
+}
+
+/// Fits `knobs` starting from their values in `start`, with at most `max_jacobians`
+/// Jacobians. `n_eff_ratio` = n_eff/n of the residual, for the uncertainties.
+pub fn fit(
+    ev: &Evaluator<'_>,
+    start: &Params,
+    knobs: &[Knob],
+    max_jacobians: usize,
+    n_eff_ratio: f64,
+) -> Result<FitResult, IdentifyError> {
+    let theta0 = DVector::from_iterator(knobs.len(), knobs.iter().map(|k| k.theta(start)));
+    let problem = Problem {
+        ev,
+        base: *start,
+        knobs,
+        theta: theta0.clone(),
+        cache: Mutex::new(None),
+        best: Mutex::new(None),
+        jacobians: AtomicUsize::new(0),
+        max_jacobians,
+        last_jacobian: Mutex::new(None),
+    };
+    let lm = LevenbergMarquardt::new()
+        .with_ftol(1e-4)
+        .with_xtol(1e-4)
+        .with_patience(20)
+        .with_stepbound(1.0);
+    let evals_before = ev.evaluations.load(Ordering::Relaxed);
+    let (problem, report) = lm.minimize(problem);
+    if ev.cancelled.load(Ordering::Relaxed) {
+        return Err(IdentifyError::Cancelled);
+    }
+    let (rss, theta) = match problem.best.lock().ok().and_then(|b| b.clone()) {
+        Some(b) => b,
+        None => {
+            let r = problem.eval(&theta0).ok_or(IdentifyError::Cancelled)?;
+            (r.norm_squared(), theta0)
+        }
+    };
+    let jac = match problem.last_jacobian.lock().ok().and_then(|l| l.clone()) {
+        Some((t, j)) if t == theta => Some(j),
+        _ => None,
+    };
+    let jac = match jac {
+        Some(j) => j,
+        None => problem
+            .jacobian_at(&theta)
+            .ok_or(IdentifyError::Cancelled)?,
+    };
+    let n = jac.nrows();
+    let p = knobs.len();
+    let s2 = rss / (n.saturating_sub(p).max(1)) as f64 / n_eff_ratio.clamp(1e-6, 1.0);
+    let jtj = jac.transpose() * &jac;
+    let cov = jtj.clone().try_inverse().map(|c| c * s2);
+    let params = params_at(start, knobs, &theta);
+    let mut values = Vec::with_capacity(p);
+    for (j, k) in knobs.iter().enumerate() {
+        let std_theta = cov
+            .as_ref()
+            .map(|c| c[(j, j)].max(0.0).sqrt())
+            .unwrap_or(f64::NAN);
+        // SI uncertainty through the local slope of the θ → SI map.
+        let mut q = params;
+        let eps = 1e-3 * theta[j].abs().max(1.0);
+        let t1 = if theta[j] < 0.0 {
+            theta[j] - eps
+        } else {
+            theta[j] + eps
+        };
+        k.set(&mut q, t1);
+        let slope = ((k.value(&q) - k.value(&params)) / eps).abs();
+        values.push(FittedValue {
+            knob: *k,
+            name: k.name().to_string(),
+            value: k.value(&params),
+            std: std_theta * slope,
+        });
+    }
+    let correlation = match &cov {
+        Some(c) => (0..p)
+            .map(|i| {
+                (0..p)
+                    .map(|j| c[(i, j)] / (c[(i, i)] * c[(j, j)]).sqrt().max(1e-300))
+                    .collect()
+            })
+            .collect(),
+        None => vec![vec![f64::NAN; p]; p],
+    };
+    Ok(FitResult {
+        params,
+        values,
+        rss,
+        n,
+        termination: format!("{:?}", report.termination),
+        evaluations: ev.evaluations.load(Ordering::Relaxed) - evals_before,
+        correlation,
+    })
+}

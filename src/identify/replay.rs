@@ -1,0 +1,515 @@
+//! Replay of a measured record through the twin, and the error metric.
+//!
+//! The record's `v_in` drives the valve in open loop (the command as sent, before the valve's
+//! delay) and its platform motion (`xdd`, else `x`, else still) drives the base. The twin runs
+//! on the record's time grid with the largest RK4 step ≤ `numerics.max_step_s` that divides the
+//! sample step.
+//!
+//! **Error metric.** Open-loop replay of a flow-controlled cylinder integrates every flow error
+//! into a drift of `u`, so position is a poor thing to fit. The metric compares two channels
+//! that do not integrate the error:
+//!
+//! * the relative velocity `u̇`, obtained from the measured `u` and from the twin's `u` by the
+//!   *same* linear operator (zero-phase low-pass, then central difference), so quantisation
+//!   and noise are smoothed identically on both sides;
+//! * the body acceleration `ÿ` (when measured), through the same zero-phase low-pass.
+//!
+//! Both are decimated to about `eval_rate_hz`, and each residual is divided by
+//! `max(σ_noise, floor·RMS(signal))` of its file and channel, where `σ_noise` is the sensor
+//! noise estimated from the measured record itself (see [`super::diagnose::noise_rms`]) after
+//! the same filter. The reported error is the RMS of these weighted residuals: 1 means the twin
+//! matches the record to the sensor noise.
+
+use super::IdentifyError;
+use crate::dataset::Record;
+use crate::model::twin::Twin;
+use crate::params::Params;
+use crate::scenario::{CommandSignal, PlatformMotion, SampledMotion};
+use crate::simulation::{Drive, Simulation, step_for_rate};
+use std::sync::Arc;
+
+/// Signal-processing settings of the error metric.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MetricOptions {
+    /// Cut-off of the zero-phase low-pass applied to measured and simulated channels [Hz].
+    pub lowpass_hz: f64,
+    /// Rate at which the filtered residual is kept [Hz] (decimation).
+    pub eval_rate_hz: f64,
+    /// Floor of a channel's weight scale, as a fraction of the measured channel's RMS.
+    pub floor_fraction: f64,
+}
+
+impl Default for MetricOptions {
+    fn default() -> Self {
+        Self {
+            lowpass_hz: 25.0,
+            eval_rate_hz: 250.0,
+            floor_fraction: 0.01,
+        }
+    }
+}
+
+/// The twin's channels replayed on a record's time grid (SI).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SimChannels {
+    /// Time [s].
+    pub t: Vec<f64>,
+    /// Relative displacement [m].
+    pub u: Vec<f64>,
+    /// Relative velocity [m/s].
+    pub du: Vec<f64>,
+    /// Body acceleration [m/s²].
+    pub ydd: Vec<f64>,
+    /// Upper chamber pressure [Pa] (absolute model pressure, as the twin holds it).
+    pub p1: Vec<f64>,
+    /// Lower chamber pressure [Pa].
+    pub p2: Vec<f64>,
+    /// Spool position [m].
+    pub xv: Vec<f64>,
+    /// Hose-1 flow [m³/s].
+    pub q1: Vec<f64>,
+    /// Hose-2 flow [m³/s].
+    pub q2: Vec<f64>,
+}
+
+/// A record made ready for repeated replays: inputs, filtered measured channels, weights.
+#[derive(Debug, Clone)]
+pub struct PreparedRecord {
+    /// File name (for reports).
+    pub name: String,
+    /// Sample step [s].
+    pub dt: f64,
+    /// Number of samples.
+    pub len: usize,
+    /// Time [s].
+    pub t: Vec<f64>,
+    /// Command as sent [V].
+    pub v_in: Arc<Vec<f64>>,
+    /// Measured relative displacement [m].
+    pub u: Vec<f64>,
+    /// Measured body acceleration [m/s²], if recorded.
+    pub ydd: Option<Vec<f64>>,
+    /// Platform motion driving the base.
+    pub platform: PlatformMotion,
+    /// Whether the platform moved (an `x` or `xdd` column above its own noise).
+    pub platform_moves: bool,
+    /// Decimation factor of the metric.
+    pub decimate: usize,
+    /// Filtered, differentiated measured `u` at every sample [m/s].
+    pub du_meas_f: Vec<f64>,
+    /// Filtered measured `ÿ` at every sample [m/s²].
+    pub ydd_meas_f: Option<Vec<f64>>,
+    /// Weight scale of the velocity channel [m/s].
+    pub scale_du: f64,
+    /// Weight scale of the acceleration channel [m/s²].
+    pub scale_ydd: f64,
+    /// Estimated noise RMS of the raw `u` [m].
+    pub noise_u: f64,
+    /// Estimated noise RMS of the raw `ÿ` [m/s²] (0 without the channel).
+    pub noise_ydd: f64,
+    /// Low-pass cut-off used [Hz].
+    pub lowpass_hz: f64,
+}
+
+impl PreparedRecord {
+    /// Prepares a record (which must have `v_in` and `u`).
+    pub fn new(record: &Record, opt: &MetricOptions) -> Result<Self, IdentifyError> {
+        let name = record
+            .path
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| record.path.display().to_string());
+        let missing = |col: &str| IdentifyError::MissingColumn {
+            file: record.path.clone(),
+            column: col.to_string(),
+        };
+        let v_in = record.v_in.clone().ok_or_else(|| missing("v_in"))?;
+        let u = record.u.clone().ok_or_else(|| missing("u"))?;
+        let dt = record.dt;
+        // A platform channel that is indistinguishable from its own sensor noise means the
+        // platform was still: replaying that noise would only add noise to the twin.
+        let moving = |v: &Vec<f64>| {
+            let n = super::diagnose::noise_rms(v, dt);
+            let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+            let dev: Vec<f64> = v.iter().map(|x| x - mean).collect();
+            rms(&dev) > 3.0 * n.max(1e-15)
+        };
+        let xdd = record.xdd.as_ref().filter(|v| moving(v));
+        let x = record.x.as_ref().filter(|v| moving(v));
+        let (platform, platform_moves) = match (xdd, x) {
+            (Some(xdd), _) => {
+                let m = SampledMotion::from_acceleration(dt, xdd.clone());
+                let m = match &record.x {
+                    Some(x) => m.with_reported_position(x.clone()),
+                    None => m,
+                };
+                (PlatformMotion::Sampled(m), true)
+            }
+            (None, Some(x)) => (
+                PlatformMotion::Sampled(SampledMotion::from_position(dt, x.clone())),
+                true,
+            ),
+            (None, None) => (PlatformMotion::Still, false),
+        };
+        let fs = 1.0 / dt;
+        let lowpass_hz = opt.lowpass_hz.min(0.4 * fs);
+        let decimate = ((fs / opt.eval_rate_hz).round() as usize).max(1);
+        let du_meas_f = filtered_derivative(&u, dt, lowpass_hz);
+        let ydd_meas_f = record.ydd.as_ref().map(|y| lowpass(y, dt, lowpass_hz));
+        let noise_u = super::diagnose::noise_rms(&u, dt);
+        let noise_ydd = record
+            .ydd
+            .as_ref()
+            .map(|y| super::diagnose::noise_rms(y, dt))
+            .unwrap_or(0.0);
+        let gain_du = noise_gain(record.len(), |x| filtered_derivative(x, dt, lowpass_hz));
+        let gain_y = noise_gain(record.len(), |x| lowpass(x, dt, lowpass_hz));
+        let scale_du = (noise_u * gain_du)
+            .max(opt.floor_fraction * rms(&du_meas_f))
+            .max(1e-9);
+        let scale_ydd = ydd_meas_f
+            .as_ref()
+            .map(|y| {
+                (noise_ydd * gain_y)
+                    .max(opt.floor_fraction * rms(y))
+                    .max(1e-6)
+            })
+            .unwrap_or(1.0);
+        Ok(Self {
+            name,
+            dt,
+            len: record.len(),
+            t: record.t.iter().map(|t| t - record.t[0]).collect(),
+            v_in: Arc::new(v_in),
+            u,
+            ydd: record.ydd.clone(),
+            platform,
+            platform_moves,
+            decimate,
+            du_meas_f,
+            ydd_meas_f,
+            scale_du,
+            scale_ydd,
+            noise_u,
+            noise_ydd,
+            lowpass_hz,
+        })
+    }
+
+    /// Duration [s].
+    pub fn duration_s(&self) -> f64 {
+        (self.len.saturating_sub(1)) as f64 * self.dt
+    }
+
+    /// Number of weighted residuals this record contributes.
+    pub fn residual_len(&self) -> usize {
+        let k = self.len.div_ceil(self.decimate);
+        if self.ydd_meas_f.is_some() { 2 * k } else { k }
+    }
+
+    /// Replays the record through the twin with `params`.
+    pub fn simulate(&self, params: &Params) -> Result<SimChannels, IdentifyError> {
+        let h = step_for_rate(
+            params
+                .numerics
+                .max_step_s
+                .min(0.9 * params.rk4_step_limit_s()),
+            1.0 / self.dt,
+        );
+        let drive = Drive::OpenLoop(CommandSignal::Sampled {
+            dt: self.dt,
+            values: self.v_in.clone(),
+        });
+        let mut sim = Simulation::new(Twin::new(*params), h, drive, self.platform.clone());
+        let every = (self.dt / h).round().max(1.0) as u64;
+        let n = self.len;
+        let mut out = SimChannels {
+            t: Vec::with_capacity(n),
+            u: Vec::with_capacity(n),
+            du: Vec::with_capacity(n),
+            ydd: Vec::with_capacity(n),
+            p1: Vec::with_capacity(n),
+            p2: Vec::with_capacity(n),
+            xv: Vec::with_capacity(n),
+            q1: Vec::with_capacity(n),
+            q2: Vec::with_capacity(n),
+        };
+        let t_end = self.duration_s();
+        sim.run_until(t_end, every, |s| {
+            if out.t.len() < n {
+                out.t.push(s.t);
+                out.u.push(s.u);
+                out.du.push(s.du);
+                out.ydd.push(s.ydd);
+                out.p1.push(s.p1);
+                out.p2.push(s.p2);
+                out.xv.push(s.xv);
+                out.q1.push(s.q1);
+                out.q2.push(s.q2);
+            }
+        })
+        .map_err(|e| IdentifyError::Simulation {
+            file: self.name.clone(),
+            source: e,
+        })?;
+        // Pad (rounding of the last step) so channels align with the record exactly.
+        while out.t.len() < n {
+            let i = out.t.len();
+            for v in [
+                &mut out.u,
+                &mut out.du,
+                &mut out.ydd,
+                &mut out.p1,
+                &mut out.p2,
+                &mut out.xv,
+                &mut out.q1,
+                &mut out.q2,
+            ] {
+                let last = v.last().copied().unwrap_or(0.0);
+                v.push(last);
+            }
+            out.t.push(i as f64 * self.dt);
+        }
+        Ok(out)
+    }
+
+    /// Weighted residuals (twin − measured) of a replay, appended to `out`:
+    /// decimated velocity channel, then decimated acceleration channel.
+    pub fn weighted_residuals(&self, sim: &SimChannels, out: &mut Vec<f64>) {
+        let du_sim_f = filtered_derivative(&sim.u, self.dt, self.lowpass_hz);
+        for i in (0..self.len).step_by(self.decimate) {
+            out.push((du_sim_f[i] - self.du_meas_f[i]) / self.scale_du);
+        }
+        if let Some(ym) = &self.ydd_meas_f {
+            let ys = lowpass(&sim.ydd, self.dt, self.lowpass_hz);
+            for i in (0..self.len).step_by(self.decimate) {
+                out.push((ys[i] - ym[i]) / self.scale_ydd);
+            }
+        }
+    }
+
+    /// Unweighted channel errors of a replay.
+    pub fn channel_errors(&self, sim: &SimChannels) -> ChannelErrors {
+        let du_sim_f = filtered_derivative(&sim.u, self.dt, self.lowpass_hz);
+        let e_du: Vec<f64> = du_sim_f
+            .iter()
+            .zip(&self.du_meas_f)
+            .map(|(a, b)| a - b)
+            .collect();
+        let e_u: Vec<f64> = sim.u.iter().zip(&self.u).map(|(a, b)| a - b).collect();
+        let (ydd, ydd_nrmse) = match &self.ydd_meas_f {
+            Some(ym) => {
+                let ys = lowpass(&sim.ydd, self.dt, self.lowpass_hz);
+                let e: Vec<f64> = ys.iter().zip(ym).map(|(a, b)| a - b).collect();
+                let r = rms(&e);
+                (Some(r), Some(r / rms(ym).max(1e-12)))
+            }
+            None => (None, None),
+        };
+        ChannelErrors {
+            du: rms(&e_du),
+            du_nrmse: rms(&e_du) / rms(&self.du_meas_f).max(1e-12),
+            ydd,
+            ydd_nrmse,
+            u: rms(&e_u),
+            samples: self.len,
+        }
+    }
+}
+
+/// RMS errors of one replay, per channel (SI).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ChannelErrors {
+    /// RMS error of the filtered relative velocity [m/s].
+    pub du: f64,
+    /// The same divided by the RMS of the measured filtered velocity [-].
+    pub du_nrmse: f64,
+    /// RMS error of the filtered body acceleration [m/s²], if measured.
+    pub ydd: Option<f64>,
+    /// The same divided by the RMS of the measured filtered acceleration [-].
+    pub ydd_nrmse: Option<f64>,
+    /// RMS error of the relative displacement [m] (open loop: includes drift; not fitted).
+    pub u: f64,
+    /// Samples in the record.
+    pub samples: usize,
+}
+
+/// One record replayed through the twin: the simulated channels aligned with the record and
+/// the residuals (twin − measured).
+#[derive(Debug, Clone)]
+pub struct Replay {
+    /// The twin's channels on the record's grid.
+    pub sim: SimChannels,
+    /// Residual of `u` [m] at every sample.
+    pub residual_u: Vec<f64>,
+    /// Residual of the filtered relative velocity [m/s] at every sample.
+    pub residual_du: Vec<f64>,
+    /// Residual of the filtered body acceleration [m/s²] at every sample, if measured.
+    pub residual_ydd: Option<Vec<f64>>,
+    /// Measured filtered velocity [m/s] (for plots).
+    pub measured_du: Vec<f64>,
+    /// Measured filtered body acceleration [m/s²] (for plots).
+    pub measured_ydd: Option<Vec<f64>>,
+    /// Twin's filtered velocity [m/s].
+    pub twin_du: Vec<f64>,
+    /// Twin's filtered body acceleration [m/s²].
+    pub twin_ydd: Vec<f64>,
+    /// RMS errors per channel.
+    pub errors: ChannelErrors,
+}
+
+/// Replays one prepared record and computes its residuals.
+pub fn replay_prepared(params: &Params, rec: &PreparedRecord) -> Result<Replay, IdentifyError> {
+    let sim = rec.simulate(params)?;
+    let twin_du = filtered_derivative(&sim.u, rec.dt, rec.lowpass_hz);
+    let twin_ydd = lowpass(&sim.ydd, rec.dt, rec.lowpass_hz);
+    let residual_du = twin_du
+        .iter()
+        .zip(&rec.du_meas_f)
+        .map(|(a, b)| a - b)
+        .collect();
+    let residual_ydd = rec
+        .ydd_meas_f
+        .as_ref()
+        .map(|ym| twin_ydd.iter().zip(ym).map(|(a, b)| a - b).collect());
+    let residual_u = sim.u.iter().zip(&rec.u).map(|(a, b)| a - b).collect();
+    let errors = rec.channel_errors(&sim);
+    Ok(Replay {
+        residual_u,
+        residual_du,
+        residual_ydd,
+        measured_du: rec.du_meas_f.clone(),
+        measured_ydd: rec.ydd_meas_f.clone(),
+        twin_du,
+        twin_ydd,
+        errors,
+        sim,
+    })
+}
+
+/// Root mean square (0 for an empty slice).
+pub fn rms(x: &[f64]) -> f64 {
+    if x.is_empty() {
+        0.0
+    } else {
+        (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
+    }
+}
+
+/// Second-order Butterworth low-pass coefficients `(b0, b1, b2, a1, a2)` (bilinear transform).
+fn butter2(dt: f64, fc: f64) -> [f64; 5] {
+    let k = (std::f64::consts::PI * fc * dt).tan();
+    let q = std::f64::consts::FRAC_1_SQRT_2;
+    let norm = 1.0 / (1.0 + k / q + k * k);
+    let b0 = k * k * norm;
+    [
+        b0,
+        2.0 * b0,
+        b0,
+        2.0 * (k * k - 1.0) * norm,
+        (1.0 - k / q + k * k) * norm,
+    ]
+}
+
+/// One pass of a biquad, started in steady state at the first value.
+fn biquad_pass(x: &mut [f64], c: &[f64; 5], reverse: bool) {
+    let n = x.len();
+    if n == 0 {
+        return;
+    }
+    let first = if reverse { x[n - 1] } else { x[0] };
+    let (mut x1, mut x2, mut y1, mut y2) = (first, first, first, first);
+    let mut step = |v: &mut f64| {
+        let x0 = *v;
+        let y0 = c[0] * x0 + c[1] * x1 + c[2] * x2 - c[3] * y1 - c[4] * y2;
+        x2 = x1;
+        x1 = x0;
+        y2 = y1;
+        y1 = y0;
+        *v = y0;
+    };
+    if reverse {
+        x.iter_mut().rev().for_each(&mut step);
+    } else {
+        x.iter_mut().for_each(&mut step);
+    }
+}
+
+/// Zero-phase low-pass: a second-order Butterworth run forward and backward twice
+/// (|H|⁴ of the biquad; −12 dB... at `fc`, −46 dB at 2·fc).
+pub fn lowpass(x: &[f64], dt: f64, fc: f64) -> Vec<f64> {
+    let c = butter2(dt, fc);
+    let mut y = x.to_vec();
+    for _ in 0..2 {
+        biquad_pass(&mut y, &c, false);
+        biquad_pass(&mut y, &c, true);
+    }
+    y
+}
+
+/// Zero-phase low-pass followed by a central difference: a smoothed derivative.
+pub fn filtered_derivative(x: &[f64], dt: f64, fc: f64) -> Vec<f64> {
+    let y = lowpass(x, dt, fc);
+    let n = y.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(1), (i + 1).min(n.saturating_sub(1)));
+            if b > a {
+                (y[b] - y[a]) / ((b - a) as f64 * dt)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// RMS gain of a linear operator on white noise of unit variance: √Σh² of its impulse response
+/// at the middle of a record of `len` samples (at most 4096).
+fn noise_gain(len: usize, op: impl Fn(&[f64]) -> Vec<f64>) -> f64 {
+    let n = len.clamp(16, 4096);
+    let mut x = vec![0.0; n];
+    x[n / 2] = 1.0;
+    op(&x).iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lowpass_keeps_slow_sine_and_kills_fast_one() {
+        let dt = 1e-3;
+        let n = 4000;
+        let slow: Vec<f64> = (0..n)
+            .map(|i| (2.0 * std::f64::consts::PI * 5.0 * i as f64 * dt).sin())
+            .collect();
+        let fast: Vec<f64> = (0..n)
+            .map(|i| (2.0 * std::f64::consts::PI * 150.0 * i as f64 * dt).sin())
+            .collect();
+        let ys = lowpass(&slow, dt, 40.0);
+        let yf = lowpass(&fast, dt, 40.0);
+        let mid = 1000..3000;
+        let e = rms(&ys[mid.clone()]
+            .iter()
+            .zip(&slow[mid.clone()])
+            .map(|(a, b)| a - b)
+            .collect::<Vec<_>>());
+        assert!(e < 1e-3, "{e}");
+        assert!(rms(&yf[mid]) < 2e-3);
+    }
+
+    #[test]
+    fn filtered_derivative_of_a_ramp_is_its_slope() {
+        let dt = 1e-3;
+        let x: Vec<f64> = (0..2000).map(|i| 0.3 * i as f64 * dt).collect();
+        let d = filtered_derivative(&x, dt, 40.0);
+        for v in &d[300..1700] {
+            assert!((v - 0.3).abs() < 1e-6, "{v}");
+        }
+    }
+
+    #[test]
+    fn noise_gain_of_identity_is_one() {
+        assert!((noise_gain(100, |x| x.to_vec()) - 1.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,476 @@
+//! Writers of a calibration: `report.json`, `report.md`, `calibrated.toml` and the plots.
+//!
+//! This is the edge where SI values become display units (mm/s, ms, bar) in the Markdown and
+//! the plots; `report.json` stays SI. Every file is written atomically.
+
+use super::{CalibrationReport, ErrorSummary, Verdict};
+use crate::preset::{Preset, PresetError, PresetMeta, write_atomic};
+use crate::report::plot::{Figure, Panel, PlotError, Scale, Series, palette, save_figure};
+use serde_json::{Value, json};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Why the report could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// A file could not be written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// A plot failed.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// The preset failed.
+    #[error(transparent)]
+    Preset(#[from] PresetError),
+}
+
+fn error_json(e: &ErrorSummary) -> Value {
+    json!({
+        "metric": e.metric,
+        "value": e.value,
+        "channels": e.channels,
+        "files": e.files.iter().map(|(n, c)| json!({"file": n, "errors": c})).collect::<Vec<_>>(),
+    })
+}
+
+/// The `report.json` document (SI).
+pub fn report_json(r: &CalibrationReport) -> Value {
+    let mut calibrated = serde_json::Map::new();
+    let mut unc = serde_json::Map::new();
+    for v in &r.calibrated {
+        calibrated.insert(v.name.clone(), json!(v.value));
+        unc.insert(v.name.clone(), json!(finite(v.std)));
+    }
+    let first_round: Vec<Value> = r
+        .candidates
+        .iter()
+        .filter(|c| c.round == 1)
+        .map(|c| {
+            json!({"name": c.effect.name(), "score": c.score,
+                   "relative_gain": c.relative_gain, "params": c.params})
+        })
+        .collect();
+    json!({
+        "verdict": r.verdict.name(),
+        "effects": r.effects.iter().map(|e| json!({
+            "name": e.effect.name(),
+            "params": e.params,
+            "uncertainties": e.uncertainties.iter()
+                .map(|(k, v)| (k.clone(), finite(*v))).collect::<serde_json::Map<_, _>>(),
+            "evidence": e.evidence,
+        })).collect::<Vec<_>>(),
+        "candidates": first_round,
+        "candidate_rounds": r.candidates.iter().map(|c| json!({
+            "round": c.round, "name": c.effect.name(), "score": c.score,
+            "relative_gain": c.relative_gain, "params": c.params})).collect::<Vec<_>>(),
+        "score": "ΔBIC = n_eff·ln(RSS_candidate/RSS_current) + Δk·ln(n_eff) against the model of that round; negative is better",
+        "calibrated_parameters": calibrated,
+        "calibrated_uncertainties": unc,
+        "mass_fitted": r.mass_fitted,
+        "paper_baseline": r.baseline,
+        "error_nominal": error_json(&r.error_nominal),
+        "error_paper_baseline": r.error_baseline.as_ref().map(error_json),
+        "error_before": error_json(&r.error_before),
+        "error_after": error_json(&r.error_after),
+        "diagnostics_before": r.diagnostics_before,
+        "diagnostics_after": r.diagnostics_after,
+        "n_residuals": r.n,
+        "n_effective": r.n_eff,
+        "replays": r.evaluations,
+        "files": r.files,
+        "notes": r.notes,
+    })
+}
+
+fn finite(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// The calibrated preset.
+pub fn calibrated_preset(r: &CalibrationReport) -> Preset {
+    let effects: Vec<&str> = r.effects.iter().map(|e| e.effect.name()).collect();
+    Preset {
+        meta: PresetMeta {
+            name: "calibrated".into(),
+            description: format!(
+                "Calibrated by `seat-twin calibrate` on {} record(s); verdict {}; effects: {}",
+                r.files.len(),
+                r.verdict.name(),
+                if effects.is_empty() {
+                    "none".to_string()
+                } else {
+                    effects.join(", ")
+                }
+            ),
+            ..PresetMeta::default()
+        },
+        params: r.params,
+    }
+}
+
+/// The Markdown report.
+pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# seat-twin calibration\n");
+    let _ = writeln!(
+        s,
+        "**Verdict: `{}`** — {}\n",
+        r.verdict.name(),
+        match r.verdict {
+            Verdict::Explained => "the residual was traced to the effect(s) below.",
+            Verdict::NoMissingEffect =>
+                "the twin with re-fitted declared parameters explains the data to the noise level; nothing was added.",
+            Verdict::Unexplained =>
+                "a residual above the noise remains and no effect of the library earns its parameters.",
+        }
+    );
+    let _ = writeln!(s, "Records: {}.\n", r.files.join(", "));
+    let _ = writeln!(s, "## Error metric\n\n{}\n", super::METRIC);
+    let _ = writeln!(
+        s,
+        "| stage | weighted RMS | u̇ RMS [mm/s] | ÿ RMS [m/s²] | u RMS [mm] |\n|---|---|---|---|---|"
+    );
+    let row = |s: &mut String, name: &str, e: &ErrorSummary| {
+        let c = |k: &str| e.channels.get(k).copied().unwrap_or(f64::NAN);
+        let _ = writeln!(
+            s,
+            "| {name} | {:.3} | {:.3} | {:.4} | {:.3} |",
+            e.value,
+            1e3 * c("du"),
+            c("ydd"),
+            1e3 * c("u")
+        );
+    };
+    row(&mut s, "nominal (preset as given)", &r.error_nominal);
+    if let Some(e) = &r.error_baseline {
+        row(&mut s, "paper's section-4 method", e);
+    }
+    row(
+        &mut s,
+        "before (declared parameters re-fitted)",
+        &r.error_before,
+    );
+    row(&mut s, "after (with added effects)", &r.error_after);
+    let _ = writeln!(s, "\n## Declared parameters\n");
+    let _ = writeln!(
+        s,
+        "| parameter | nominal | paper method | calibrated | 1-σ |\n|---|---|---|---|---|"
+    );
+    for v in &r.calibrated {
+        let nominal = v.knob.value(&r.nominal);
+        let paper = match (&r.baseline, v.knob) {
+            (Some(b), super::Knob::Cd) => format!("{:.5}", b.cd),
+            (Some(b), super::Knob::Tau) => format!("{:.5}", b.tau_s),
+            _ => "—".into(),
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {:.5} | {} | {:.5} | {:.2e} |",
+            v.name, nominal, paper, v.value, v.std
+        );
+    }
+    let _ = writeln!(s, "\n## Effects added\n");
+    if r.effects.is_empty() {
+        let _ = writeln!(s, "None.\n");
+    }
+    for e in &r.effects {
+        let _ = writeln!(s, "### `{}`\n", e.effect.name());
+        for (k, v) in &e.params {
+            let u = e.uncertainties.get(k).copied().unwrap_or(f64::NAN);
+            let _ = writeln!(s, "- {k} = {v:.4e} ± {u:.2e}");
+        }
+        let _ = writeln!(s, "\nEvidence: {}\n", e.evidence);
+    }
+    let _ = writeln!(
+        s,
+        "## Candidates\n\nScore = ΔBIC against the model of the round \
+         (n = {}, n_eff = {:.0}); an effect is added when ΔBIC < 0 and it removes enough of the residual.\n",
+        r.n, r.n_eff
+    );
+    let _ = writeln!(
+        s,
+        "| round | effect | ΔBIC | residual removed | parameters |\n|---|---|---|---|---|"
+    );
+    for c in &r.candidates {
+        let p: Vec<String> = c
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.3e}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.1} | {:.1} % | {} |",
+            c.round,
+            c.effect.name(),
+            c.score,
+            100.0 * c.relative_gain,
+            p.join(", ")
+        );
+    }
+    let _ = writeln!(s, "\n## Residual diagnostics\n");
+    let _ = writeln!(s, "| | before | after |\n|---|---|---|");
+    let (wb, wa) = (
+        &r.diagnostics_before.whiteness,
+        &r.diagnostics_after.whiteness,
+    );
+    let _ = writeln!(
+        s,
+        "| lag-1 autocorrelation | {:.3} | {:.3} |",
+        wb.lag1, wa.lag1
+    );
+    let _ = writeln!(
+        s,
+        "| share of lags 1–{} outside the white-noise band | {:.2} | {:.2} |",
+        wb.max_lag, wb.share_outside, wa.share_outside
+    );
+    let _ = writeln!(
+        s,
+        "| ÿ residual power above 30 Hz | {:.3} | {:.3} |",
+        r.diagnostics_before.high_frequency_share, r.diagnostics_after.high_frequency_share
+    );
+    for (b, a) in r
+        .diagnostics_before
+        .correlations
+        .iter()
+        .zip(&r.diagnostics_after.correlations)
+    {
+        let _ = writeln!(
+            s,
+            "| corr(u̇ residual, `{}`) → {} | {:+.3} | {:+.3} |",
+            b.feature, b.effect, b.velocity, a.velocity
+        );
+        let _ = writeln!(
+            s,
+            "| corr(ÿ residual, `{}`) → {} | {:+.3} | {:+.3} |",
+            b.feature, b.effect, b.acceleration, a.acceleration
+        );
+    }
+    let _ = writeln!(s, "\n## Per file (u̇ NRMSE before → after)\n");
+    for ((n, b), (_, a)) in r.error_before.files.iter().zip(&r.error_after.files) {
+        let _ = writeln!(
+            s,
+            "- {n}: {:.2} % → {:.2} %{}",
+            100.0 * b.du_nrmse,
+            100.0 * a.du_nrmse,
+            match (b.ydd_nrmse, a.ydd_nrmse) {
+                (Some(x), Some(y)) => format!(" (ÿ {:.2} % → {:.2} %)", 100.0 * x, 100.0 * y),
+                _ => String::new(),
+            }
+        );
+    }
+    if !r.notes.is_empty() {
+        let _ = writeln!(s, "\n## Notes\n");
+        for n in &r.notes {
+            let _ = writeln!(s, "- {n}");
+        }
+    }
+    let _ = writeln!(s, "\nReplays of the whole campaign: {}.", r.evaluations);
+    if let Some(t) = elapsed_s {
+        let _ = writeln!(s, "Wall time: {t:.1} s.");
+    }
+    let _ = writeln!(
+        s,
+        "\nPlots: `measured_vs_twin`, `residual`, `residual_spectrum`, `signature_correlation` (PNG and SVG)."
+    );
+    s
+}
+
+fn thin(x: &[f64], max: usize) -> (Vec<usize>, usize) {
+    let step = x.len().div_ceil(max.max(1)).max(1);
+    ((0..x.len()).step_by(step).collect(), step)
+}
+
+/// Records shown in the time plots: up to four, the longest first, then the largest residual.
+fn shown(r: &CalibrationReport) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..r.records.len()).collect();
+    idx.sort_by(|&a, &b| {
+        r.error_before.files[b]
+            .1
+            .du_nrmse
+            .total_cmp(&r.error_before.files[a].1.du_nrmse)
+    });
+    idx.truncate(4);
+    idx
+}
+
+/// Writes the four figures into `dir` (PNG + SVG each).
+pub fn write_plots(r: &CalibrationReport, dir: &Path) -> Result<(), ReportError> {
+    let (c_meas, c_before, c_after) = (palette(0), palette(1), palette(2));
+    let mut fit_panels = Vec::new();
+    let mut res_panels = Vec::new();
+    for i in shown(r) {
+        let rec = &r.records[i];
+        let (ix, _) = thin(&rec.t, 3000);
+        let pick = |v: &[f64], k: f64| ix.iter().map(|&j| k * v[j]).collect::<Vec<f64>>();
+        let t = pick(&rec.t, 1.0);
+        let mut p = Panel::new(
+            format!("{}: relative velocity", rec.name),
+            "time [s]",
+            "u̇ [mm/s]",
+        );
+        p.series = vec![
+            Series::line("measured", t.clone(), pick(&rec.du_meas_f, 1e3), c_meas),
+            Series::line(
+                "twin before",
+                t.clone(),
+                pick(&r.replays_before[i].twin_du, 1e3),
+                c_before,
+            ),
+            Series::line(
+                "twin after",
+                t.clone(),
+                pick(&r.replays_after[i].twin_du, 1e3),
+                c_after,
+            ),
+        ];
+        fit_panels.push(p);
+        let mut q = Panel::new(
+            format!("{}: velocity residual (twin − measured)", rec.name),
+            "time [s]",
+            "Δu̇ [mm/s]",
+        );
+        q.series = vec![
+            Series::line(
+                "before",
+                t.clone(),
+                pick(&r.replays_before[i].residual_du, 1e3),
+                c_before,
+            ),
+            Series::line(
+                "after",
+                t.clone(),
+                pick(&r.replays_after[i].residual_du, 1e3),
+                c_after,
+            ),
+        ];
+        if let (Some(b), Some(a)) = (
+            &r.replays_before[i].residual_ydd,
+            &r.replays_after[i].residual_ydd,
+        ) {
+            let mut qa = Panel::new(
+                format!("{}: acceleration residual", rec.name),
+                "time [s]",
+                "Δÿ [m/s²]",
+            );
+            qa.series = vec![
+                Series::line("before", t.clone(), pick(b, 1.0), c_before),
+                Series::line("after", t.clone(), pick(a, 1.0), c_after),
+            ];
+            res_panels.push(q);
+            res_panels.push(qa);
+        } else {
+            res_panels.push(q);
+        }
+    }
+    let h = |n: usize| (260 * n as u32).clamp(400, 2400);
+    let mut fig = Figure::new("Measured vs twin, before and after", fit_panels);
+    fig.height = h(fig.panels.len());
+    save_figure(&fig, &dir.join("measured_vs_twin"))?;
+    let mut fig = Figure::new("Residual before and after", res_panels);
+    fig.height = h(fig.panels.len());
+    save_figure(&fig, &dir.join("residual"))?;
+
+    // Spectrum of the raw acceleration residual (else velocity), the longest record.
+    let longest = (0..r.records.len()).max_by_key(|&i| r.records[i].len);
+    let mut sp = Panel::new("", "frequency [Hz]", "amplitude density");
+    sp.x_scale = Scale::Log10;
+    sp.y_scale = Scale::Log10;
+    if let Some(i) = longest {
+        let rec = &r.records[i];
+        let res = |rep: &super::Replay| -> Vec<f64> {
+            match &rec.ydd {
+                Some(y) => rep.sim.ydd.iter().zip(y).map(|(a, b)| a - b).collect(),
+                None => rep.residual_du.clone(),
+            }
+        };
+        sp.title = format!(
+            "{}: spectrum of the {} residual",
+            rec.name,
+            if rec.ydd.is_some() {
+                "ÿ [m/s²/√Hz]"
+            } else {
+                "u̇ [m/s/√Hz]"
+            }
+        );
+        for (label, rep, c) in [
+            ("before", &r.replays_before[i], c_before),
+            ("after", &r.replays_after[i], c_after),
+        ] {
+            let (f, a) = super::diagnose::spectrum(&res(rep), rec.dt);
+            let (ix, _) = thin(&f, 4000);
+            sp.series.push(Series::line(
+                label,
+                ix.iter().map(|&j| f[j]).collect(),
+                ix.iter().map(|&j| a[j]).collect(),
+                c,
+            ));
+        }
+    }
+    save_figure(
+        &Figure::new("Residual spectrum", vec![sp]),
+        &dir.join("residual_spectrum"),
+    )?;
+
+    // Correlation with the signature features.
+    let mut cp = Panel::new(
+        "1 sign_velocity (friction) · 2 small_command (overlap) · 3 load_pressure (leakage) · \
+         4 flow_magnitude (supply sag) · 5 constant (offset) · 6 HF share (compliance)",
+        "feature",
+        "correlation [-]",
+    );
+    for (label, d, c) in [
+        ("u̇ residual before", &r.diagnostics_before, c_before),
+        ("u̇ residual after", &r.diagnostics_after, c_after),
+    ] {
+        let mut x: Vec<f64> = (1..=d.correlations.len()).map(|k| k as f64).collect();
+        let mut y: Vec<f64> = d.correlations.iter().map(|c| c.velocity).collect();
+        x.push(6.0);
+        y.push(d.high_frequency_share);
+        cp.series.push(Series::markers(label, x, y, c));
+    }
+    for (label, d, c) in [
+        ("ÿ residual before", &r.diagnostics_before, palette(3)),
+        ("ÿ residual after", &r.diagnostics_after, palette(4)),
+    ] {
+        let x: Vec<f64> = (1..=d.correlations.len())
+            .map(|k| k as f64 + 0.15)
+            .collect();
+        let y: Vec<f64> = d.correlations.iter().map(|c| c.acceleration).collect();
+        cp.series.push(Series::markers(label, x, y, c));
+    }
+    cp.y_range = Some((-1.0, 1.0));
+    cp.x_range = Some((0.5, 6.5));
+    cp.hlines = vec![(0.0, String::new())];
+    save_figure(
+        &Figure::new("Residual vs signature features", vec![cp]),
+        &dir.join("signature_correlation"),
+    )?;
+    Ok(())
+}
+
+/// Writes `report.json`, `report.md`, `calibrated.toml` and the plots into `dir` (created if
+/// needed). Each file is written atomically.
+pub fn write_all(
+    r: &CalibrationReport,
+    dir: &Path,
+    elapsed_s: Option<f64>,
+) -> Result<(), ReportError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| ReportError::Io { path, source }
+    };
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    write_plots(r, dir)?;
+    calibrated_preset(r).save(&dir.join("calibrated.toml"))?;
+    let json = serde_json::to_string_pretty(&report_json(r)).unwrap_or_default();
+    let p = dir.join("report.json");
+    write_atomic(&p, json.as_bytes()).map_err(io(&p))?;
+    let p = dir.join("report.md");
+    write_atomic(&p, report_markdown(r, elapsed_s).as_bytes()).map_err(io(&p))?;
+    Ok(())
+}
