@@ -1,5 +1,6 @@
 //! Criterion benches of the engine kernels: 10 s of closed-loop random ride on each model, the
-//! 69 Table 1 sine dwells on the twin, and the twin's linearisation + frequency response.
+//! 69 Table 1 sine dwells on the twin, the twin's linearisation + frequency response, and one
+//! calibration (two demo sine records, full effect search).
 //!
 //! Run with `cargo bench --no-default-features --bench engine`. The real-time factor is
 //! 10 s divided by the reported time per iteration.
@@ -62,5 +63,26 @@ fn linearisation(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, ride_10s, table1_sweep, linearisation);
+fn calibration(c: &mut Criterion) {
+    use seat_twin::dataset::{RecordKind, read_record};
+    use seat_twin::identify::{CalibrationOptions, calibrate};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo-campaign");
+    let records: Vec<_> = ["sine_05hz_4.50v.csv", "sine_10hz_1.10v.csv"]
+        .iter()
+        .map(|f| read_record(&dir.join(f), RecordKind::Measured).expect("demo record"))
+        .collect();
+    let params = Params::paper();
+    let options = CalibrationOptions::default();
+    let mut group = c.benchmark_group("calibration");
+    group.sample_size(10);
+    group.bench_function("two_demo_sine_records", |b| {
+        b.iter(|| {
+            let report = calibrate(&params, &records, &options, &|_| true).expect("calibrates");
+            black_box(report)
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, ride_10s, table1_sweep, linearisation, calibration);
 criterion_main!(benches);
