@@ -6,7 +6,9 @@
 //! Coulomb + viscous, a smooth overlap edge, a spool-position offset, a pressure-dependent
 //! leakage, separate hose and chamber bulk moduli, a quadratic supply droop). Its declared
 //! parameters are off from the preset (Cd −5 %, τ +1.5 ms), and its records carry sensor
-//! noise (0.08 m/s² on accelerations, 0.01 mm on u plus 18.3 µm quantisation).
+//! noise (0.08 m/s² on accelerations, 0.01 mm on u plus 18.3 µm quantisation). Most
+//! campaigns have no pressure channels, as the issue expects; the supply-sag case and one
+//! friction case record `p1`, `p2` too (0.2 bar noise, 12-bit on 250 bar).
 
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -146,8 +148,9 @@ impl Rig {
         self.rhs(y, 0.0, xdd)[1] + xdd
     }
 
-    /// Simulates one test and returns a measured record (1 kHz, noisy, quantised).
-    fn record(&self, test: &Test, seed: u64) -> Record {
+    /// Simulates one test and returns a measured record (1 kHz, noisy, quantised); with
+    /// `pressures`, the chamber pressures too (Pa gauge, 0.2 bar noise, 12-bit on 250 bar).
+    fn record(&self, test: &Test, seed: u64, pressures: bool) -> Record {
         let h = 5e-5;
         let per_sample = 20;
         let dur = match test {
@@ -187,8 +190,11 @@ impl Rig {
         let acc_noise = Normal::new(0.0, 0.08).unwrap();
         let pos_noise = Normal::new(0.0, 1e-5).unwrap();
         let lsb = 0.075 / 4096.0;
+        let p_noise = Normal::new(0.0, 2e4).unwrap();
+        let p_lsb = 250e5 / 4096.0;
         let (mut t_col, mut v_col, mut u_col, mut x_col, mut xdd_col, mut ydd_col) =
             (vec![], vec![], vec![], vec![], vec![], vec![]);
+        let (mut p1_col, mut p2_col) = (vec![], vec![]);
         let mut t = 0.0;
         hist.push(cmd(0.0, &y));
         for s in 0..n {
@@ -200,6 +206,11 @@ impl Rig {
             x_col.push(x + pos_noise.sample(&mut rng));
             xdd_col.push(xdd + acc_noise.sample(&mut rng));
             ydd_col.push(self.body_acc(&y, xdd) + acc_noise.sample(&mut rng));
+            if pressures {
+                for (col, p) in [(&mut p1_col, y[2]), (&mut p2_col, y[3])] {
+                    col.push(p_lsb * ((p + p_noise.sample(&mut rng)) / p_lsb).round());
+                }
+            }
             if s + 1 == n {
                 break;
             }
@@ -241,14 +252,14 @@ impl Rig {
             x: ride.then_some(x_col),
             xdd: ride.then_some(xdd_col),
             ydd: Some(ydd_col),
-            p1: None,
-            p2: None,
+            p1: pressures.then_some(p1_col),
+            p2: pressures.then_some(p2_col),
             warnings: vec![],
         }
     }
 }
 
-fn campaign(fx: RigEffects, seed: u64) -> Vec<Record> {
+fn campaign(fx: RigEffects, seed: u64, pressures: bool) -> Vec<Record> {
     let rig = Rig {
         cd: 0.95 * 0.1506,
         tau: 0.0175 + 0.0015,
@@ -280,12 +291,16 @@ fn campaign(fx: RigEffects, seed: u64) -> Vec<Record> {
     tests
         .iter()
         .enumerate()
-        .map(|(i, t)| rig.record(t, seed * 100 + i as u64))
+        .map(|(i, t)| rig.record(t, seed * 100 + i as u64, pressures))
         .collect()
 }
 
 fn run(fx: RigEffects, seed: u64) -> CalibrationReport {
-    let recs = campaign(fx, seed);
+    run_with(fx, seed, false)
+}
+
+fn run_with(fx: RigEffects, seed: u64, pressures: bool) -> CalibrationReport {
+    let recs = campaign(fx, seed, pressures);
     identify::calibrate(
         &Params::paper(),
         &recs,
@@ -335,7 +350,16 @@ fn summary(r: &CalibrationReport) -> String {
 }
 
 fn check_single(fx: RigEffects, expected: EffectId, seed: u64) -> CalibrationReport {
-    let r = run(fx, seed);
+    check_single_with(fx, expected, seed, false)
+}
+
+fn check_single_with(
+    fx: RigEffects,
+    expected: EffectId,
+    seed: u64,
+    pressures: bool,
+) -> CalibrationReport {
+    let r = run_with(fx, seed, pressures);
     let s = summary(&r);
     eprintln!("{}: {s}", expected.name());
     assert_eq!(first_ranked(&r), expected, "{s}");
@@ -372,7 +396,13 @@ fn friction_is_found() {
         friction: Some((40.0, 20.0, 0.01, 80.0)),
         ..Default::default()
     };
-    check_single(fx, EffectId::Friction, 2);
+    let r = check_single(fx, EffectId::Friction, 2);
+    // Coulomb friction acts at reversals, which sag cannot mimic: no ambiguity note.
+    assert!(
+        !r.notes.iter().any(|n| n.contains("about equally")),
+        "{:?}",
+        r.notes
+    );
 }
 
 #[test]
@@ -413,14 +443,66 @@ fn compliance_is_found() {
 
 /// Known limitation: without pressure channels, a quadratic supply droop and viscous friction
 /// both just reduce the velocity at high flow (Q = A·u̇ in every test), and the scores tie.
+/// Supply sag with chamber pressures recorded. Without them the case cannot be decided (see
+/// `supply_sag_without_pressures_is_reported_ambiguous`): at steady flow a supply droop and a
+/// viscous friction lower the velocity alike, since both take pressure from the metering
+/// edges in proportion to the flow (r ≈ b/A²), so u̇ and ÿ carry almost the same signature.
+/// The pressures do not: sag lowers the common-mode pressure (p1 + p2)/2 with the drawn
+/// flow, friction shifts the load pressure p1 − p2. Fitting pressure transducers is the
+/// physically justified experiment when sag is suspected (the record format has `p1`, `p2`),
+/// so this campaign records them; the tests and the rig's effect law are unchanged.
 #[test]
-#[ignore = "supply sag and viscous friction are confounded without pressure channels"]
 fn supply_sag_is_found() {
     let fx = RigEffects {
         sag: Some(1.5e14),
         ..Default::default()
     };
-    check_single(fx, EffectId::SupplySag, 7);
+    check_single_with(fx, EffectId::SupplySag, 7, true);
+}
+
+/// Without pressure channels, the pipeline must not claim it told supply sag from friction:
+/// it adds one of them and says, in the notes, that the other explains the data as well.
+#[test]
+fn supply_sag_without_pressures_is_reported_ambiguous() {
+    let fx = RigEffects {
+        sag: Some(1.5e14),
+        ..Default::default()
+    };
+    let r = run(fx, 7);
+    let s = summary(&r);
+    let params: Vec<String> = r
+        .candidates
+        .iter()
+        .filter(|c| c.round == 1 && c.score < 0.0)
+        .map(|c| format!("{} {:?}", c.effect.name(), c.params))
+        .collect();
+    eprintln!(
+        "supply_sag without pressures: {s}; round-1 fits {params:?}; notes {:?}",
+        r.notes
+    );
+    assert_eq!(r.verdict, Verdict::Explained, "{s}");
+    assert!(
+        [EffectId::Friction, EffectId::SupplySag].contains(&r.effects[0].effect),
+        "{s}"
+    );
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.contains("`friction`") && n.contains("`supply_sag`")),
+        "{s}; notes {:?}",
+        r.notes
+    );
+    assert!(r.error_after.value < 0.7 * r.error_before.value, "{s}");
+}
+
+/// The pressure channels must not turn friction into sag: friction still wins with them.
+#[test]
+fn friction_is_found_with_pressures() {
+    let fx = RigEffects {
+        friction: Some((40.0, 20.0, 0.01, 80.0)),
+        ..Default::default()
+    };
+    check_single_with(fx, EffectId::Friction, 2, true);
 }
 
 #[test]

@@ -181,6 +181,9 @@ pub struct CalibrationOptions {
     /// left after the first effect is partly model-form error, which any flexible effect can
     /// soak up a little of, so a second effect must explain a large part of it.
     pub min_relative_gain_later: f64,
+    /// ΔBIC difference below which the runner-up of a round is reported as equally plausible
+    /// (a note in the report; 6 = "strong evidence" on the usual BIC scale).
+    pub ambiguity_margin: f64,
     /// Fit the mass when its relative uncertainty would be below this [-].
     pub mass_max_rel_std: f64,
     /// Weighted RMS error at or below which the twin explains the data "to the noise level".
@@ -200,6 +203,7 @@ impl Default for CalibrationOptions {
             screen_iterations: 4,
             min_relative_gain: 0.10,
             min_relative_gain_later: 0.40,
+            ambiguity_margin: 6.0,
             mass_max_rel_std: 0.05,
             noise_level: 1.5,
             fit_step_s: 2.5e-4,
@@ -223,8 +227,8 @@ pub struct ErrorSummary {
     pub metric: String,
     /// RMS of the weighted residual (1 = sensor-noise level).
     pub value: f64,
-    /// Pooled RMS errors per channel, SI: `du` [m/s], `ydd` [m/s²], `u` [m], and the
-    /// normalised ones `du_nrmse`, `ydd_nrmse` [-].
+    /// Pooled RMS errors per channel, SI: `du` [m/s], `ydd` [m/s²], `u` [m], `p1`, `p2` [Pa]
+    /// (records with pressures only), and the normalised ones `du_nrmse`, `ydd_nrmse` [-].
     pub channels: BTreeMap<String, f64>,
     /// Per file.
     pub files: Vec<(String, ChannelErrors)>,
@@ -234,7 +238,8 @@ pub struct ErrorSummary {
 pub const METRIC: &str = "RMS of the noise-weighted residual of relative velocity du/dt \
 (measured and twin u through the same zero-phase 25 Hz low-pass and central difference) and of \
 body acceleration ydd (same low-pass), decimated to 250 Hz; each file and channel divided by \
-max(estimated sensor noise, 1 % of the signal RMS); 1.0 = noise level";
+max(estimated sensor noise, 1 % of the signal RMS); chamber pressures p1, p2 (same low-pass, \
+floor on 1 % of their swing) are included for the records that have them; 1.0 = noise level";
 
 /// A candidate effect's score in one round.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -362,6 +367,19 @@ pub struct CalibrationReport {
     pub notes: Vec<String>,
 }
 
+/// Why two effects can be confounded, when the physics says so (for the ambiguity note).
+fn confounding_hint(a: EffectId, b: EffectId, recs: &[PreparedRecord]) -> &'static str {
+    let pair = |x, y| (a == x && b == y) || (a == y && b == x);
+    let pressures = recs.iter().any(|r| r.p_meas_f.iter().any(|p| p.is_some()));
+    if pair(EffectId::Friction, EffectId::SupplySag) && !pressures {
+        " At steady flow a supply droop r and a viscous friction b reduce the velocity alike \
+         (r ≈ b/A²); the chamber pressures p1, p2 separate them (sag lowers (p1 + p2)/2, \
+         friction shifts p1 − p2): record them to decide."
+    } else {
+        ""
+    }
+}
+
 /// Coarse start for a candidate effect: its first parameter on a log grid (both signs for a
 /// signed one), the others at 0; returns the best of the grid and "off".
 fn multi_start(ev: &Evaluator<'_>, current: &Params, e: EffectId) -> Result<Params, IdentifyError> {
@@ -431,6 +449,8 @@ fn summary(recs: &[PreparedRecord], replays: &[Replay], weighted: &[f64]) -> Err
         ("ydd", &|r: &Replay| r.errors.ydd),
         ("ydd_nrmse", &|r: &Replay| r.errors.ydd_nrmse),
         ("u", &|r: &Replay| Some(r.errors.u)),
+        ("p1", &|r: &Replay| r.errors.p1),
+        ("p2", &|r: &Replay| r.errors.p2),
     ] {
         if let Some(v) = pooled(f) {
             channels.insert(name.to_string(), v);
@@ -698,6 +718,7 @@ pub fn calibrate(
                     .collect(),
             });
         }
+        let runner_up = scored.get(1).map(|(e, _, s, _)| (*e, *s));
         let Some((best, best_fit, score, gain)) = scored.into_iter().next() else {
             break;
         };
@@ -708,6 +729,22 @@ pub fn calibrate(
         };
         if !(score < 0.0 && gain >= min_gain) {
             break;
+        }
+        if let Some((other, other_score)) = runner_up
+            && other_score < 0.0
+            && other_score - score < options.ambiguity_margin
+        {
+            notes.push(format!(
+                "round {round}: `{}` (ΔBIC {score:.1}) and `{}` (ΔBIC {other_score:.1}) explain \
+                 the residual about equally (difference {:.1} < {:.0}): the data cannot tell \
+                 them apart, `{}` was added by a narrow margin.{}",
+                best.name(),
+                other.name(),
+                other_score - score,
+                options.ambiguity_margin,
+                best.name(),
+                confounding_hint(best, other, &recs),
+            ));
         }
         set_stage(format!("re-fit with {}", best.name()));
         knobs.extend_from_slice(best.knobs());

@@ -12,9 +12,15 @@
 //! * the relative velocity `u̇`, obtained from the measured `u` and from the twin's `u` by the
 //!   *same* linear operator (zero-phase low-pass, then central difference), so quantisation
 //!   and noise are smoothed identically on both sides;
-//! * the body acceleration `ÿ` (when measured), through the same zero-phase low-pass.
+//! * the body acceleration `ÿ` (when measured), through the same zero-phase low-pass;
+//! * the chamber pressures `p1`, `p2` (only when the record has them), through the same
+//!   low-pass. Records give them in Pa gauge, the convention of the twin's pressures (supply
+//!   and return pressures of the preset are gauge too). Pressures are what separate effects
+//!   that motion alone confounds: supply sag lowers the common-mode pressure `(p1 + p2)/2`
+//!   with the drawn flow, friction shifts the load pressure `p1 − p2`, and at steady flow
+//!   the two give the same velocity.
 //!
-//! Both are decimated to about `eval_rate_hz`, and each residual is divided by
+//! All are decimated to about `eval_rate_hz`, and each residual is divided by
 //! `max(σ_noise, floor·RMS(signal))` of its file and channel, where `σ_noise` is the sensor
 //! noise estimated from the measured record itself (see [`super::diagnose::noise_rms`]) after
 //! the same filter. The reported error is the RMS of these weighted residuals: 1 means the twin
@@ -107,6 +113,12 @@ pub struct PreparedRecord {
     pub noise_u: f64,
     /// Estimated noise RMS of the raw `ÿ` [m/s²] (0 without the channel).
     pub noise_ydd: f64,
+    /// Filtered measured chamber pressures `p1`, `p2` [Pa gauge], each if recorded.
+    pub p_meas_f: [Option<Vec<f64>>; 2],
+    /// Weight scales of the pressure channels [Pa] (1 without the channel).
+    pub scale_p: [f64; 2],
+    /// Estimated noise RMS of the raw pressures [Pa] (0 without the channel).
+    pub noise_p: [f64; 2],
     /// Low-pass cut-off used [Hz].
     pub lowpass_hz: f64,
 }
@@ -175,6 +187,22 @@ impl PreparedRecord {
                     .max(1e-6)
             })
             .unwrap_or(1.0);
+        let mut p_meas_f = [None, None];
+        let mut scale_p = [1.0; 2];
+        let mut noise_p = [0.0; 2];
+        for (i, raw) in [&record.p1, &record.p2].into_iter().enumerate() {
+            if let Some(p) = raw {
+                let f = lowpass(p, dt, lowpass_hz);
+                let n = super::diagnose::noise_rms(p, dt);
+                // The floor is taken on the swing about the mean: the mean pressure (tens of
+                // bar) says nothing about how well the twin can follow it.
+                let mean = f.iter().sum::<f64>() / f.len().max(1) as f64;
+                let swing: Vec<f64> = f.iter().map(|v| v - mean).collect();
+                scale_p[i] = (n * gain_y).max(opt.floor_fraction * rms(&swing)).max(1.0);
+                noise_p[i] = n;
+                p_meas_f[i] = Some(f);
+            }
+        }
         Ok(Self {
             name,
             dt,
@@ -192,6 +220,9 @@ impl PreparedRecord {
             scale_ydd,
             noise_u,
             noise_ydd,
+            p_meas_f,
+            scale_p,
+            noise_p,
             lowpass_hz,
         })
     }
@@ -204,7 +235,10 @@ impl PreparedRecord {
     /// Number of weighted residuals this record contributes.
     pub fn residual_len(&self) -> usize {
         let k = self.len.div_ceil(self.decimate);
-        if self.ydd_meas_f.is_some() { 2 * k } else { k }
+        let channels = 1
+            + usize::from(self.ydd_meas_f.is_some())
+            + self.p_meas_f.iter().filter(|p| p.is_some()).count();
+        channels * k
     }
 
     /// Replays the record through the twin with `params`.
@@ -274,7 +308,8 @@ impl PreparedRecord {
     }
 
     /// Weighted residuals (twin − measured) of a replay, appended to `out`:
-    /// decimated velocity channel, then decimated acceleration channel.
+    /// decimated velocity channel, then decimated acceleration channel, then the pressure
+    /// channels the record has.
     pub fn weighted_residuals(&self, sim: &SimChannels, out: &mut Vec<f64>) {
         let du_sim_f = filtered_derivative(&sim.u, self.dt, self.lowpass_hz);
         for i in (0..self.len).step_by(self.decimate) {
@@ -284,6 +319,14 @@ impl PreparedRecord {
             let ys = lowpass(&sim.ydd, self.dt, self.lowpass_hz);
             for i in (0..self.len).step_by(self.decimate) {
                 out.push((ys[i] - ym[i]) / self.scale_ydd);
+            }
+        }
+        for (k, sim_p) in [&sim.p1, &sim.p2].into_iter().enumerate() {
+            if let Some(pm) = &self.p_meas_f[k] {
+                let ps = lowpass(sim_p, self.dt, self.lowpass_hz);
+                for i in (0..self.len).step_by(self.decimate) {
+                    out.push((ps[i] - pm[i]) / self.scale_p[k]);
+                }
             }
         }
     }
@@ -306,7 +349,15 @@ impl PreparedRecord {
             }
             None => (None, None),
         };
+        let p_err = |k: usize, sim_p: &[f64]| {
+            self.p_meas_f[k].as_ref().map(|pm| {
+                let ps = lowpass(sim_p, self.dt, self.lowpass_hz);
+                rms(&ps.iter().zip(pm).map(|(a, b)| a - b).collect::<Vec<_>>())
+            })
+        };
         ChannelErrors {
+            p1: p_err(0, &sim.p1),
+            p2: p_err(1, &sim.p2),
             du: rms(&e_du),
             du_nrmse: rms(&e_du) / rms(&self.du_meas_f).max(1e-12),
             ydd,
@@ -328,6 +379,10 @@ pub struct ChannelErrors {
     pub ydd: Option<f64>,
     /// The same divided by the RMS of the measured filtered acceleration [-].
     pub ydd_nrmse: Option<f64>,
+    /// RMS error of the filtered upper chamber pressure [Pa], if measured.
+    pub p1: Option<f64>,
+    /// RMS error of the filtered lower chamber pressure [Pa], if measured.
+    pub p2: Option<f64>,
     /// RMS error of the relative displacement [m] (open loop: includes drift; not fitted).
     pub u: f64,
     /// Samples in the record.
@@ -506,6 +561,53 @@ mod tests {
         for v in &d[300..1700] {
             assert!((v - 0.3).abs() < 1e-6, "{v}");
         }
+    }
+
+    #[test]
+    fn pressure_channels_enter_the_metric_only_when_recorded() {
+        let n = 2000;
+        let dt = 1e-3;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+        let p: Vec<f64> = t.iter().map(|t| 55e5 + 2e5 * (6.0 * t).sin()).collect();
+        let mut rec = Record {
+            path: "p.csv".into(),
+            metadata: vec![],
+            dt,
+            t: t.clone(),
+            v_in: Some(vec![0.0; n]),
+            u: Some(vec![0.0; n]),
+            x: None,
+            xdd: None,
+            ydd: None,
+            p1: None,
+            p2: None,
+            warnings: vec![],
+        };
+        let opt = MetricOptions::default();
+        let k = n.div_ceil(4);
+        assert_eq!(PreparedRecord::new(&rec, &opt).unwrap().residual_len(), k);
+        rec.p1 = Some(p.clone());
+        let prep = PreparedRecord::new(&rec, &opt).unwrap();
+        assert_eq!(prep.residual_len(), 2 * k);
+        // Floor: 1 % of the swing (2 bar sine → 0.014 bar), not of the 55 bar mean.
+        assert!((prep.scale_p[0] - 0.01 * 2e5 / 2f64.sqrt()).abs() < 100.0);
+        // A twin 1 bar too low on p1 gives a weighted pressure residual of −1 bar / scale.
+        let sim = SimChannels {
+            u: vec![0.0; n],
+            ydd: vec![0.0; n],
+            p1: p.iter().map(|v| v - 1e5).collect(),
+            p2: vec![0.0; n],
+            ..Default::default()
+        };
+        let mut w = Vec::new();
+        prep.weighted_residuals(&sim, &mut w);
+        assert_eq!(w.len(), 2 * k);
+        let mid = w[k + k / 2];
+        assert!(
+            (mid + 1e5 / prep.scale_p[0]).abs() < 1e-3 * mid.abs(),
+            "{mid}"
+        );
+        assert!((prep.channel_errors(&sim).p1.unwrap() - 1e5).abs() < 1.0);
     }
 
     #[test]
