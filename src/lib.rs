@@ -31,6 +31,8 @@ pub mod dataset;
 pub mod delay;
 pub mod engine;
 pub mod experiments;
+#[cfg(feature = "gui")]
+pub mod gui;
 pub mod identify;
 pub mod integrate;
 pub mod lti;

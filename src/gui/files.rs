@@ -1,0 +1,225 @@
+//! File dialogs and file work off the UI thread: rfd's async dialogs run to completion on
+//! their own thread (a cancelled or unavailable dialog gives `None`), and exports are written
+//! by a worker thread. Results come back over channels, polled each frame.
+
+use crate::dataset::{self, RecordKind};
+use crate::report::plot::{Figure, save_figure};
+use crate::scenario::SampledMotion;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, Sender, channel};
+
+/// What a file dialog is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Purpose {
+    /// Open a preset (TOML).
+    OpenPreset,
+    /// Save the preset (TOML).
+    SavePreset,
+    /// Load a platform record (CSV).
+    LoadRecord,
+    /// Load measured records (CSV, several at once).
+    LoadMeasured,
+    /// Export the traces (CSV).
+    ExportCsv,
+    /// Export the plots (PNG + SVG).
+    ExportPng,
+}
+
+impl Purpose {
+    fn title(self) -> &'static str {
+        match self {
+            Purpose::OpenPreset => "Open preset",
+            Purpose::SavePreset => "Save preset",
+            Purpose::LoadRecord => "Load a platform record (CSV)",
+            Purpose::LoadMeasured => "Load measured records (CSV)",
+            Purpose::ExportCsv => "Export traces (CSV)",
+            Purpose::ExportPng => "Export plots (PNG)",
+        }
+    }
+
+    fn saves(self) -> bool {
+        matches!(
+            self,
+            Purpose::SavePreset | Purpose::ExportCsv | Purpose::ExportPng
+        )
+    }
+
+    fn filter(self) -> (&'static str, &'static [&'static str]) {
+        match self {
+            Purpose::OpenPreset | Purpose::SavePreset => ("preset", &["toml"]),
+            Purpose::LoadRecord | Purpose::LoadMeasured | Purpose::ExportCsv => ("CSV", &["csv"]),
+            Purpose::ExportPng => ("PNG", &["png"]),
+        }
+    }
+}
+
+/// The file dialog in flight (one at a time) and its result channel.
+pub struct Dialogs {
+    tx: Sender<(Purpose, Vec<PathBuf>)>,
+    rx: Receiver<(Purpose, Vec<PathBuf>)>,
+    open: Option<Purpose>,
+}
+
+impl Default for Dialogs {
+    fn default() -> Self {
+        let (tx, rx) = channel();
+        Self { tx, rx, open: None }
+    }
+}
+
+impl Dialogs {
+    /// The dialog currently open, if any.
+    pub fn open(&self) -> Option<Purpose> {
+        self.open
+    }
+
+    /// Opens a dialog on its own thread; ignored while another is open.
+    pub fn request(&mut self, purpose: Purpose, suggested_name: &str, ctx: &egui::Context) {
+        if self.open.is_some() {
+            return;
+        }
+        let tx = self.tx.clone();
+        let ctx = ctx.clone();
+        let name = suggested_name.to_owned();
+        let spawned = std::thread::Builder::new()
+            .name("seat-twin-dialog".into())
+            .spawn(move || {
+                let (fname, ext) = purpose.filter();
+                let mut dialog = rfd::AsyncFileDialog::new()
+                    .set_title(purpose.title())
+                    .add_filter(fname, ext);
+                if let Ok(dir) = std::env::current_dir() {
+                    dialog = dialog.set_directory(dir);
+                }
+                let picked: Vec<PathBuf> = if purpose.saves() {
+                    pollster::block_on(dialog.set_file_name(name).save_file())
+                        .into_iter()
+                        .collect::<Vec<_>>()
+                } else if purpose == Purpose::LoadMeasured {
+                    pollster::block_on(dialog.pick_files()).unwrap_or_default()
+                } else {
+                    pollster::block_on(dialog.pick_file())
+                        .into_iter()
+                        .collect::<Vec<_>>()
+                }
+                .into_iter()
+                .map(|h| h.path().to_path_buf())
+                .collect();
+                let _ = tx.send((purpose, picked));
+                ctx.request_repaint();
+            });
+        if spawned.is_ok() {
+            self.open = Some(purpose);
+        }
+    }
+
+    /// A finished dialog: its purpose and the chosen files (empty: cancelled or no dialog
+    /// available on this desktop).
+    pub fn poll(&mut self) -> Option<(Purpose, Vec<PathBuf>)> {
+        let r = self.rx.try_recv().ok()?;
+        self.open = None;
+        Some(r)
+    }
+}
+
+/// Reads a platform record (CSV with `t` and `x` and/or `xdd`, SI) for the live simulation.
+pub fn read_platform_record(path: &Path) -> anyhow::Result<SampledMotion> {
+    let rec = dataset::read_record(path, RecordKind::Excitation)?;
+    let dt = rec.dt;
+    Ok(match (rec.xdd, rec.x) {
+        (Some(xdd), Some(x)) => SampledMotion::from_acceleration(dt, xdd).with_reported_position(x),
+        (Some(xdd), None) => SampledMotion::from_acceleration(dt, xdd),
+        (None, Some(x)) => SampledMotion::from_position(dt, x),
+        (None, None) => anyhow::bail!("{}: no `x` or `xdd` column", path.display()),
+    })
+}
+
+/// A CSV table ready to be written.
+pub struct CsvTable {
+    /// Column names.
+    pub header: Vec<&'static str>,
+    /// `# key: value` lines.
+    pub comments: Vec<(String, String)>,
+    /// Rows, all finite.
+    pub rows: Vec<Vec<f64>>,
+}
+
+/// Background file writer: each job reports one message (success or error) when done.
+pub struct Writer {
+    tx: Sender<Result<String, String>>,
+    rx: Receiver<Result<String, String>>,
+    /// Jobs in flight.
+    pub busy: usize,
+}
+
+impl Default for Writer {
+    fn default() -> Self {
+        let (tx, rx) = channel();
+        Self { tx, rx, busy: 0 }
+    }
+}
+
+impl Writer {
+    fn spawn(
+        &mut self,
+        ctx: &egui::Context,
+        job: impl FnOnce() -> Result<String, String> + Send + 'static,
+    ) {
+        let tx = self.tx.clone();
+        let ctx = ctx.clone();
+        let spawned = std::thread::Builder::new()
+            .name("seat-twin-writer".into())
+            .spawn(move || {
+                let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(job))
+                    .unwrap_or_else(|_| Err("internal error while writing".into()));
+                let _ = tx.send(r);
+                ctx.request_repaint();
+            });
+        match spawned {
+            Ok(_) => self.busy += 1,
+            Err(e) => {
+                let _ = self.tx.send(Err(format!("could not start a thread: {e}")));
+            }
+        }
+    }
+
+    /// Writes a CSV table atomically.
+    pub fn write_csv(&mut self, ctx: &egui::Context, path: PathBuf, table: CsvTable) {
+        self.spawn(ctx, move || {
+            dataset::write_csv_atomic(
+                &path,
+                &table.header,
+                &table.comments,
+                table.rows.into_iter(),
+            )
+            .map(|()| format!("traces written to {}", path.display()))
+            .map_err(|e| format!("{}: {e}", path.display()))
+        });
+    }
+
+    /// Writes figures as `<stem>-<suffix>.png` and `.svg`.
+    pub fn write_figures(
+        &mut self,
+        ctx: &egui::Context,
+        stem: PathBuf,
+        figures: Vec<(&'static str, Figure)>,
+    ) {
+        self.spawn(ctx, move || {
+            let mut written = Vec::new();
+            for (suffix, fig) in figures {
+                let mut name = stem.clone().into_os_string();
+                name.push(format!("-{suffix}"));
+                let (png, _svg) = save_figure(&fig, Path::new(&name)).map_err(|e| e.to_string())?;
+                written.push(png.display().to_string());
+            }
+            Ok(format!("plots written: {} (and .svg)", written.join(", ")))
+        });
+    }
+
+    /// A finished job's message.
+    pub fn poll(&mut self) -> Option<Result<String, String>> {
+        let r = self.rx.try_recv().ok()?;
+        self.busy = self.busy.saturating_sub(1);
+        Some(r)
+    }
+}

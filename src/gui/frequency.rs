@@ -1,0 +1,790 @@
+//! Frequency plots that follow the sliders: transmissibility |T| and phase (linear active,
+//! twin linearised, passive), the Bode of `u̇/V_in` (twin vs G(s)), the |T| = 1 crossings,
+//! the loop margins, and the twin's simulated sine-dwell points computed on a background
+//! thread with progress and cancel.
+//!
+//! The analytic curves are recomputed on the frame the parameters change (the twin's
+//! linearisation only when a plant parameter changes, not for a gain).
+
+use super::units::{db, deg};
+use crate::analysis::frequency_response::{
+    self as fr, Crossing, DwellOptions, LinearisedModel, LoopMargins,
+};
+use crate::model::ModelKind;
+use crate::params::{ControllerParams, Params};
+use egui::{Color32, RichText};
+use egui_plot::{Corner, Legend, Line, LineStyle, MarkerShape, Plot, PlotPoint, Points, VLine};
+use num_complex::Complex64;
+use std::f64::consts::PI;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+/// Frequency range of the plots [Hz].
+pub const F_RANGE_HZ: (f64, f64) = (0.1, 100.0);
+/// Points of the analytic curves.
+pub const N_POINTS: usize = 240;
+/// Frequencies of the simulated dwell [Hz].
+pub const DWELL_RANGE_HZ: (f64, f64) = (0.3, 30.0);
+/// Number of dwell points.
+pub const N_DWELL: usize = 14;
+/// Pause after the last parameter change before the dwell restarts.
+pub const DWELL_DEBOUNCE: Duration = Duration::from_millis(400);
+
+/// Colours of the three models, shared by scopes and frequency plots.
+pub const TWIN: Color32 = Color32::from_rgb(31, 119, 180);
+/// Linear model colour.
+pub const LINEAR: Color32 = Color32::from_rgb(255, 127, 14);
+/// Passive model colour.
+pub const PASSIVE: Color32 = Color32::from_rgb(44, 160, 44);
+/// Platform colour.
+pub const PLATFORM: Color32 = Color32::from_rgb(127, 127, 127);
+
+/// The plant part of the parameters: the linearisation's cache key. The gains and the delay
+/// act outside the linearised plant, so dragging Kp, Ki or τ reuses it.
+fn plant_key(p: &Params) -> Params {
+    let mut k = *p;
+    k.controller = ControllerParams {
+        kp_v_per_m: 0.0,
+        ki_v_s_per_m: 0.0,
+    };
+    k.valve.tau_s = 0.0;
+    k.linear.tau_s = 0.0;
+    k
+}
+
+/// Frequencies at which [`fr::loop_margins`] evaluates the loop.
+fn margin_grid() -> Vec<f64> {
+    fr::log_space(0.01, 200.0, 2000)
+}
+
+/// Open-loop responses of the linearised twin (without the delay) at one frequency:
+/// `u/V`, `u/ẍ`, `ÿ/V`, `ÿ/ẍ` and `u̇/V`.
+#[derive(Debug, Clone, Copy)]
+pub struct PlantPoint {
+    /// Frequency [Hz].
+    pub freq_hz: f64,
+    u_v: Complex64,
+    u_x: Complex64,
+    y_v: Complex64,
+    y_x: Complex64,
+    du_v: Complex64,
+}
+
+impl PlantPoint {
+    /// From the delay-free linearisation `lin0`, through its public responses: `u̇/V` from
+    /// the Bode, `ÿ/ẍ` from T with zero gains, `u/ẍ` from T with Kp = 1.
+    fn new(lin0: &LinearisedModel, freq_hz: f64) -> Self {
+        let jw = Complex64::new(0.0, 2.0 * PI * freq_hz);
+        let du_v = lin0.bode(freq_hz);
+        let u_v = du_v / jw;
+        let y_v = jw * du_v;
+        let zero = ControllerParams {
+            kp_v_per_m: 0.0,
+            ki_v_s_per_m: 0.0,
+        };
+        let unit = ControllerParams {
+            kp_v_per_m: 1.0,
+            ki_v_s_per_m: 0.0,
+        };
+        let y_x = lin0.transmissibility(&zero, freq_hz);
+        let t1 = lin0.transmissibility(&unit, freq_hz);
+        let u_x = (t1 - y_x) * (1.0 - u_v) / y_v;
+        Self {
+            freq_hz,
+            u_v,
+            u_x,
+            y_v,
+            y_x,
+            du_v,
+        }
+    }
+
+    /// Closed-loop `ÿ/ẍ` with the controller `V = Kp·u + Ki·ẍ/s` and the delay `tau_s`.
+    pub fn transmissibility(&self, c: &ControllerParams, tau_s: f64) -> Complex64 {
+        let jw = Complex64::new(0.0, 2.0 * PI * self.freq_hz);
+        let e = (-jw * tau_s).exp();
+        let v_per_x =
+            (c.kp_v_per_m * self.u_x + c.ki_v_s_per_m / jw) / (1.0 - c.kp_v_per_m * self.u_v * e);
+        self.y_v * e * v_per_x + self.y_x
+    }
+
+    /// `u̇/V_in` with the delay `tau_s`.
+    pub fn bode(&self, tau_s: f64) -> Complex64 {
+        self.du_v * Complex64::new(0.0, -2.0 * PI * self.freq_hz * tau_s).exp()
+    }
+}
+
+/// The linearised twin's open-loop responses on the plot grid and the margin grid.
+pub struct PlantCache {
+    key: Params,
+    /// On the plot frequencies.
+    pub points: Vec<PlantPoint>,
+    margin_freqs: Vec<f64>,
+    margin_u_v: Vec<Complex64>,
+}
+
+impl PlantCache {
+    /// Linearises the twin (delay-free) and evaluates it on both grids.
+    pub fn new(params: &Params, freqs: &[f64]) -> Self {
+        let key = plant_key(params);
+        let lin0 = fr::linearise_twin(&key);
+        let points = freqs.iter().map(|&f| PlantPoint::new(&lin0, f)).collect();
+        let margin_freqs = margin_grid();
+        let margin_u_v = margin_freqs
+            .iter()
+            .map(|&f| lin0.bode(f) / Complex64::new(0.0, 2.0 * PI * f))
+            .collect();
+        Self {
+            key,
+            points,
+            margin_freqs,
+            margin_u_v,
+        }
+    }
+
+    /// Position-loop margins of the twin for a gain and delay (as [`fr::twin_margins`]).
+    pub fn margins(&self, kp_v_per_m: f64, tau_s: f64) -> LoopMargins {
+        fr::loop_margins(
+            |f| {
+                let i = self
+                    .margin_freqs
+                    .partition_point(|&g| g < f)
+                    .min(self.margin_freqs.len() - 1);
+                self.margin_u_v[i]
+            },
+            tau_s,
+            kp_v_per_m,
+        )
+    }
+}
+
+/// One curve in plot coordinates `(log10 f, value)`.
+pub type Curve = Vec<PlotPoint>;
+
+/// The analytic frequency responses for one parameter set.
+#[derive(Debug, Clone, Default)]
+pub struct Curves {
+    /// Parameters they were computed for.
+    pub params: Option<Params>,
+    /// |T| [dB] of linear, twin (linearised), passive.
+    pub t_mag: [Curve; 3],
+    /// Phase of T [deg] of linear, twin, passive (unwrapped).
+    pub t_phase: [Curve; 3],
+    /// |u̇/V_in| [dB re 1 (mm/s)/V] of twin (linearised) and G(s).
+    pub bode_mag: [Curve; 2],
+    /// Phase of `u̇/V_in` [deg] of twin and G(s).
+    pub bode_phase: [Curve; 2],
+    /// |T| = 1 crossings of linear and twin.
+    pub crossings: [Vec<Crossing>; 2],
+    /// Position-loop margins of linear and twin.
+    pub margins: [Option<LoopMargins>; 2],
+    /// Time the last recomputation took [ms].
+    pub compute_ms: f64,
+}
+
+impl Curves {
+    /// Whether either active loop is unstable.
+    pub fn unstable(&self) -> bool {
+        self.margins.iter().flatten().any(|m| !m.stable())
+    }
+}
+
+/// Cached analytic curves plus the linearised twin.
+#[derive(Default)]
+pub struct Analytic {
+    curves: Curves,
+    plant: Option<PlantCache>,
+    freqs: Vec<f64>,
+}
+
+impl Analytic {
+    /// The current curves.
+    pub fn curves(&self) -> &Curves {
+        &self.curves
+    }
+
+    /// Recomputes if `params` differ from the last call; returns true if it did.
+    pub fn update(&mut self, params: &Params) -> bool {
+        if self.curves.params.as_ref() == Some(params) {
+            return false;
+        }
+        let t0 = Instant::now();
+        if self.freqs.is_empty() {
+            self.freqs = fr::log_space(F_RANGE_HZ.0, F_RANGE_HZ.1, N_POINTS);
+        }
+        let key = plant_key(params);
+        if self.plant.as_ref().is_none_or(|c| c.key != key) {
+            self.plant = Some(PlantCache::new(params, &self.freqs));
+        }
+        let Some(plant) = self.plant.as_ref() else {
+            return false;
+        };
+        let tau = params.valve.tau_s;
+        let f = &self.freqs;
+        let lx: Vec<f64> = f.iter().map(|x| x.log10()).collect();
+        let t_lin: Vec<Complex64> = f
+            .iter()
+            .map(|&x| fr::linear_transmissibility(params, x))
+            .collect();
+        let t_twin: Vec<Complex64> = plant
+            .points
+            .iter()
+            .map(|p| p.transmissibility(&params.controller, tau))
+            .collect();
+        let t_pas: Vec<Complex64> = f
+            .iter()
+            .map(|&x| fr::passive_transmissibility(params, x))
+            .collect();
+        let b_twin: Vec<Complex64> = plant.points.iter().map(|p| p.bode(tau)).collect();
+        let b_g: Vec<Complex64> = f.iter().map(|&x| fr::linear_bode(params, x)).collect();
+        let mag = |v: &[Complex64], scale: f64| -> Curve {
+            lx.iter()
+                .zip(v)
+                .map(|(&x, c)| PlotPoint::new(x, db(c.norm() * scale)))
+                .filter(|p| p.y.is_finite())
+                .collect()
+        };
+        let phase = |v: &[Complex64]| -> Curve {
+            let ph = fr::unwrap_phase(&v.iter().map(|c| c.arg()).collect::<Vec<_>>());
+            lx.iter()
+                .zip(ph)
+                .map(|(&x, p)| PlotPoint::new(x, deg(p)))
+                .filter(|p| p.y.is_finite())
+                .collect()
+        };
+        let mags = |v: &[Complex64]| v.iter().map(|c| c.norm()).collect::<Vec<_>>();
+        self.curves = Curves {
+            params: Some(*params),
+            t_mag: [mag(&t_lin, 1.0), mag(&t_twin, 1.0), mag(&t_pas, 1.0)],
+            t_phase: [phase(&t_lin), phase(&t_twin), phase(&t_pas)],
+            bode_mag: [mag(&b_twin, 1e3), mag(&b_g, 1e3)],
+            bode_phase: [phase(&b_twin), phase(&b_g)],
+            crossings: [
+                fr::unity_crossings(f, &mags(&t_lin)),
+                fr::unity_crossings(f, &mags(&t_twin)),
+            ],
+            margins: [
+                Some(fr::linear_margins(params)),
+                Some(plant.margins(params.controller.kp_v_per_m, tau)),
+            ],
+            compute_ms: 0.0,
+        };
+        self.curves.compute_ms = t0.elapsed().as_secs_f64() * 1e3;
+        true
+    }
+}
+
+/// A message from the dwell thread.
+enum DwellMsg {
+    Point { freq_hz: f64, value: Complex64 },
+    Failed { freq_hz: f64, reason: String },
+    Finished,
+}
+
+/// A running sine-dwell sweep of the twin.
+struct DwellJob {
+    params: Params,
+    cancel: Arc<AtomicBool>,
+    rx: Receiver<DwellMsg>,
+    total: usize,
+    done: usize,
+}
+
+impl Drop for DwellJob {
+    fn drop(&mut self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+}
+
+/// The simulated (sine dwell) transmissibility points of the twin.
+#[derive(Default)]
+pub struct Dwell {
+    job: Option<DwellJob>,
+    /// Parameters of the shown points.
+    shown_for: Option<Params>,
+    /// |T| [dB] points.
+    pub mag: Curve,
+    /// Phase [deg] points.
+    pub phase: Curve,
+    /// Points that failed (diverged), with the reason.
+    pub failures: Vec<(f64, String)>,
+    /// Last parameter change not yet simulated, and when it happened.
+    pending: Option<(Params, Instant)>,
+    /// Whether the user cancelled the sweep for the current parameters.
+    pub cancelled: bool,
+}
+
+impl Dwell {
+    /// Progress `(done, total)` of a running sweep.
+    pub fn progress(&self) -> Option<(usize, usize)> {
+        self.job.as_ref().map(|j| (j.done, j.total))
+    }
+
+    /// Whether the shown points belong to `params`.
+    pub fn is_current(&self, params: &Params) -> bool {
+        self.shown_for.as_ref() == Some(params) && self.job.is_none()
+    }
+
+    /// Cancels the running sweep (the thread stops after its current point).
+    pub fn cancel(&mut self) {
+        self.job = None;
+        self.pending = None;
+        self.cancelled = true;
+    }
+
+    /// Starts a sweep now for `params` (also after a cancel).
+    pub fn start(&mut self, params: &Params) {
+        self.pending = None;
+        self.cancelled = false;
+        self.mag.clear();
+        self.phase.clear();
+        self.failures.clear();
+        self.shown_for = Some(*params);
+        let freqs = fr::log_space(DWELL_RANGE_HZ.0, DWELL_RANGE_HZ.1, N_DWELL);
+        let cancel = Arc::new(AtomicBool::new(false));
+        let (tx, rx) = channel();
+        let p = *params;
+        let stop = cancel.clone();
+        let total = freqs.len();
+        let spawned = std::thread::Builder::new()
+            .name("seat-twin-dwell".into())
+            .spawn(move || {
+                let opt = DwellOptions::default();
+                for &f in &freqs {
+                    if stop.load(Ordering::Relaxed) {
+                        return;
+                    }
+                    let r = std::panic::catch_unwind(|| {
+                        fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)
+                    });
+                    let msg = match r {
+                        Ok(Ok(value)) => DwellMsg::Point { freq_hz: f, value },
+                        Ok(Err(e)) => DwellMsg::Failed {
+                            freq_hz: f,
+                            reason: e.to_string(),
+                        },
+                        Err(_) => DwellMsg::Failed {
+                            freq_hz: f,
+                            reason: "internal error in the simulation".into(),
+                        },
+                    };
+                    if tx.send(msg).is_err() {
+                        return;
+                    }
+                }
+                let _ = tx.send(DwellMsg::Finished);
+            });
+        match spawned {
+            Ok(_) => {
+                self.job = Some(DwellJob {
+                    params: p,
+                    cancel,
+                    rx,
+                    total,
+                    done: 0,
+                })
+            }
+            Err(e) => self
+                .failures
+                .push((0.0, format!("could not start a thread: {e}"))),
+        }
+    }
+
+    /// Follows the parameters (debounced restart) and collects finished points. Returns
+    /// true while work is under way (the caller keeps repainting).
+    pub fn poll(&mut self, params: &Params, auto: bool) -> bool {
+        let stale = self.shown_for.as_ref() != Some(params);
+        if stale && auto {
+            match &self.pending {
+                Some((p, _)) if p == params => {}
+                _ => {
+                    self.pending = Some((*params, Instant::now()));
+                    self.cancelled = false;
+                }
+            }
+        }
+        if let Some((p, since)) = self.pending
+            && since.elapsed() >= DWELL_DEBOUNCE
+        {
+            self.start(&p);
+        }
+        let mut finished = false;
+        if let Some(job) = self.job.as_mut() {
+            for msg in job.rx.try_iter() {
+                match msg {
+                    DwellMsg::Point { freq_hz, value } => {
+                        job.done += 1;
+                        let x = freq_hz.log10();
+                        if value.norm().is_finite() {
+                            self.mag.push(PlotPoint::new(x, db(value.norm())));
+                            self.phase.push(PlotPoint::new(x, deg(value.arg())));
+                        }
+                    }
+                    DwellMsg::Failed { freq_hz, reason } => {
+                        job.done += 1;
+                        self.failures.push((freq_hz, reason));
+                    }
+                    DwellMsg::Finished => finished = true,
+                }
+            }
+            if finished || job.done >= job.total {
+                self.shown_for = Some(job.params);
+                self.job = None;
+                self.unwrap_phase_points();
+            }
+        }
+        self.job.is_some() || self.pending.is_some()
+    }
+
+    /// Puts the dwell phases on the same branch as a continuous curve (each point is an
+    /// independent `arg` in (−180°, 180°]).
+    fn unwrap_phase_points(&mut self) {
+        let ph: Vec<f64> = self.phase.iter().map(|p| p.y.to_radians()).collect();
+        for (p, u) in self.phase.iter_mut().zip(fr::unwrap_phase(&ph)) {
+            p.y = u.to_degrees();
+        }
+    }
+}
+
+/// Formats a log10-frequency axis mark as Hz.
+fn hz_axis(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
+    let f = 10f64.powf(mark.value);
+    if (mark.value - mark.value.round()).abs() > 1e-6 {
+        // Only label decades and 2, 5 multiples.
+        let lead = f / 10f64.powf(mark.value.floor());
+        if (lead - 2.0).abs() > 0.05 && (lead - 5.0).abs() > 0.05 {
+            return String::new();
+        }
+    }
+    if f >= 1.0 {
+        format!("{f:.0}")
+    } else {
+        format!("{f:.1}")
+    }
+}
+
+/// Grid marks at decades (strong) and 2…9 within each decade (faint).
+fn log_grid(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
+    let (lo, hi) = input.bounds;
+    let mut out = Vec::new();
+    let mut d = lo.floor() as i32 - 1;
+    while (d as f64) <= hi + 1.0 {
+        for k in 1..10 {
+            let v = d as f64 + (k as f64).log10();
+            if v >= lo && v <= hi {
+                out.push(egui_plot::GridMark {
+                    value: v,
+                    step_size: if k == 1 { 1.0 } else { 0.1 },
+                });
+            }
+        }
+        d += 1;
+    }
+    out
+}
+
+fn freq_plot<'a>(id: &str, y_label: &str) -> Plot<'a> {
+    Plot::new(id)
+        .x_axis_label("frequency [Hz]")
+        .y_axis_label(y_label.to_owned())
+        .x_axis_formatter(hz_axis)
+        .x_grid_spacer(log_grid)
+        .label_formatter(|pos| {
+            Some(match pos {
+                egui_plot::HoverPosition::NearDataPoint {
+                    plot_name,
+                    position,
+                    ..
+                } => format!(
+                    "{plot_name}\n{:.2} Hz\n{:.1}",
+                    10f64.powf(position.x),
+                    position.y
+                ),
+                egui_plot::HoverPosition::Elsewhere { position } => {
+                    format!("{:.2} Hz\n{:.1}", 10f64.powf(position.x), position.y)
+                }
+            })
+        })
+        .default_x_bounds(F_RANGE_HZ.0.log10(), F_RANGE_HZ.1.log10())
+        .allow_scroll(false)
+        .y_axis_min_width(40.0)
+        .legend(
+            Legend::default()
+                .position(Corner::LeftBottom)
+                .text_style(egui::TextStyle::Small)
+                .background_alpha(0.6),
+        )
+}
+
+/// Draws the stability banner (if needed), the four frequency plots and the dwell progress.
+pub fn frequency_ui(ui: &mut egui::Ui, curves: &Curves, dwell: &mut Dwell, params: &Params) {
+    stability_ui(ui, curves);
+    ui.horizontal(|ui| {
+        ui.label(RichText::new("Simulated twin (sine dwell):").strong());
+        match dwell.progress() {
+            Some((done, total)) => {
+                ui.add(
+                    egui::ProgressBar::new(done as f32 / total.max(1) as f32)
+                        .desired_width(120.0)
+                        .text(format!("{done}/{total}")),
+                );
+                if ui.button("Cancel").clicked() {
+                    dwell.cancel();
+                }
+            }
+            None if dwell.is_current(params) => {
+                ui.label(format!("{} points, up to date", dwell.mag.len()));
+            }
+            None if dwell.cancelled => {
+                ui.label("cancelled");
+                if ui.button("Recompute").clicked() {
+                    dwell.start(params);
+                }
+            }
+            None => {
+                ui.label("waiting for the sliders to settle…");
+            }
+        }
+        if !dwell.failures.is_empty() {
+            ui.colored_label(
+                Color32::from_rgb(200, 60, 40),
+                format!("{} point(s) diverged", dwell.failures.len()),
+            )
+            .on_hover_text(
+                dwell
+                    .failures
+                    .iter()
+                    .map(|(f, r)| format!("{f:.2} Hz: {r}"))
+                    .collect::<Vec<_>>()
+                    .join("\n"),
+            );
+        }
+    });
+    let unstable = curves.unstable();
+    let h = ((ui.available_height() - 12.0) / 4.0).max(80.0);
+    let crossings = curves.crossings.clone();
+    let active_style = if unstable {
+        LineStyle::dashed_loose()
+    } else {
+        LineStyle::Solid
+    };
+    let names = ["linear active", "twin active (linearised)", "passive"];
+    let colors = [LINEAR, TWIN, PASSIVE];
+    freq_plot("t_mag", "|T| [dB]")
+        .height(h)
+        .link_axis(egui::Id::unique("freq"), [true, false])
+        .show(ui, |pu| {
+            pu.hline(
+                egui_plot::HLine::new("", 0.0)
+                    .color(Color32::GRAY)
+                    .style(LineStyle::dashed_dense()),
+            );
+            for (i, c) in curves.t_mag.iter().enumerate() {
+                let style = if i < 2 {
+                    active_style
+                } else {
+                    LineStyle::Solid
+                };
+                pu.line(
+                    Line::new(names[i], c.as_slice())
+                        .color(colors[i])
+                        .width(2.0)
+                        .style(style),
+                );
+            }
+            pu.points(
+                Points::new("twin simulated (dwell)", dwell.mag.as_slice())
+                    .color(TWIN)
+                    .shape(MarkerShape::Circle)
+                    .radius(4.0)
+                    .filled(true),
+            );
+            // |T| = 1 crossings (end of the isolation band): a dotted line and a label.
+            let top = curves.t_mag[0]
+                .iter()
+                .chain(&curves.t_mag[1])
+                .map(|p| p.y)
+                .fold(f64::NEG_INFINITY, f64::max)
+                .max(0.0);
+            for (i, cs) in crossings.iter().enumerate() {
+                for c in cs.iter().filter(|c| c.rising).take(1) {
+                    let x = c.freq_hz.log10();
+                    pu.vline(
+                        VLine::new("", x)
+                            .color(colors[i].gamma_multiply(0.8))
+                            .style(LineStyle::dotted_dense()),
+                    );
+                    pu.text(
+                        egui_plot::Text::new(
+                            "",
+                            PlotPoint::new(x, top),
+                            RichText::new(if i == 0 {
+                                format!(" |T|=1 @ {:.2} Hz", c.freq_hz)
+                            } else {
+                                format!("|T|=1 @ {:.2} Hz ", c.freq_hz)
+                            })
+                            .color(colors[i])
+                            .small(),
+                        )
+                        // Linear to the right of its line, twin to the left.
+                        .anchor(if i == 0 {
+                            egui::Align2::LEFT_TOP
+                        } else {
+                            egui::Align2::RIGHT_TOP
+                        }),
+                    );
+                }
+            }
+        });
+    freq_plot("t_phase", "phase T [deg]")
+        .height(h)
+        .link_axis(egui::Id::unique("freq"), [true, false])
+        .show(ui, |pu| {
+            for (i, c) in curves.t_phase.iter().enumerate() {
+                pu.line(
+                    Line::new(names[i], c.as_slice())
+                        .color(colors[i])
+                        .width(2.0),
+                );
+            }
+            pu.points(
+                Points::new("twin simulated (dwell)", dwell.phase.as_slice())
+                    .color(TWIN)
+                    .radius(4.0)
+                    .filled(true),
+            );
+        });
+    freq_plot("bode_mag", "|du/dt / V_in| [dB]")
+        .height(h)
+        .link_axis(egui::Id::unique("freq"), [true, false])
+        .show(ui, |pu| {
+            pu.line(
+                Line::new("twin (linearised)", curves.bode_mag[0].as_slice())
+                    .color(TWIN)
+                    .width(2.0),
+            );
+            pu.line(
+                Line::new("G(s)", curves.bode_mag[1].as_slice())
+                    .color(LINEAR)
+                    .width(2.0)
+                    .style(LineStyle::dashed_loose()),
+            );
+        });
+    freq_plot("bode_phase", "phase [deg]")
+        .height(h)
+        .link_axis(egui::Id::unique("freq"), [true, false])
+        .show(ui, |pu| {
+            pu.line(
+                Line::new("twin (linearised)", curves.bode_phase[0].as_slice())
+                    .color(TWIN)
+                    .width(2.0),
+            );
+            pu.line(
+                Line::new("G(s)", curves.bode_phase[1].as_slice())
+                    .color(LINEAR)
+                    .width(2.0)
+                    .style(LineStyle::dashed_loose()),
+            );
+        });
+}
+
+fn margin_text(m: &LoopMargins) -> String {
+    let gm = if m.gain_margin.is_finite() {
+        format!("{:.1} dB", db(m.gain_margin))
+    } else {
+        "∞".into()
+    };
+    let pm = if m.phase_margin_deg.is_finite() {
+        format!("{:.0}°", m.phase_margin_deg)
+    } else if m.phase_margin_deg > 0.0 {
+        "∞".into()
+    } else {
+        "−∞".into()
+    };
+    format!("GM {gm}, PM {pm}")
+}
+
+/// The stability line: margins, and a red banner when a loop is unstable.
+pub fn stability_ui(ui: &mut egui::Ui, curves: &Curves) {
+    let [lin, twin] = &curves.margins;
+    let (Some(lin), Some(twin)) = (lin, twin) else {
+        return;
+    };
+    if curves.unstable() {
+        egui::Frame::new()
+            .fill(Color32::from_rgb(180, 30, 30))
+            .inner_margin(6.0)
+            .corner_radius(4.0)
+            .show(ui, |ui| {
+                ui.set_width(ui.available_width());
+                ui.label(
+                    RichText::new(format!(
+                        "UNSTABLE closed loop — twin: {}; linear: {}. Reduce |Kp| (Kp must be \
+                         negative). The dashed active curves are not a steady state.",
+                        margin_text(twin),
+                        margin_text(lin)
+                    ))
+                    .color(Color32::WHITE)
+                    .strong(),
+                );
+            });
+    } else {
+        let edge = |cs: &[Crossing]| {
+            cs.iter()
+                .find(|c| c.rising)
+                .map(|c| format!("{:.2} Hz", c.freq_hz))
+                .unwrap_or_else(|| "none".into())
+        };
+        ui.label(format!(
+            "Stable. Twin {}, isolation up to {}; linear {}, up to {}.",
+            margin_text(twin),
+            edge(&curves.crossings[1]),
+            margin_text(lin),
+            edge(&curves.crossings[0]),
+        ));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cached plant responses reproduce the engine's linearised-twin responses for any
+    /// gains and delay (the fast path used while dragging Kp, Ki, τ).
+    #[test]
+    fn cached_plant_matches_the_linearised_twin() {
+        let mut p = Params::paper();
+        p.controller.kp_v_per_m = -37.0;
+        p.controller.ki_v_s_per_m = -3.0;
+        p.valve.tau_s = 0.021;
+        let freqs = fr::log_space(0.2, 50.0, 9);
+        let cache = PlantCache::new(&p, &freqs);
+        let lin = fr::linearise_twin(&p);
+        for (pt, &f) in cache.points.iter().zip(&freqs) {
+            let (a, b) = (
+                pt.transmissibility(&p.controller, 0.021),
+                lin.transmissibility(&p.controller, f),
+            );
+            assert!(
+                (a - b).norm() <= 1e-6 * b.norm().max(1e-3),
+                "T at {f} Hz: {a} vs {b}"
+            );
+            let (a, b) = (pt.bode(0.021), lin.bode(f));
+            assert!(
+                (a - b).norm() <= 1e-6 * b.norm(),
+                "bode at {f} Hz: {a} vs {b}"
+            );
+        }
+        let (a, b) = (cache.margins(-37.0, 0.021), fr::twin_margins(&lin, -37.0));
+        assert!(
+            (a.gain_margin - b.gain_margin).abs() <= 1e-6 * b.gain_margin.abs(),
+            "{a:?} {b:?}"
+        );
+        assert!(
+            (a.phase_margin_deg - b.phase_margin_deg).abs() < 1e-6,
+            "{a:?} {b:?}"
+        );
+    }
+}

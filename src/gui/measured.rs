@@ -1,0 +1,920 @@
+//! The measured-data window: load measured records, overlay them on the twin, show the
+//! residual and its diagnosis, calibrate in the background (progress, cancel) and hand the
+//! result back to the live twin.
+//!
+//! All work runs on worker threads through [`crate::identify`] — the same code as
+//! `seat-twin replay` and `seat-twin calibrate` — and comes back over channels polled each
+//! frame; the UI thread only draws.
+
+use super::frequency::TWIN;
+use super::units::MM_PER_M;
+use crate::dataset::{self, Record, RecordKind};
+use crate::identify::diagnose::{self, FeatureCorrelation, Whiteness};
+use crate::identify::replay::{ChannelErrors, MetricOptions, PreparedRecord, replay_prepared};
+use crate::identify::{
+    self, CalibrationOptions, CalibrationReport, ErrorSummary, IdentifyError, Progress,
+};
+use crate::params::Params;
+use egui::{Color32, RichText};
+use egui_plot::{Corner, Legend, Line, Plot, PlotPoints};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, channel};
+use std::sync::{Arc, Mutex};
+
+/// Measured channel colour.
+const MEASURED: Color32 = Color32::from_rgb(90, 90, 90);
+/// Calibrated twin colour.
+const CALIBRATED: Color32 = Color32::from_rgb(44, 160, 44);
+/// Residual colour.
+const RESIDUAL: Color32 = Color32::from_rgb(214, 39, 40);
+/// Most points drawn per line (the records are decimated for display only).
+const MAX_PLOT_POINTS: usize = 3000;
+/// Lags of the whiteness test.
+const WHITENESS_LAGS: usize = 20;
+
+type Waker = Arc<dyn Fn() + Send + Sync>;
+
+/// A job on a worker thread; its result (or its error message) arrives once over a channel.
+struct Job<T> {
+    rx: Receiver<Result<T, String>>,
+}
+
+impl<T: Send + 'static> Job<T> {
+    /// Runs `work` on a named thread; a panic in it becomes an error message.
+    fn spawn(
+        name: &str,
+        waker: &Waker,
+        work: impl FnOnce() -> Result<T, String> + Send + 'static,
+    ) -> Result<Job<T>, String> {
+        let (tx, rx) = channel();
+        let w = waker.clone();
+        std::thread::Builder::new()
+            .name(name.into())
+            .spawn(move || {
+                let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(work))
+                    .unwrap_or_else(|p| Err(format!("internal error: {}", panic_text(&p))));
+                let _ = tx.send(r);
+                w();
+            })
+            .map_err(|e| format!("could not start a worker thread: {e}"))?;
+        Ok(Job { rx })
+    }
+}
+
+impl<T> Job<T> {
+    fn poll(&self) -> Option<Result<T, String>> {
+        self.rx.try_recv().ok()
+    }
+}
+
+fn panic_text(p: &Box<dyn std::any::Any + Send>) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a worker panicked".into())
+}
+
+/// A record loaded in the window, with its metric preparation.
+pub struct LoadedMeasured {
+    /// The record as read.
+    pub record: Record,
+    /// Filtered channels and noise estimates of the error metric.
+    pub prepared: Arc<PreparedRecord>,
+    /// Used by the calibration.
+    pub include: bool,
+}
+
+impl LoadedMeasured {
+    /// The file name shown.
+    pub fn name(&self) -> &str {
+        &self.prepared.name
+    }
+}
+
+/// A replay of the selected record, reduced to what the window draws.
+pub struct ReplayView {
+    /// Index of the record it belongs to.
+    pub record: usize,
+    /// The parameters it was run with.
+    pub params: Params,
+    /// Per-channel errors (SI).
+    pub errors: ChannelErrors,
+    /// Whiteness of the relative-velocity residual, decimated to the metric's rate.
+    pub whiteness: Whiteness,
+    /// Correlation of the residual with the signature features of the library effects.
+    pub correlations: Vec<FeatureCorrelation>,
+    /// Measured and twin relative velocity du/dt [mm/s] (filtered as in the metric).
+    du: [Vec<[f64; 2]>; 2],
+    /// Measured and twin stroke u [mm].
+    u: [Vec<[f64; 2]>; 2],
+    /// Measured and twin body acceleration [m/s²] (empty without `ydd`).
+    ydd: [Vec<[f64; 2]>; 2],
+    /// Residual of du/dt [mm/s].
+    residual: Vec<[f64; 2]>,
+}
+
+impl ReplayView {
+    /// Number of measured-vs-twin points drawn for du/dt.
+    pub fn n_points(&self) -> usize {
+        self.du[0].len()
+    }
+}
+
+/// Display-decimated `(t, scale·y)` points.
+fn decimated(t: &[f64], y: &[f64], scale: f64) -> Vec<[f64; 2]> {
+    let step = (t.len() / MAX_PLOT_POINTS).max(1);
+    t.iter()
+        .zip(y)
+        .step_by(step)
+        .filter(|(_, v)| v.is_finite())
+        .map(|(t, v)| [*t, v * scale])
+        .collect()
+}
+
+fn replay_view(params: &Params, rec: &PreparedRecord, index: usize) -> Result<ReplayView, String> {
+    let r = replay_prepared(params, rec).map_err(|e| e.to_string())?;
+    let dec: Vec<f64> = r
+        .residual_du
+        .iter()
+        .step_by(rec.decimate.max(1))
+        .copied()
+        .collect();
+    let whiteness = diagnose::whiteness(&dec, WHITENESS_LAGS);
+    let correlations =
+        diagnose::feature_correlations(std::slice::from_ref(rec), std::slice::from_ref(&r));
+    let t = &rec.t;
+    let ydd = match &r.measured_ydd {
+        Some(m) => [decimated(t, m, 1.0), decimated(t, &r.twin_ydd, 1.0)],
+        None => [Vec::new(), Vec::new()],
+    };
+    Ok(ReplayView {
+        record: index,
+        params: *params,
+        errors: r.errors,
+        whiteness,
+        correlations,
+        du: [
+            decimated(t, &r.measured_du, MM_PER_M),
+            decimated(t, &r.twin_du, MM_PER_M),
+        ],
+        u: [
+            decimated(t, &rec.u, MM_PER_M),
+            decimated(t, &r.sim.u, MM_PER_M),
+        ],
+        ydd,
+        residual: decimated(t, &r.residual_du, MM_PER_M),
+    })
+}
+
+/// A calibration running in the background.
+struct Calibration {
+    job: Job<CalibrationReport>,
+    progress: Arc<Mutex<Option<Progress>>>,
+    cancel: Arc<AtomicBool>,
+    started: std::time::Instant,
+}
+
+/// What the window asks the app to do.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeasuredAction {
+    /// Nothing.
+    None,
+    /// Open the file dialog for measured records.
+    OpenDialog,
+    /// Put these (calibrated) parameters on the live twin.
+    Apply(Box<Params>),
+    /// Put them on the live twin and save them as a preset (dialog).
+    ApplyAndSave(Box<Params>),
+}
+
+/// State of the measured-data window.
+pub struct MeasuredData {
+    /// Window shown.
+    pub open: bool,
+    /// Loaded records.
+    pub records: Vec<LoadedMeasured>,
+    /// Index of the record drawn.
+    pub selected: usize,
+    /// Options of the calibration (defaults as in `seat-twin calibrate`).
+    pub options: CalibrationOptions,
+    /// Path typed by hand (for desktops without a file dialog).
+    pub typed_path: String,
+    waker: Waker,
+    loading: Option<Job<Vec<(Record, PreparedRecord)>>>,
+    /// The replay running: record index, parameters, job.
+    replaying: Option<(usize, Params, Job<ReplayView>)>,
+    view: Option<ReplayView>,
+    calibration: Option<Calibration>,
+    report: Option<CalibrationReport>,
+    /// Replays of the selected record with the calibrated parameters, for the overlay.
+    calibrated_view: Option<ReplayView>,
+    calibrated_job: Option<(usize, Job<ReplayView>)>,
+    last_error: Option<String>,
+    last_info: Option<String>,
+}
+
+impl MeasuredData {
+    /// An empty window; `waker` repaints the UI when a job finishes.
+    pub fn new(waker: Arc<dyn Fn() + Send + Sync>) -> Self {
+        Self {
+            open: false,
+            records: Vec::new(),
+            selected: 0,
+            options: CalibrationOptions::default(),
+            typed_path: String::new(),
+            waker,
+            loading: None,
+            replaying: None,
+            view: None,
+            calibration: None,
+            report: None,
+            calibrated_view: None,
+            calibrated_job: None,
+            last_error: None,
+            last_info: None,
+        }
+    }
+
+    /// Reads measured records on a worker thread (all or none: one bad file names itself
+    /// and nothing is added).
+    pub fn load_files(&mut self, paths: Vec<PathBuf>) {
+        if paths.is_empty() {
+            return;
+        }
+        let metric = self.options.metric;
+        match Job::spawn("seat-twin-load", &self.waker, move || {
+            read_measured(&paths, &metric)
+        }) {
+            Ok(j) => {
+                self.loading = Some(j);
+                self.last_error = None;
+            }
+            Err(e) => self.last_error = Some(e),
+        }
+    }
+
+    /// The demo campaign shipped in `assets/demo-campaign/`, if found.
+    pub fn demo_campaign() -> Vec<PathBuf> {
+        let dirs = [
+            PathBuf::from("assets/demo-campaign"),
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo-campaign"),
+        ];
+        for d in dirs {
+            if let Ok(entries) = std::fs::read_dir(&d) {
+                let mut v: Vec<PathBuf> = entries
+                    .filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+                    .collect();
+                v.sort();
+                if !v.is_empty() {
+                    return v;
+                }
+            }
+        }
+        Vec::new()
+    }
+
+    /// Any job running (loading, replay, calibration).
+    pub fn busy(&self) -> bool {
+        self.loading.is_some()
+            || self.replaying.is_some()
+            || self.calibration.is_some()
+            || self.calibrated_job.is_some()
+    }
+
+    /// The current replay of the selected record, if done.
+    pub fn view(&self) -> Option<&ReplayView> {
+        self.view.as_ref()
+    }
+
+    /// The last calibration's result.
+    pub fn report(&self) -> Option<&CalibrationReport> {
+        self.report.as_ref()
+    }
+
+    /// A calibration is running.
+    pub fn calibrating(&self) -> bool {
+        self.calibration.is_some()
+    }
+
+    /// The last error shown in the window.
+    pub fn last_error(&self) -> Option<&str> {
+        self.last_error.as_deref()
+    }
+
+    /// The last information line shown in the window.
+    pub fn last_info(&self) -> Option<&str> {
+        self.last_info.as_deref()
+    }
+
+    /// Starts a calibration of the included records from `params`.
+    pub fn start_calibration(&mut self, params: &Params) {
+        if self.calibration.is_some() {
+            return;
+        }
+        let records: Vec<Record> = self
+            .records
+            .iter()
+            .filter(|r| r.include)
+            .map(|r| r.record.clone())
+            .collect();
+        if records.is_empty() {
+            self.last_error = Some("no record selected for calibration".into());
+            return;
+        }
+        let progress = Arc::new(Mutex::new(None));
+        let cancel = Arc::new(AtomicBool::new(false));
+        let (p2, c2, w2) = (progress.clone(), cancel.clone(), self.waker.clone());
+        let params = *params;
+        let options = self.options.clone();
+        let job = Job::spawn("seat-twin-calibrate", &self.waker, move || {
+            let cb = move |p: &Progress| {
+                if let Ok(mut g) = p2.lock() {
+                    *g = Some(p.clone());
+                }
+                w2();
+                !c2.load(Ordering::Relaxed)
+            };
+            identify::calibrate(&params, &records, &options, &cb).map_err(|e| match e {
+                IdentifyError::Cancelled => "calibration cancelled".to_string(),
+                e => format!("calibration failed: {e}"),
+            })
+        });
+        match job {
+            Ok(job) => {
+                self.calibration = Some(Calibration {
+                    job,
+                    progress,
+                    cancel,
+                    started: std::time::Instant::now(),
+                });
+                self.last_error = None;
+                self.last_info = None;
+            }
+            Err(e) => self.last_error = Some(e),
+        }
+    }
+
+    /// Asks the running calibration to stop (it ends at its next replay).
+    pub fn cancel_calibration(&mut self) {
+        if let Some(c) = &self.calibration {
+            c.cancel.store(true, Ordering::Relaxed);
+        }
+    }
+
+    /// Collects finished jobs and starts the replay of the selected record when the live
+    /// parameters or the selection changed. Call once per frame.
+    pub fn poll(&mut self, params: &Params) {
+        if let Some(r) = self.loading.as_ref().and_then(Job::poll) {
+            self.loading = None;
+            match r {
+                Ok(recs) => {
+                    let n = recs.len();
+                    let warnings: Vec<String> = recs
+                        .iter()
+                        .flat_map(|(r, _)| r.warnings.iter().cloned())
+                        .collect();
+                    self.selected = self.records.len();
+                    for (record, prepared) in recs {
+                        // The same file loaded twice replaces the earlier copy.
+                        self.records.retain(|r| r.record.path != record.path);
+                        self.records.push(LoadedMeasured {
+                            record,
+                            prepared: Arc::new(prepared),
+                            include: true,
+                        });
+                    }
+                    self.selected = self.selected.min(self.records.len().saturating_sub(n));
+                    self.view = None;
+                    self.calibrated_view = None;
+                    self.last_info = Some(if warnings.is_empty() {
+                        format!("{n} record(s) loaded")
+                    } else {
+                        format!("{n} record(s) loaded; {}", warnings.join(" "))
+                    });
+                }
+                Err(e) => self.last_error = Some(e),
+            }
+        }
+        if let Some((_, _, job)) = &self.replaying
+            && let Some(r) = job.poll()
+        {
+            self.replaying = None;
+            match r {
+                Ok(v) => self.view = Some(v),
+                Err(e) => {
+                    self.last_error = Some(format!("replay failed: {e}"));
+                    self.view = None;
+                }
+            }
+        }
+        if let Some((_, job)) = &self.calibrated_job
+            && let Some(r) = job.poll()
+        {
+            self.calibrated_job = None;
+            self.calibrated_view = r.ok();
+        }
+        if let Some(c) = &self.calibration
+            && let Some(r) = c.job.poll()
+        {
+            let secs = c.started.elapsed().as_secs_f64();
+            self.calibration = None;
+            match r {
+                Ok(rep) => {
+                    self.last_info = Some(format!(
+                        "calibrated in {secs:.1} s ({} replays): {}",
+                        rep.evaluations,
+                        rep.verdict.name()
+                    ));
+                    self.report = Some(rep);
+                    self.calibrated_view = None;
+                }
+                Err(e) => self.last_error = Some(e),
+            }
+        }
+        self.start_replays(params);
+    }
+
+    fn start_replays(&mut self, params: &Params) {
+        let Some(rec) = self.records.get(self.selected) else {
+            self.view = None;
+            return;
+        };
+        let stale = |v: Option<(usize, &Params)>| v != Some((self.selected, params));
+        let current = self.view.as_ref().map(|v| (v.record, &v.params));
+        let running = self.replaying.as_ref().map(|(i, p, _)| (*i, p));
+        if stale(current) && running.is_none() {
+            let (p, rec, i) = (*params, rec.prepared.clone(), self.selected);
+            match Job::spawn("seat-twin-replay", &self.waker, move || {
+                replay_view(&p, &rec, i)
+            }) {
+                Ok(j) => self.replaying = Some((i, p, j)),
+                Err(e) => self.last_error = Some(e),
+            }
+        }
+        if let Some(rep) = &self.report {
+            let have = self.calibrated_view.as_ref().map(|v| v.record);
+            if have != Some(self.selected) && self.calibrated_job.is_none() {
+                let (p, rec, i) = (rep.params, rec.prepared.clone(), self.selected);
+                if let Ok(j) = Job::spawn("seat-twin-replay", &self.waker, move || {
+                    replay_view(&p, &rec, i)
+                }) {
+                    self.calibrated_job = Some((i, j));
+                }
+            }
+        }
+    }
+
+    /// The window; returns what the app should do.
+    pub fn window_ui(&mut self, ctx: &egui::Context, params: &Params) -> MeasuredAction {
+        let mut action = MeasuredAction::None;
+        let mut open = self.open;
+        egui::Window::new("Measured data")
+            .open(&mut open)
+            .default_size([1300.0, 820.0])
+            .vscroll(true)
+            .show(ctx, |ui| action = self.contents_ui(ui, params));
+        self.open = open;
+        action
+    }
+
+    fn contents_ui(&mut self, ui: &mut egui::Ui, params: &Params) -> MeasuredAction {
+        let mut action = MeasuredAction::None;
+        ui.horizontal_wrapped(|ui| {
+            if ui.button("Load measured records…").clicked() {
+                action = MeasuredAction::OpenDialog;
+            }
+            if ui
+                .button("Load demo campaign")
+                .on_hover_text("assets/demo-campaign: 8 sine tests, a bump and a ride")
+                .clicked()
+            {
+                self.load_files(Self::demo_campaign());
+            }
+            ui.label("or path:");
+            let r = ui.add(
+                egui::TextEdit::singleline(&mut self.typed_path)
+                    .desired_width(220.0)
+                    .hint_text("file.csv"),
+            );
+            let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            if (ui.button("Load").clicked() || enter) && !self.typed_path.trim().is_empty() {
+                let p = PathBuf::from(self.typed_path.trim());
+                self.load_files(vec![p]);
+            }
+            if !self.records.is_empty() && ui.button("Clear").clicked() {
+                self.records.clear();
+                self.view = None;
+                self.calibrated_view = None;
+                self.selected = 0;
+            }
+        });
+        if self.loading.is_some() {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label("reading…");
+            });
+        }
+        if let Some(e) = &self.last_error {
+            ui.colored_label(Color32::from_rgb(220, 50, 40), e);
+        }
+        if let Some(i) = &self.last_info {
+            ui.weak(i);
+        }
+        if self.records.is_empty() {
+            ui.label(
+                "Load one or more measured records (CSV: t, v_in, u; optional x, xdd, ydd, \
+                 p1, p2; SI). The twin replays the selected one with the live parameters; \
+                 Calibrate fits Cd, τ (and the mass) and looks for a missing effect.",
+            );
+            return action;
+        }
+        ui.separator();
+        ui.columns(2, |cols| {
+            self.overlay_ui(&mut cols[0]);
+            self.records_ui(&mut cols[1]);
+            cols[1].separator();
+            let a = self.calibration_ui(&mut cols[1], params);
+            if a != MeasuredAction::None {
+                action = a;
+            }
+            cols[1].separator();
+            self.diagnosis_ui(&mut cols[1]);
+        });
+        action
+    }
+
+    fn records_ui(&mut self, ui: &mut egui::Ui) {
+        ui.strong(
+            "Records (tick “use” to include one in the calibration; click a name to draw it)",
+        );
+        egui::Grid::new("measured_records")
+            .striped(true)
+            .num_columns(5)
+            .show(ui, |ui| {
+                for h in ["use", "file", "duration", "rate", "channels"] {
+                    ui.strong(h);
+                }
+                ui.end_row();
+                for (i, r) in self.records.iter_mut().enumerate() {
+                    ui.checkbox(&mut r.include, "");
+                    if ui
+                        .selectable_label(self.selected == i, &r.prepared.name)
+                        .on_hover_text(metadata_text(&r.record))
+                        .clicked()
+                    {
+                        self.selected = i;
+                    }
+                    ui.monospace(format!("{:.1} s", r.record.duration_s()));
+                    ui.monospace(format!("{:.0} Hz", r.record.sample_rate_hz()));
+                    ui.label(channels_text(&r.record));
+                    ui.end_row();
+                }
+            });
+    }
+
+    fn overlay_ui(&mut self, ui: &mut egui::Ui) {
+        let name = self
+            .records
+            .get(self.selected)
+            .map(|r| r.prepared.name.clone())
+            .unwrap_or_default();
+        ui.horizontal(|ui| {
+            ui.strong(format!("Measured vs twin: {name}"));
+            if self.replaying.is_some() || self.calibrated_job.is_some() {
+                ui.spinner();
+                ui.weak("replaying…");
+            }
+        });
+        let Some(v) = &self.view else {
+            return;
+        };
+        let cal = self
+            .calibrated_view
+            .as_ref()
+            .filter(|c| c.record == v.record);
+        let plot = |id: &str, label: &str| {
+            Plot::new(id.to_owned())
+                .height(150.0)
+                .y_axis_label(label.to_owned())
+                .y_axis_min_width(44.0)
+                .link_axis(egui::Id::unique("measured_link"), [true, false])
+                .link_cursor(egui::Id::unique("measured_link"), [true, false])
+                .legend(
+                    Legend::default()
+                        .position(Corner::LeftTop)
+                        .text_style(egui::TextStyle::Small)
+                        .background_alpha(0.6),
+                )
+        };
+        let line = |name: &str, pts: &[[f64; 2]], c: Color32, w: f32| {
+            Line::new(name.to_owned(), PlotPoints::from(pts.to_vec()))
+                .color(c)
+                .width(w)
+        };
+        plot("measured_du", "du/dt [mm/s]").show(ui, |pu| {
+            pu.line(line("measured", &v.du[0], MEASURED, 1.0));
+            pu.line(line("twin (live parameters)", &v.du[1], TWIN, 1.5));
+            if let Some(c) = cal {
+                pu.line(line("twin (calibrated)", &c.du[1], CALIBRATED, 1.5));
+            }
+        });
+        plot("measured_u", "stroke u [mm]").show(ui, |pu| {
+            pu.line(line("measured", &v.u[0], MEASURED, 1.0));
+            pu.line(line("twin (live parameters)", &v.u[1], TWIN, 1.5));
+            if let Some(c) = cal {
+                pu.line(line("twin (calibrated)", &c.u[1], CALIBRATED, 1.5));
+            }
+        });
+        if !v.ydd[0].is_empty() {
+            plot("measured_ydd", "body accel. [m/s²]").show(ui, |pu| {
+                pu.line(line("measured", &v.ydd[0], MEASURED, 1.0));
+                pu.line(line("twin (live parameters)", &v.ydd[1], TWIN, 1.5));
+                if let Some(c) = cal {
+                    pu.line(line("twin (calibrated)", &c.ydd[1], CALIBRATED, 1.5));
+                }
+            });
+        }
+        plot("measured_res", "residual du/dt [mm/s]")
+            .x_axis_label("time [s]")
+            .show(ui, |pu| {
+                pu.line(line("twin − measured (live)", &v.residual, RESIDUAL, 1.0));
+                if let Some(c) = cal {
+                    pu.line(line(
+                        "twin − measured (calibrated)",
+                        &c.residual,
+                        CALIBRATED,
+                        1.0,
+                    ));
+                }
+            });
+    }
+
+    fn diagnosis_ui(&self, ui: &mut egui::Ui) {
+        let Some(v) = &self.view else {
+            return;
+        };
+        ui.strong("Residual of this record (live parameters)");
+        let e = &v.errors;
+        ui.monospace(format!(
+            "RMS: du/dt {:.2} mm/s ({:.1} % of signal), u {:.2} mm{}{}",
+            e.du * MM_PER_M,
+            e.du_nrmse * 100.0,
+            e.u * MM_PER_M,
+            e.ydd
+                .map(|y| format!(", ydd {y:.3} m/s²"))
+                .unwrap_or_default(),
+            match (e.p1, e.p2) {
+                (Some(a), Some(b)) => format!(", p1 {:.2} bar, p2 {:.2} bar", a * 1e-5, b * 1e-5),
+                _ => String::new(),
+            }
+        ));
+        let w = &v.whiteness;
+        let white = w.share_outside <= 0.1;
+        ui.label(format!(
+            "whiteness: lag-1 autocorrelation {:.2}, {:.0} % of {} lags outside ±1.96/√n: {}",
+            w.lag1,
+            w.share_outside * 100.0,
+            w.max_lag,
+            if white {
+                "residual looks like noise"
+            } else {
+                "structured residual: the twin misses something"
+            }
+        ));
+        ui.label("correlation of the residual with each effect's signature:");
+        egui::Grid::new("measured_corr")
+            .striped(true)
+            .num_columns(4)
+            .show(ui, |ui| {
+                for h in ["feature", "suggests", "velocity", "accel."] {
+                    ui.strong(h);
+                }
+                ui.end_row();
+                let strongest = v
+                    .correlations
+                    .iter()
+                    .map(|c| c.velocity.abs())
+                    .fold(0.0, f64::max);
+                for c in &v.correlations {
+                    ui.label(&c.feature);
+                    let t = RichText::new(&c.effect);
+                    ui.label(if c.velocity.abs() == strongest && strongest > 0.2 {
+                        t.strong()
+                    } else {
+                        t
+                    });
+                    ui.monospace(format!("{:+.2}", c.velocity));
+                    ui.monospace(if c.acceleration.is_finite() {
+                        format!("{:+.2}", c.acceleration)
+                    } else {
+                        "–".into()
+                    });
+                    ui.end_row();
+                }
+            });
+        ui.weak(
+            "Correlations hint; the calibration decides, by fitting each effect and ranking \
+             them by ΔBIC.",
+        );
+    }
+
+    fn calibration_ui(&mut self, ui: &mut egui::Ui, params: &Params) -> MeasuredAction {
+        let mut action = MeasuredAction::None;
+        ui.strong("Calibration");
+        let n = self.records.iter().filter(|r| r.include).count();
+        if let Some(c) = &self.calibration {
+            let p = c.progress.lock().ok().and_then(|g| g.clone());
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label(match &p {
+                    Some(p) => format!(
+                        "{} — {} replays, {:.0} s",
+                        p.stage,
+                        p.evaluations,
+                        c.started.elapsed().as_secs_f64()
+                    ),
+                    None => "starting…".into(),
+                });
+                if c.cancel.load(Ordering::Relaxed) {
+                    ui.weak("cancelling…");
+                } else if ui.button("Cancel calibration").clicked() {
+                    c.cancel.store(true, Ordering::Relaxed);
+                }
+            });
+        } else {
+            ui.horizontal(|ui| {
+                if ui
+                    .add_enabled(
+                        n > 0,
+                        egui::Button::new(format!("Calibrate on {n} record(s)")),
+                    )
+                    .on_hover_text(
+                        "From the live parameters: the paper's method, then Levenberg–Marquardt \
+                         on Cd, τ (and the mass), then the effect library ranked by ΔBIC — \
+                         the same as `seat-twin calibrate`",
+                    )
+                    .clicked()
+                {
+                    self.start_calibration(params);
+                }
+            });
+        }
+        let Some(r) = &self.report else {
+            return action;
+        };
+        ui.label(
+            RichText::new(format!("verdict: {}", r.verdict.name()))
+                .strong()
+                .color(match r.verdict {
+                    identify::Verdict::Explained => Color32::from_rgb(40, 160, 60),
+                    identify::Verdict::NoMissingEffect => Color32::from_rgb(40, 120, 200),
+                    identify::Verdict::Unexplained => Color32::from_rgb(220, 120, 20),
+                }),
+        );
+        egui::Grid::new("measured_errors")
+            .striped(true)
+            .num_columns(4)
+            .show(ui, |ui| {
+                for h in ["stage", "weighted error", "du/dt [mm/s]", "ydd [m/s²]"] {
+                    ui.strong(h);
+                }
+                ui.end_row();
+                let mut row = |name: &str, e: &ErrorSummary| {
+                    ui.label(name);
+                    ui.monospace(format!("{:.3}", e.value));
+                    ui.monospace(
+                        e.channels
+                            .get("du")
+                            .map(|v| format!("{:.3}", v * MM_PER_M))
+                            .unwrap_or_else(|| "–".into()),
+                    );
+                    ui.monospace(
+                        e.channels
+                            .get("ydd")
+                            .map(|v| format!("{v:.4}"))
+                            .unwrap_or_else(|| "–".into()),
+                    );
+                    ui.end_row();
+                };
+                row("nominal", &r.error_nominal);
+                if let Some(b) = &r.error_baseline {
+                    row("paper's method", b);
+                }
+                row("before (Cd, τ re-fitted)", &r.error_before);
+                row("after (with effects)", &r.error_after);
+            });
+        ui.weak("weighted error: 1.0 = sensor-noise level (see report.md for the metric)");
+        for v in &r.calibrated {
+            ui.monospace(format!("{} = {:.6} ± {:.2e}", v.name, v.value, v.std));
+        }
+        if r.effects.is_empty() {
+            ui.label("effects added: none");
+        }
+        for e in &r.effects {
+            let params: Vec<String> = e
+                .params
+                .iter()
+                .map(|(k, v)| format!("{k} = {v:.4e}"))
+                .collect();
+            ui.label(RichText::new(format!("added: {}", e.effect.name())).strong());
+            ui.monospace(params.join(", "));
+            ui.weak(glyph_safe(&e.evidence));
+        }
+        ui.collapsing("candidate scores (ΔBIC, negative = better)", |ui| {
+            egui::Grid::new("measured_candidates")
+                .striped(true)
+                .num_columns(4)
+                .show(ui, |ui| {
+                    for h in ["round", "effect", "ΔBIC", "share removed"] {
+                        ui.strong(h);
+                    }
+                    ui.end_row();
+                    for c in &r.candidates {
+                        ui.monospace(c.round.to_string());
+                        ui.label(c.effect.name());
+                        ui.monospace(format!("{:.1}", c.score));
+                        ui.monospace(format!("{:.0} %", c.relative_gain * 100.0));
+                        ui.end_row();
+                    }
+                });
+        });
+        for note in &r.notes {
+            ui.weak(glyph_safe(note));
+        }
+        ui.horizontal(|ui| {
+            if ui
+                .button("Apply to the live twin")
+                .on_hover_text("The calibrated parameters and effects replace the live ones")
+                .clicked()
+            {
+                action = MeasuredAction::Apply(Box::new(r.params));
+            }
+            if ui.button("Apply and save as preset…").clicked() {
+                action = MeasuredAction::ApplyAndSave(Box::new(r.params));
+            }
+        });
+        action
+    }
+}
+
+/// Reads and prepares records; the first bad file is the error.
+fn read_measured(
+    paths: &[PathBuf],
+    metric: &MetricOptions,
+) -> Result<Vec<(Record, PreparedRecord)>, String> {
+    let mut out = Vec::with_capacity(paths.len());
+    for p in paths {
+        let rec = dataset::read_record(p, RecordKind::Measured).map_err(|e| e.to_string())?;
+        let prep = PreparedRecord::new(&rec, metric).map_err(|e| e.to_string())?;
+        out.push((rec, prep));
+    }
+    Ok(out)
+}
+
+fn channels_text(r: &Record) -> String {
+    let mut v = vec!["v_in", "u"];
+    for (name, present) in [
+        ("x", r.x.is_some()),
+        ("xdd", r.xdd.is_some()),
+        ("ydd", r.ydd.is_some()),
+        ("p1", r.p1.is_some()),
+        ("p2", r.p2.is_some()),
+    ] {
+        if present {
+            v.push(name);
+        }
+    }
+    v.join(", ")
+}
+
+fn metadata_text(r: &Record) -> String {
+    if r.metadata.is_empty() {
+        return r.path.display().to_string();
+    }
+    let mut s = r.path.display().to_string();
+    for (k, v) in &r.metadata {
+        s.push_str(&format!("\n{k}: {v}"));
+    }
+    s
+}
+
+/// Text from the engine's reports with the few characters egui's bundled font lacks
+/// (arrows, combining dots) spelled out.
+fn glyph_safe(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '→' => out.push_str("->"),
+            '⇒' => out.push_str("=>"),
+            'ẍ' => out.push_str("xdd"),
+            'ẏ' => out.push_str("yd"),
+            '\u{0307}' => out.push('\''),
+            '⁻' => out.push('-'),
+            'ᵀ' => out.push_str("^T"),
+            c => out.push(c),
+        }
+    }
+    out
+}

@@ -1,0 +1,44 @@
+//! The desktop app (feature `gui`): eframe/egui front end over the [`engine`](crate::engine).
+//!
+//! ```text
+//!  sliders ──SetParams──► engine thread ──Samples/Status──► Traces ──► scopes (egui_plot)
+//!     │                                                        └────► metrics, schematic
+//!     └──► Analytic (same frame) ──► frequency plots ◄── Dwell (background sine dwell)
+//! ```
+//!
+//! * [`app::SeatTwinApp`] — state and layout; `SeatTwinApp::ui` is the whole per-frame work
+//!   and runs headless under `egui_kittest`.
+//! * [`traces`] — bounded sliding windows of the engine's batches (plots borrow them).
+//! * [`frequency`] — analytic responses, margins, the background dwell job.
+//! * [`measured`] — measured records: replay overlay, residual diagnosis, calibration in
+//!   the background.
+//! * [`scopes`], [`schematic`], [`controls`] — widgets; [`files`] — dialogs and exports
+//!   off the UI thread; [`units`] — display units.
+
+pub mod app;
+pub mod controls;
+pub mod files;
+pub mod frequency;
+pub mod measured;
+pub mod schematic;
+pub mod scopes;
+pub mod traces;
+pub mod units;
+
+pub use app::SeatTwinApp;
+
+/// Opens the app window and runs until it is closed.
+pub fn run_native() -> Result<(), eframe::Error> {
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title("seat-twin")
+            .with_inner_size([1600.0, 1000.0])
+            .with_min_inner_size([1100.0, 700.0]),
+        ..Default::default()
+    };
+    eframe::run_native(
+        "seat-twin",
+        options,
+        Box::new(|cc| Ok(Box::new(SeatTwinApp::from_creation_context(cc)))),
+    )
+}
