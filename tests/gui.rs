@@ -347,6 +347,11 @@ fn demo_campaign_loads_from_the_menu_and_replays_with_the_live_parameters() {
         v.errors.du_nrmse
     );
     assert_eq!(v.correlations.len(), 5, "one row per signature feature");
+    assert!(
+        v.weighted_rms.is_finite() && v.weighted_rms > 0.0,
+        "{}",
+        v.weighted_rms
+    );
     h.get_by_label_contains("Measured vs twin");
 
     // A slider change re-runs the replay with the new parameters.

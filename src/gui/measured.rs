@@ -23,7 +23,7 @@ use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 
 /// Measured channel colour.
-const MEASURED: Color32 = Color32::from_rgb(90, 90, 90);
+const MEASURED: Color32 = Color32::from_rgb(150, 150, 150);
 /// Calibrated twin colour.
 const CALIBRATED: Color32 = Color32::from_rgb(44, 160, 44);
 /// Residual colour.
@@ -100,6 +100,8 @@ pub struct ReplayView {
     pub params: Params,
     /// Per-channel errors (SI).
     pub errors: ChannelErrors,
+    /// RMS of the noise-weighted residual, as in the calibration (1.0 = sensor noise).
+    pub weighted_rms: f64,
     /// Whiteness of the relative-velocity residual, decimated to the metric's rate.
     pub whiteness: Whiteness,
     /// Correlation of the residual with the signature features of the library effects.
@@ -141,6 +143,8 @@ fn replay_view(params: &Params, rec: &PreparedRecord, index: usize) -> Result<Re
         .copied()
         .collect();
     let whiteness = diagnose::whiteness(&dec, WHITENESS_LAGS);
+    let mut weighted = Vec::new();
+    rec.weighted_residuals(&r.sim, &mut weighted);
     let correlations =
         diagnose::feature_correlations(std::slice::from_ref(rec), std::slice::from_ref(&r));
     let t = &rec.t;
@@ -152,6 +156,7 @@ fn replay_view(params: &Params, rec: &PreparedRecord, index: usize) -> Result<Re
         record: index,
         params: *params,
         errors: r.errors,
+        weighted_rms: identify::replay::rms(&weighted),
         whiteness,
         correlations,
         du: [
@@ -614,26 +619,29 @@ impl MeasuredData {
                 .width(w)
         };
         plot("measured_du", "du/dt [mm/s]").show(ui, |pu| {
-            pu.line(line("measured", &v.du[0], MEASURED, 1.0));
-            pu.line(line("twin (live parameters)", &v.du[1], TWIN, 1.5));
+            pu.line(line("twin (live parameters)", &v.du[1], TWIN, 2.0));
             if let Some(c) = cal {
-                pu.line(line("twin (calibrated)", &c.du[1], CALIBRATED, 1.5));
+                pu.line(line("twin (calibrated)", &c.du[1], CALIBRATED, 2.0));
             }
+            // On top, thin: visible where the twin covers it.
+            pu.line(line("measured", &v.du[0], MEASURED, 1.0));
         });
         plot("measured_u", "stroke u [mm]").show(ui, |pu| {
-            pu.line(line("measured", &v.u[0], MEASURED, 1.0));
-            pu.line(line("twin (live parameters)", &v.u[1], TWIN, 1.5));
+            pu.line(line("twin (live parameters)", &v.u[1], TWIN, 2.0));
             if let Some(c) = cal {
-                pu.line(line("twin (calibrated)", &c.u[1], CALIBRATED, 1.5));
+                pu.line(line("twin (calibrated)", &c.u[1], CALIBRATED, 2.0));
             }
+            // On top, thin: visible where the twin covers it.
+            pu.line(line("measured", &v.u[0], MEASURED, 1.0));
         });
         if !v.ydd[0].is_empty() {
             plot("measured_ydd", "body accel. [m/s²]").show(ui, |pu| {
-                pu.line(line("measured", &v.ydd[0], MEASURED, 1.0));
-                pu.line(line("twin (live parameters)", &v.ydd[1], TWIN, 1.5));
+                pu.line(line("twin (live parameters)", &v.ydd[1], TWIN, 2.0));
                 if let Some(c) = cal {
-                    pu.line(line("twin (calibrated)", &c.ydd[1], CALIBRATED, 1.5));
+                    pu.line(line("twin (calibrated)", &c.ydd[1], CALIBRATED, 2.0));
                 }
+                // On top, thin: visible where the twin covers it.
+                pu.line(line("measured", &v.ydd[0], MEASURED, 1.0));
             });
         }
         plot("measured_res", "residual du/dt [mm/s]")
@@ -670,18 +678,30 @@ impl MeasuredData {
                 _ => String::new(),
             }
         ));
+        let above = v.weighted_rms > self.options.noise_level;
+        ui.label(
+            RichText::new(format!(
+                "weighted error {:.2} (1.0 = sensor noise): {}",
+                v.weighted_rms,
+                if above {
+                    "above the noise, the twin misses something here"
+                } else {
+                    "at the noise level (or within 1 % of the signal)"
+                }
+            ))
+            .color(if above {
+                Color32::from_rgb(220, 120, 20)
+            } else {
+                Color32::from_rgb(40, 160, 60)
+            }),
+        );
         let w = &v.whiteness;
-        let white = w.share_outside <= 0.1;
-        ui.label(format!(
-            "whiteness: lag-1 autocorrelation {:.2}, {:.0} % of {} lags outside ±1.96/√n: {}",
+        ui.weak(format!(
+            "whiteness of the (25 Hz low-passed, so never white) residual: lag-1 \
+             autocorrelation {:.2}, {:.0} % of {} lags outside the white-noise band",
             w.lag1,
             w.share_outside * 100.0,
             w.max_lag,
-            if white {
-                "residual looks like noise"
-            } else {
-                "structured residual: the twin misses something"
-            }
         ));
         ui.label("correlation of the residual with each effect's signature:");
         egui::Grid::new("measured_corr")
