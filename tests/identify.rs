@@ -441,8 +441,6 @@ fn compliance_is_found() {
     check_single(fx, EffectId::Compliance, 6);
 }
 
-/// Known limitation: without pressure channels, a quadratic supply droop and viscous friction
-/// both just reduce the velocity at high flow (Q = A·u̇ in every test), and the scores tie.
 /// Supply sag with chamber pressures recorded. Without them the case cannot be decided (see
 /// `supply_sag_without_pressures_is_reported_ambiguous`): at steady flow a supply droop and a
 /// viscous friction lower the velocity alike, since both take pressure from the metering
