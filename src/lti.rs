@@ -26,7 +26,7 @@ use crate::integrate::StepStats;
 use crate::model::{Inputs, Model};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::PlatformMotion;
-use crate::simulation::{CommandPath, ContactEvent, Drive, Sample, SimError, Trace};
+use crate::simulation::{CommandPath, ContactEvent, Drive, Sample, SimError, Trace, track_contact};
 use nalgebra::{DMatrix, SMatrix, SVector};
 
 /// Marker for models whose derivatives are linear in state and inputs.
@@ -154,24 +154,9 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
 
     fn track_contact(&mut self) {
         let u = self.model.relative_position(&self.y.into());
-        let pen = u.abs() - self.model.half_stroke();
+        let half = self.model.half_stroke();
         let t = self.time();
-        if pen > 0.0 {
-            if !self.in_contact {
-                self.contacts.push(ContactEvent {
-                    t_start: t,
-                    t_end: t,
-                    side: if u > 0.0 { 1 } else { -1 },
-                    max_penetration_m: pen,
-                });
-                self.in_contact = true;
-            } else if let Some(c) = self.contacts.last_mut() {
-                c.t_end = t;
-                c.max_penetration_m = c.max_penetration_m.max(pen);
-            }
-        } else {
-            self.in_contact = false;
-        }
+        track_contact(&mut self.contacts, &mut self.in_contact, t, u, half);
     }
 
     /// The current instant as a recorded sample.
@@ -183,26 +168,12 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
             xdd: p.xdd,
         };
         let o = self.model.outputs(&self.y.into(), &inputs);
-        Sample {
-            t,
-            x: p.x,
-            xd: p.xd,
-            xdd: p.xdd,
-            u: o.u,
-            du: o.du,
-            ydd: o.ydd,
-            v_in: if M::KIND.has_command() {
-                self.history.last_value()
-            } else {
-                f64::NAN
-            },
-            xv: o.xv,
-            p1: o.p1,
-            p2: o.p2,
-            q1: o.q1,
-            q2: o.q2,
-            contact: o.u.abs() > self.model.half_stroke(),
-        }
+        let v_in = if M::KIND.has_command() {
+            self.history.last_value()
+        } else {
+            f64::NAN
+        };
+        Sample::assemble(t, p, &o, v_in, self.model.half_stroke())
     }
 
     /// Runs from rest to `t_end` [s] and returns the trace recorded at `rate_hz` (a whole

@@ -12,7 +12,7 @@ use crate::delay::DelayLine;
 use crate::integrate::{StepStats, rk4_step};
 use crate::model::{Inputs, Model, ModelKind, Outputs};
 use crate::params::{ControllerParams, MAX_DELAY_S};
-use crate::scenario::{CommandSignal, PlatformMotion};
+use crate::scenario::{CommandSignal, PlatformMotion, PlatformSample};
 
 /// Where the valve command comes from.
 #[derive(Debug, Clone, PartialEq)]
@@ -76,6 +76,56 @@ pub struct Sample {
     pub q2: f64,
     /// Body beyond ±Lc/2 (end-stop contact for the twin, stroke overrun for the others).
     pub contact: bool,
+}
+
+impl Sample {
+    /// The sample at `t` from the platform's motion, the model's outputs and the command as
+    /// sent (NaN without a valve); `half_stroke` [m] decides `contact`.
+    pub fn assemble(t: f64, p: PlatformSample, o: &Outputs, v_in: f64, half_stroke: f64) -> Self {
+        Sample {
+            t,
+            x: p.x,
+            xd: p.xd,
+            xdd: p.xdd,
+            u: o.u,
+            du: o.du,
+            ydd: o.ydd,
+            v_in,
+            xv: o.xv,
+            p1: o.p1,
+            p2: o.p2,
+            q1: o.q1,
+            q2: o.q2,
+            contact: o.u.abs() > half_stroke,
+        }
+    }
+}
+
+/// Opens, extends or closes the end-stop contact event at time `t` for stroke `u` [m].
+pub(crate) fn track_contact(
+    contacts: &mut Vec<ContactEvent>,
+    in_contact: &mut bool,
+    t: f64,
+    u: f64,
+    half_stroke: f64,
+) {
+    let pen = u.abs() - half_stroke;
+    if pen > 0.0 {
+        if !*in_contact {
+            contacts.push(ContactEvent {
+                t_start: t,
+                t_end: t,
+                side: if u > 0.0 { 1 } else { -1 },
+                max_penetration_m: pen,
+            });
+            *in_contact = true;
+        } else if let Some(c) = contacts.last_mut() {
+            c.t_end = t;
+            c.max_penetration_m = c.max_penetration_m.max(pen);
+        }
+    } else {
+        *in_contact = false;
+    }
 }
 
 /// One end-stop contact (twin) or stroke overrun (linear, passive models).
@@ -344,23 +394,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     fn track_contact(&mut self) {
         let u = self.model.relative_position(&self.y);
         let half = self.model.half_stroke();
-        let pen = u.abs() - half;
-        if pen > 0.0 {
-            if !self.in_contact {
-                self.contacts.push(ContactEvent {
-                    t_start: self.t,
-                    t_end: self.t,
-                    side: if u > 0.0 { 1 } else { -1 },
-                    max_penetration_m: pen,
-                });
-                self.in_contact = true;
-            } else if let Some(c) = self.contacts.last_mut() {
-                c.t_end = self.t;
-                c.max_penetration_m = c.max_penetration_m.max(pen);
-            }
-        } else {
-            self.in_contact = false;
-        }
+        track_contact(&mut self.contacts, &mut self.in_contact, self.t, u, half);
     }
 
     /// Inputs at the current time (for outputs).
@@ -381,28 +415,18 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
 
     /// The current instant as a recorded sample.
     pub fn sample(&self) -> Sample {
-        let o = self.outputs();
-        let p = self.platform.at(self.t);
-        Sample {
-            t: self.t,
-            x: p.x,
-            xd: p.xd,
-            xdd: p.xdd,
-            u: o.u,
-            du: o.du,
-            ydd: o.ydd,
-            v_in: if M::KIND.has_command() {
-                self.history.last_value()
-            } else {
-                f64::NAN
-            },
-            xv: o.xv,
-            p1: o.p1,
-            p2: o.p2,
-            q1: o.q1,
-            q2: o.q2,
-            contact: o.u.abs() > self.model.half_stroke(),
-        }
+        let v_in = if M::KIND.has_command() {
+            self.history.last_value()
+        } else {
+            f64::NAN
+        };
+        Sample::assemble(
+            self.t,
+            self.platform.at(self.t),
+            &self.outputs(),
+            v_in,
+            self.model.half_stroke(),
+        )
     }
 
     /// Runs until `t_end` [s], calling `record` every `every` steps (and at the start if
