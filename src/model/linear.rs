@@ -74,17 +74,7 @@ impl Model<3> for LinearModel {
     }
 
     fn outputs(&self, y: &[f64; 3], inputs: &Inputs) -> Outputs {
-        Outputs {
-            u: y[0],
-            du: y[1],
-            ydd: inputs.xdd + y[2],
-            xv: f64::NAN,
-            p1: f64::NAN,
-            p2: f64::NAN,
-            q1: f64::NAN,
-            q2: f64::NAN,
-            end_stop_force: 0.0,
-        }
+        Outputs::mechanical(y[0], y[1], inputs.xdd + y[2])
     }
 
     #[inline(always)]

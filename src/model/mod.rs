@@ -45,6 +45,23 @@ pub struct Outputs {
     pub end_stop_force: f64,
 }
 
+impl Outputs {
+    /// Outputs of a model without hydraulics (linear, passive): the hydraulic quantities NaN.
+    pub fn mechanical(u: f64, du: f64, ydd: f64) -> Self {
+        Outputs {
+            u,
+            du,
+            ydd,
+            xv: f64::NAN,
+            p1: f64::NAN,
+            p2: f64::NAN,
+            q1: f64::NAN,
+            q2: f64::NAN,
+            end_stop_force: 0.0,
+        }
+    }
+}
+
 /// Which model a trace came from; decides which CSV columns exist.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -69,17 +69,7 @@ impl Model<2> for PassiveModel {
     }
 
     fn outputs(&self, y: &[f64; 2], _inputs: &Inputs) -> Outputs {
-        Outputs {
-            u: y[0],
-            du: y[1],
-            ydd: self.body_acceleration(y),
-            xv: f64::NAN,
-            p1: f64::NAN,
-            p2: f64::NAN,
-            q1: f64::NAN,
-            q2: f64::NAN,
-            end_stop_force: 0.0,
-        }
+        Outputs::mechanical(y[0], y[1], self.body_acceleration(y))
     }
 
     #[inline(always)]
