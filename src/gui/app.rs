@@ -804,6 +804,11 @@ impl SeatTwinApp {
         }
     }
 
+    /// The simulated (sine dwell) frequency points of the twin.
+    pub fn dwell(&self) -> &Dwell {
+        &self.dwell
+    }
+
     /// The measured-data window's state.
     pub fn measured(&self) -> &MeasuredData {
         &self.measured

@@ -29,6 +29,20 @@ pub const N_POINTS: usize = 240;
 pub const DWELL_RANGE_HZ: (f64, f64) = (0.3, 30.0);
 /// Number of dwell points.
 pub const N_DWELL: usize = 14;
+/// Legend of the simulated u̇/V_in points.
+const BODE_DWELL_NAME: &str = "twin simulated (sine dwell, ≤ 1.1 V)";
+/// Highest frequency of the simulated u̇/V_in points [Hz] (Table 1's range: above it the
+/// phase between neighbouring dwell points could not be unwrapped reliably).
+pub const BODE_DWELL_MAX_HZ: f64 = 20.0;
+/// Command amplitude of the simulated u̇/V_in point at `freq_hz` [V]: Table 1's 1.1 V where
+/// the stroke allows, less at low frequency so that the piston stays within ±15 mm of
+/// mid-stroke (at the paper's gain of 133 mm/(s·V), 1.1 V at 0.3 Hz would swing ±78 mm,
+/// into the end stops at ±35 mm).
+pub fn bode_dwell_amplitude_v(freq_hz: f64) -> f64 {
+    const STROKE_AMPLITUDE_M: f64 = 0.015;
+    const NOMINAL_GAIN_M_PER_S_V: f64 = 0.133;
+    (STROKE_AMPLITUDE_M * 2.0 * PI * freq_hz / NOMINAL_GAIN_M_PER_S_V).clamp(0.05, 1.1)
+}
 /// Pause after the last parameter change before the dwell restarts.
 pub const DWELL_DEBOUNCE: Duration = Duration::from_millis(400);
 
@@ -278,8 +292,15 @@ impl Analytic {
 
 /// A message from the dwell thread.
 enum DwellMsg {
-    Point { freq_hz: f64, value: Complex64 },
-    Failed { freq_hz: f64, reason: String },
+    Point {
+        freq_hz: f64,
+        value: Complex64,
+        bode: Option<Complex64>,
+    },
+    Failed {
+        freq_hz: f64,
+        reason: String,
+    },
     Finished,
 }
 
@@ -298,7 +319,8 @@ impl Drop for DwellJob {
     }
 }
 
-/// The simulated (sine dwell) transmissibility points of the twin.
+/// The simulated (sine dwell) points of the twin: transmissibility, and u̇/V_in up to
+/// [`BODE_DWELL_MAX_HZ`].
 #[derive(Default)]
 pub struct Dwell {
     job: Option<DwellJob>,
@@ -308,6 +330,10 @@ pub struct Dwell {
     pub mag: Curve,
     /// Phase [deg] points.
     pub phase: Curve,
+    /// |u̇/V_in| [dB re 1 mm/(s·V)] points.
+    pub bode_mag: Curve,
+    /// Phase of u̇/V_in [deg] points.
+    pub bode_phase: Curve,
     /// Points that failed (diverged), with the reason.
     pub failures: Vec<(f64, String)>,
     /// Last parameter change not yet simulated, and when it happened.
@@ -340,6 +366,8 @@ impl Dwell {
         self.cancelled = false;
         self.mag.clear();
         self.phase.clear();
+        self.bode_mag.clear();
+        self.bode_phase.clear();
         self.failures.clear();
         self.shown_for = Some(*params);
         let freqs = fr::log_space(DWELL_RANGE_HZ.0, DWELL_RANGE_HZ.1, N_DWELL);
@@ -357,10 +385,26 @@ impl Dwell {
                         return;
                     }
                     let r = std::panic::catch_unwind(|| {
-                        fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)
+                        let t = fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
+                        let b = if f <= BODE_DWELL_MAX_HZ {
+                            Some(fr::simulated_bode(
+                                &p,
+                                ModelKind::Twin,
+                                f,
+                                bode_dwell_amplitude_v(f),
+                                &opt,
+                            )?)
+                        } else {
+                            None
+                        };
+                        Ok::<_, crate::simulation::SimError>((t, b))
                     });
                     let msg = match r {
-                        Ok(Ok(value)) => DwellMsg::Point { freq_hz: f, value },
+                        Ok(Ok((value, bode))) => DwellMsg::Point {
+                            freq_hz: f,
+                            value,
+                            bode,
+                        },
                         Ok(Err(e)) => DwellMsg::Failed {
                             freq_hz: f,
                             reason: e.to_string(),
@@ -414,12 +458,20 @@ impl Dwell {
         if let Some(job) = self.job.as_mut() {
             for msg in job.rx.try_iter() {
                 match msg {
-                    DwellMsg::Point { freq_hz, value } => {
+                    DwellMsg::Point {
+                        freq_hz,
+                        value,
+                        bode,
+                    } => {
                         job.done += 1;
                         let x = freq_hz.log10();
                         if value.norm().is_finite() {
                             self.mag.push(PlotPoint::new(x, db(value.norm())));
                             self.phase.push(PlotPoint::new(x, deg(value.arg())));
+                        }
+                        if let Some(b) = bode.filter(|b| b.norm().is_finite()) {
+                            self.bode_mag.push(PlotPoint::new(x, db(b.norm() * 1e3)));
+                            self.bode_phase.push(PlotPoint::new(x, deg(b.arg())));
                         }
                     }
                     DwellMsg::Failed { freq_hz, reason } => {
@@ -441,9 +493,11 @@ impl Dwell {
     /// Puts the dwell phases on the same branch as a continuous curve (each point is an
     /// independent `arg` in (−180°, 180°]).
     fn unwrap_phase_points(&mut self) {
-        let ph: Vec<f64> = self.phase.iter().map(|p| p.y.to_radians()).collect();
-        for (p, u) in self.phase.iter_mut().zip(fr::unwrap_phase(&ph)) {
-            p.y = u.to_degrees();
+        for curve in [&mut self.phase, &mut self.bode_phase] {
+            let ph: Vec<f64> = curve.iter().map(|p| p.y.to_radians()).collect();
+            for (p, u) in curve.iter_mut().zip(fr::unwrap_phase(&ph)) {
+                p.y = u.to_degrees();
+            }
         }
     }
 }
@@ -671,6 +725,12 @@ pub fn frequency_ui(ui: &mut egui::Ui, curves: &Curves, dwell: &mut Dwell, param
                     .width(2.0)
                     .style(LineStyle::dashed_loose()),
             );
+            pu.points(
+                Points::new(BODE_DWELL_NAME, dwell.bode_mag.as_slice())
+                    .color(TWIN)
+                    .radius(4.0)
+                    .filled(true),
+            );
         });
     freq_plot("bode_phase", "phase [deg]")
         .height(h)
@@ -686,6 +746,12 @@ pub fn frequency_ui(ui: &mut egui::Ui, curves: &Curves, dwell: &mut Dwell, param
                     .color(LINEAR)
                     .width(2.0)
                     .style(LineStyle::dashed_loose()),
+            );
+            pu.points(
+                Points::new(BODE_DWELL_NAME, dwell.bode_phase.as_slice())
+                    .color(TWIN)
+                    .radius(4.0)
+                    .filled(true),
             );
         });
 }
