@@ -10,7 +10,7 @@ use seat_twin::analysis::frequency_response as fr;
 use seat_twin::bench::{bench_ride, ride_run};
 use seat_twin::experiments;
 use seat_twin::model::ModelKind;
-use seat_twin::params::Params;
+use seat_twin::params::{Integrator, Params};
 use std::hint::black_box;
 
 fn ride_10s(c: &mut Criterion) {
@@ -28,6 +28,17 @@ fn ride_10s(c: &mut Criterion) {
             })
         });
     }
+    // The twin with classical RK4 at the step that gives it the same accuracy.
+    let mut rk4 = params;
+    rk4.numerics.integrator = Integrator::Rk4;
+    rk4.numerics.max_step_s = seat_twin::bench::RK4_STEP_S;
+    group.bench_function("twin_rk4", |b| {
+        b.iter(|| {
+            let trace = ride_run(black_box(&rk4), ModelKind::Twin, &ride, 10.0, 1e-4)
+                .expect("the paper's ride does not diverge");
+            black_box(trace.samples.len())
+        })
+    });
     group.finish();
 }
 

@@ -253,7 +253,7 @@ impl Sims {
         let h = step_for_rate(params.numerics.max_step_s, STREAM_RATE_HZ);
         let every = ((1.0 / STREAM_RATE_HZ) / h).round() as u64;
         Self {
-            twin: Simulation::new(Twin::new(*params), h, drive.clone(), platform.clone()),
+            twin: Simulation::twin(params, h, drive.clone(), platform.clone()),
             linear: Simulation::new(LinearModel::new(params), h, drive.clone(), platform.clone()),
             passive: Simulation::new(PassiveModel::new(params), h, drive, platform),
             every,

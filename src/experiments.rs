@@ -5,7 +5,6 @@ use crate::lti::LtiSimulation;
 use crate::model::ModelKind;
 use crate::model::linear::LinearModel;
 use crate::model::passive::PassiveModel;
-use crate::model::twin::Twin;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, Cycloid, PlatformMotion};
 use crate::simulation::{Drive, SimError, Simulation, Trace, step_for_rate};
@@ -27,7 +26,7 @@ pub fn run(
     let h = step_for_rate(params.numerics.max_step_s, rate_hz);
     match kind {
         ModelKind::Twin => {
-            Simulation::new(Twin::new(*params), h, drive, platform).run_trace(duration_s, rate_hz)
+            Simulation::twin(params, h, drive, platform).run_trace(duration_s, rate_hz)
         }
         // The linear models are stepped exactly (crate::lti) at up to 1 ms, unless the delay
         // is shorter than that step; then RK4 at the twin's step, like the twin.

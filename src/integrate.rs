@@ -42,6 +42,283 @@ pub fn rk4_step<const N: usize>(
     }
 }
 
+/// Column-major `N×N` matrix: `m[j]` is column `j`.
+type Columns<const N: usize> = [[f64; N]; N];
+
+/// `out += m·x`.
+#[inline(always)]
+fn mul_add<const N: usize>(out: &mut [f64; N], m: &Columns<N>, x: &[f64; N]) {
+    for (col, &xj) in m.iter().zip(x) {
+        for (o, &c) in out.iter_mut().zip(col) {
+            *o += c * xj;
+        }
+    }
+}
+
+/// `out += Σ_k cols[k]·x[k]` over the remainder's rows only.
+#[inline(always)]
+fn mul_add_rows<const N: usize>(out: &mut [f64; N], cols: &[[f64; N]], x: &[f64]) {
+    for (col, &xk) in cols.iter().zip(x) {
+        for (o, &c) in out.iter_mut().zip(col) {
+            *o += c * xk;
+        }
+    }
+}
+
+/// Most rows of the remainder an [`Etd4`] handles explicitly (the twin needs 4).
+const MAX_REMAINDER_ROWS: usize = 8;
+
+/// Exponential fourth-order Runge–Kutta (Cox & Matthews 2002, "ETDRK4") for
+/// `y' = A·(y − y_ref) + R(t, y)` with a constant matrix `A` taken exactly, through its
+/// matrix exponential and φ-functions, and the remainder `R = f − A·(y − y_ref)` explicitly.
+///
+/// Why: linearised at rest the twin has two hose/chamber L–C modes near 912 Hz with a damping
+/// ratio of 6e-4 (MODEL_NOTES 9). They ring for a quarter of a second after every disturbance,
+/// and resolving that ringing to 1e-4 m/s² in ÿ takes RK4 a step of ≈ 0.1 ms: the step is set
+/// by phase error on a linear mode, not by the nonlinear physics. With `A` the Jacobian at rest
+/// those modes are propagated without phase or amplitude error at any step; what is left
+/// explicit (valve orifices, saturations, end stops, friction, the inputs) changes slowly.
+///
+/// The remainder is non-zero only in the rows of `f` that are not affine in the state (for the
+/// twin: body velocity, the two valve-port pressures and the spool velocity). [`Etd4::new`]
+/// finds those rows by probing `f` far from `y_ref`, and the step only carries the columns of
+/// the φ-matrices for them. With `A = 0` the scheme is classical RK4.
+#[derive(Debug, Clone)]
+pub struct Etd4<const N: usize> {
+    h: f64,
+    y_ref: [f64; N],
+    /// Rows in which the remainder can be non-zero.
+    rows: Vec<usize>,
+    /// For each of `rows`, the non-zero entries `(column, value)` of that row of `A`.
+    a_rows: Vec<Vec<(usize, f64)>>,
+    /// `e^{hA}`.
+    e: Columns<N>,
+    /// `e^{hA/2}`.
+    e2: Columns<N>,
+    /// Columns `rows` of `(h/2)·φ1(hA/2)`.
+    p2: Vec<[f64; N]>,
+    /// Columns `rows` of `e^{hA/2}·(h/2)·φ1(hA/2)` (so that the third stage can start from
+    /// `e^{hA}·z`, which the last stage needs anyway: one dense product fewer per step).
+    e2p2: Vec<[f64; N]>,
+    /// Columns `rows` of `h·(φ1 − 3φ2 + 4φ3)(hA)`, weight of the first stage.
+    b1: Vec<[f64; N]>,
+    /// Columns `rows` of `h·(2φ2 − 4φ3)(hA)`, weight of the two middle stages.
+    b2: Vec<[f64; N]>,
+    /// Columns `rows` of `h·(4φ3 − φ2)(hA)`, weight of the last stage.
+    b4: Vec<[f64; N]>,
+}
+
+/// Why [`Etd4::new`] could not build its coefficients.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Etd4Error {
+    /// A matrix exponential overflowed (a step far too long for the matrix).
+    #[error("the matrix exponential of h·A is not finite (step {h} s)")]
+    NotFinite {
+        /// Step [s].
+        h: f64,
+    },
+    /// More rows of the right-hand side are nonlinear than the scheme carries.
+    #[error("{rows} rows of the right-hand side are nonlinear (at most {MAX_REMAINDER_ROWS})")]
+    TooManyNonlinearRows {
+        /// Rows found nonlinear.
+        rows: usize,
+    },
+}
+
+impl<const N: usize> Etd4<N> {
+    /// Coefficients for step `h` [s], matrix `A` (`a[i][j] = A_ij`), reference state `y_ref`,
+    /// per-state scales (the exponentials are taken of `D⁻¹·A·D`, `D = diag(scales)`, whose
+    /// entries are of similar size) and the right-hand side `f(y)` to probe for its nonlinear
+    /// rows, which must include every row an input enters.
+    pub fn new(
+        h: f64,
+        a: &[[f64; N]; N],
+        y_ref: [f64; N],
+        scales: &[f64; N],
+        probe: impl Fn(&[f64; N]) -> [f64; N],
+    ) -> Result<Self, Etd4Error> {
+        use nalgebra::DMatrix;
+        let scaled = |i: usize, j: usize| a[i][j] * scales[j] / scales[i];
+        // exp([[hÃ, I, 0, 0], [0, 0, I, 0], [0, 0, 0, I], [0, 0, 0, 0]]) has φ0..φ3(hÃ) on its
+        // first block row; the 2-block version with hÃ/2 gives e^{hÃ/2} and φ1(hÃ/2).
+        let augmented = |blocks: usize, step: f64| {
+            let mut m = DMatrix::<f64>::zeros(blocks * N, blocks * N);
+            for i in 0..N {
+                for j in 0..N {
+                    m[(i, j)] = step * scaled(i, j);
+                }
+                for b in 1..blocks {
+                    m[((b - 1) * N + i, b * N + i)] = 1.0;
+                }
+            }
+            m.exp()
+        };
+        let full = augmented(4, h);
+        let half = augmented(2, 0.5 * h);
+        if full.iter().chain(half.iter()).any(|v| !v.is_finite()) {
+            return Err(Etd4Error::NotFinite { h });
+        }
+        let rows = nonlinear_rows(a, &y_ref, scales, probe);
+        if rows.len() > MAX_REMAINDER_ROWS {
+            return Err(Etd4Error::TooManyNonlinearRows { rows: rows.len() });
+        }
+        // Column j of a weighted sum of blocks of the first block row, unscaled (D·Φ̃·D⁻¹).
+        let column = |m: &DMatrix<f64>, w: &[(usize, f64)], j: usize| {
+            let mut col = [0.0; N];
+            for (i, v) in col.iter_mut().enumerate() {
+                let sum: f64 = w.iter().map(|&(k, c)| c * m[(i, k * N + j)]).sum();
+                *v = sum * scales[i] / scales[j];
+            }
+            col
+        };
+        let all = |m: &DMatrix<f64>| {
+            let mut out = [[0.0; N]; N];
+            for (j, col) in out.iter_mut().enumerate() {
+                *col = column(m, &[(0, 1.0)], j);
+            }
+            out
+        };
+        let cols = |m: &DMatrix<f64>, w: &[(usize, f64)]| -> Vec<[f64; N]> {
+            rows.iter().map(|&j| column(m, w, j)).collect()
+        };
+        let e2 = all(&half);
+        let p2 = cols(&half, &[(1, 0.5 * h)]);
+        let e2p2 = p2
+            .iter()
+            .map(|c| {
+                let mut out = [0.0; N];
+                mul_add(&mut out, &e2, c);
+                out
+            })
+            .collect();
+        Ok(Self {
+            h,
+            y_ref,
+            a_rows: rows
+                .iter()
+                .map(|&i| {
+                    (0..N)
+                        .filter(|&j| a[i][j] != 0.0)
+                        .map(|j| (j, a[i][j]))
+                        .collect()
+                })
+                .collect(),
+            e: all(&full),
+            e2,
+            p2,
+            e2p2,
+            b1: cols(&full, &[(1, h), (2, -3.0 * h), (3, 4.0 * h)]),
+            b2: cols(&full, &[(2, 2.0 * h), (3, -4.0 * h)]),
+            b4: cols(&full, &[(2, -h), (3, 4.0 * h)]),
+            rows,
+        })
+    }
+
+    /// The step these coefficients are for [s].
+    pub fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    /// Rows of the right-hand side handled explicitly.
+    pub fn nonlinear_rows(&self) -> &[usize] {
+        &self.rows
+    }
+
+    /// The remainder `R = f − A·z` on the nonlinear rows.
+    #[inline(always)]
+    fn remainder(&self, fy: &[f64; N], z: &[f64; N]) -> [f64; MAX_REMAINDER_ROWS] {
+        let mut r = [0.0; MAX_REMAINDER_ROWS];
+        for ((rk, &i), row) in r.iter_mut().zip(&self.rows).zip(&self.a_rows) {
+            *rk = fy[i] - row.iter().map(|&(j, v)| v * z[j]).sum::<f64>();
+        }
+        r
+    }
+
+    /// One step from `(t, y)`, in place; `f(t, y)` returns `dy/dt`. Stage times are `t`,
+    /// `t + h/2` (twice) and `t + h`, as in RK4.
+    #[inline(always)]
+    pub fn step(&self, t: f64, y: &mut [f64; N], mut f: impl FnMut(f64, &[f64; N]) -> [f64; N]) {
+        let h = self.h;
+        let k = self.rows.len();
+        let shift = |z: &[f64; N]| {
+            let mut y = *z;
+            for (v, r) in y.iter_mut().zip(&self.y_ref) {
+                *v += r;
+            }
+            y
+        };
+        let mut z = *y;
+        for (v, r) in z.iter_mut().zip(&self.y_ref) {
+            *v -= r;
+        }
+        let nu = self.remainder(&f(t, y), &z);
+        let mut e2z = [0.0; N];
+        mul_add(&mut e2z, &self.e2, &z);
+        let mut ez = [0.0; N];
+        mul_add(&mut ez, &self.e, &z);
+        let mut za = e2z;
+        mul_add_rows(&mut za, &self.p2, &nu[..k]);
+        let na = self.remainder(&f(t + 0.5 * h, &shift(&za)), &za);
+        let mut zb = e2z;
+        mul_add_rows(&mut zb, &self.p2, &na[..k]);
+        let nb = self.remainder(&f(t + 0.5 * h, &shift(&zb)), &zb);
+        // e^{hA/2}·za = e^{hA}·z + e^{hA/2}·(h/2)·φ1(hA/2)·nu.
+        let mut zc = ez;
+        mul_add_rows(&mut zc, &self.e2p2, &nu[..k]);
+        let mut w = [0.0; MAX_REMAINDER_ROWS];
+        for i in 0..k {
+            w[i] = 2.0 * nb[i] - nu[i];
+        }
+        mul_add_rows(&mut zc, &self.p2, &w[..k]);
+        let nc = self.remainder(&f(t + h, &shift(&zc)), &zc);
+        let mut out = ez;
+        mul_add_rows(&mut out, &self.b1, &nu[..k]);
+        for i in 0..k {
+            w[i] = na[i] + nb[i];
+        }
+        mul_add_rows(&mut out, &self.b2, &w[..k]);
+        mul_add_rows(&mut out, &self.b4, &nc[..k]);
+        *y = shift(&out);
+    }
+}
+
+/// Rows `i` where `f_i(y) − A_i·(y − y_ref)` is not ≈ 0 for states from 0.3 to 30 scales away
+/// from `y_ref` (far enough to reach saturations and end stops), i.e. the rows that are not
+/// affine with matrix `A` and an equilibrium at `y_ref`.
+fn nonlinear_rows<const N: usize>(
+    a: &[[f64; N]; N],
+    y_ref: &[f64; N],
+    scales: &[f64; N],
+    f: impl Fn(&[f64; N]) -> [f64; N],
+) -> Vec<usize> {
+    let mut nonlinear = [false; N];
+    // A fixed, irregular pattern of signs and sizes per state (no RNG: reproducible).
+    let pattern = [
+        0.83, -0.41, 0.67, -0.97, 0.29, -0.55, 0.76, -0.18, 0.92, -0.63,
+    ];
+    for (p, amplitude) in [0.3, 3.0, 30.0].into_iter().enumerate() {
+        for flip in [1.0, -1.0] {
+            let mut z = [0.0; N];
+            for (j, v) in z.iter_mut().enumerate() {
+                *v = flip * amplitude * pattern[(j + 3 * p) % pattern.len()] * scales[j];
+            }
+            let mut y = *y_ref;
+            for (v, dz) in y.iter_mut().zip(&z) {
+                *v += dz;
+            }
+            let fy = f(&y);
+            for i in 0..N {
+                let linear: f64 = (0..N).map(|j| a[i][j] * z[j]).sum();
+                let size: f64 = (0..N).map(|j| (a[i][j] * z[j]).abs()).sum::<f64>() + fy[i].abs();
+                if (fy[i] - linear).abs() > 1e-9 * size.max(f64::MIN_POSITIVE) {
+                    nonlinear[i] = true;
+                }
+            }
+        }
+    }
+    (0..N).filter(|&i| nonlinear[i]).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -59,5 +336,49 @@ mod tests {
         };
         let ratio = err(20) / err(40);
         assert!((ratio - 16.0).abs() < 1.0, "ratio {ratio}");
+    }
+
+    /// A lightly damped oscillator with a nonlinear forcing: ETD4 with its A equal to the
+    /// oscillator is 4th order; with A = 0 it is RK4 (to round-off).
+    #[test]
+    fn etd4_is_fourth_order_and_reduces_to_rk4() {
+        let w = 50.0;
+        let f = |t: f64, y: &[f64; 2]| {
+            [
+                y[1],
+                -w * w * y[0] - 0.2 * y[1] + (t.sin() + 30.0 * y[0] * y[0]),
+            ]
+        };
+        let a = [[0.0, 1.0], [-w * w, -0.2]];
+        let run = |n: usize, a: &[[f64; 2]; 2]| {
+            let h = 1.0 / n as f64;
+            let etd = Etd4::new(h, a, [0.0; 2], &[1.0, w], |y| f(0.0, y)).unwrap();
+            assert_eq!(etd.nonlinear_rows(), &[1]);
+            let mut y = [0.01, 0.0];
+            for i in 0..n {
+                etd.step(i as f64 * h, &mut y, f);
+            }
+            y[0]
+        };
+        let exact = run(20_000, &a);
+        let e1 = (run(100, &a) - exact).abs();
+        let e2 = (run(200, &a) - exact).abs();
+        assert!((e1 / e2 - 16.0).abs() < 3.0, "ratio {}", e1 / e2);
+        // At h·ω = 0.5 RK4 is far off; ETD4 with the linear part exact is not.
+        let h = 1.0 / 100.0;
+        let etd0 = Etd4::new(h, &[[0.0; 2]; 2], [0.0; 2], &[1.0, w], |y| f(0.0, y)).unwrap();
+        assert_eq!(etd0.nonlinear_rows(), &[0, 1]);
+        let (mut y, mut yr) = ([0.01, 0.0], [0.01, 0.0]);
+        for i in 0..100 {
+            let t = i as f64 * h;
+            etd0.step(t, &mut y, f);
+            rk4_step(t, h, &mut yr, f);
+        }
+        assert!((y[0] - yr[0]).abs() <= 1e-12 * yr[0].abs().max(1e-3));
+        assert!(
+            (yr[0] - exact).abs() > 100.0 * e1,
+            "rk4 {} etd {e1}",
+            (yr[0] - exact).abs()
+        );
     }
 }

@@ -9,7 +9,7 @@
 //! ```
 
 use crate::delay::DelayLine;
-use crate::integrate::{StepStats, rk4_step};
+use crate::integrate::{Etd4, StepStats, rk4_step};
 use crate::model::{Inputs, Model, ModelKind, Outputs};
 use crate::params::{ControllerParams, MAX_DELAY_S};
 use crate::scenario::{CommandSignal, PlatformMotion, PlatformSample};
@@ -179,6 +179,8 @@ pub struct Simulation<M: Model<N>, const N: usize> {
     stats: StepStats,
     contacts: Vec<ContactEvent>,
     in_contact: bool,
+    /// Exponential integrator coefficients when stepping with [`Method::Exponential`].
+    exponential: Option<Box<Etd4<N>>>,
 }
 
 /// Command delay and saturation a model sees: `(τ [s], Vmax [V])`.
@@ -195,6 +197,26 @@ impl CommandPath for crate::model::twin::Twin {
     }
     fn command_limit(&self) -> f64 {
         self.params().valve.v_max_v
+    }
+}
+
+impl Simulation<crate::model::twin::Twin, 10> {
+    /// The twin from rest, stepped with `params.numerics.integrator` at step `h` [s].
+    ///
+    /// The exponential integrator's coefficients always build for validated parameters (its
+    /// step ≤ 1 ms keeps `h·A` moderate; the twin has four nonlinear rows); should they not,
+    /// RK4 is used and the run is checked for divergence as always.
+    pub fn twin(
+        params: &crate::params::Params,
+        h: f64,
+        drive: Drive,
+        platform: PlatformMotion,
+    ) -> Self {
+        let mut sim = Self::new(crate::model::twin::Twin::new(*params), h, drive, platform);
+        if params.numerics.integrator == crate::params::Integrator::Exponential {
+            let _ = sim.use_exponential();
+        }
+        sim
     }
 }
 
@@ -220,6 +242,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             stats: StepStats::default(),
             contacts: Vec::new(),
             in_contact: false,
+            exponential: None,
         };
         history.push(sim.command_now());
         sim.history = history;
@@ -261,6 +284,37 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         self.tau = model.command_delay();
         self.v_max = model.command_limit();
         self.model = model;
+        if self.exponential.is_some() && self.use_exponential().is_err() {
+            self.exponential = None;
+        }
+    }
+
+    /// Steps with the exponential integrator [`Etd4`], its matrix the model's Jacobian at rest
+    /// (central differences at the model's state scales). On error RK4 stays in use.
+    pub fn use_exponential(&mut self) -> Result<(), crate::integrate::Etd4Error> {
+        let rest = self.model.rest_state();
+        let scales = self.model.state_scales();
+        let a = crate::analysis::frequency_response::jacobian(&self.model, &rest, &scales);
+        // Unit inputs in the probe make the rows the inputs enter count as nonlinear.
+        let inputs = Inputs {
+            v_valve: 1.0,
+            xdd: 1.0,
+        };
+        let etd = Etd4::new(self.h, &a, rest, &scales, |y| {
+            self.model.derivatives(0.0, y, &inputs)
+        })?;
+        self.exponential = Some(Box::new(etd));
+        Ok(())
+    }
+
+    /// Rows of the right-hand side the exponential integrator treats explicitly, if in use.
+    pub fn exponential_rows(&self) -> Option<&[usize]> {
+        self.exponential.as_deref().map(|e| e.nonlinear_rows())
+    }
+
+    /// Whether the exponential integrator is in use.
+    pub fn is_exponential(&self) -> bool {
+        self.exponential.is_some()
     }
 
     /// The drive in use.
@@ -346,7 +400,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             ]),
             _ => None,
         };
-        rk4_step(t, h, &mut y, |ts, ys| {
+        let rhs = |ts: f64, ys: &[f64; N]| {
             let (xdds, side) = if ts == t {
                 (xdd0, 1.0)
             } else if ts == t + h {
@@ -360,7 +414,11 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             };
             let inputs = Inputs { v_valve, xdd: xdds };
             this.model.derivatives(ts, ys, &inputs)
-        });
+        };
+        match &self.exponential {
+            Some(etd) => etd.step(t, &mut y, rhs),
+            None => rk4_step(t, h, &mut y, rhs),
+        }
         self.model.project(&mut y);
         self.stats.steps += 1;
         self.stats.rhs_evals += 4;

@@ -164,18 +164,15 @@ pub struct LinearisedModel {
     pub scales: Vec<f64>,
 }
 
-/// Characteristic scale of each twin state, for finite-difference steps.
-const TWIN_SCALES: [f64; 10] = [1e-2, 1e-1, 1e6, 1e6, 1e-4, 1e-4, 1e6, 1e6, 1e-4, 1e-1];
-
-/// Numerical Jacobian (central differences) of a model at state `y0` with zero inputs.
-pub fn linearise<M: Model<N>, const N: usize>(
+/// Numerical Jacobian `∂f/∂y` (central differences, step 1e-6 of each state's scale) of a
+/// model at state `y0` with zero inputs; `a[i][j] = ∂f_i/∂y_j`.
+pub fn jacobian<M: Model<N>, const N: usize>(
     model: &M,
     y0: &[f64; N],
     scales: &[f64; N],
-    tau_s: f64,
-) -> LinearisedModel {
+) -> [[f64; N]; N] {
     let inputs = Inputs::default();
-    let mut a = DMatrix::zeros(N, N);
+    let mut a = [[0.0; N]; N];
     for j in 0..N {
         let h = 1e-6 * scales[j];
         let mut yp = *y0;
@@ -185,9 +182,21 @@ pub fn linearise<M: Model<N>, const N: usize>(
         let fp = model.derivatives(0.0, &yp, &inputs);
         let fm = model.derivatives(0.0, &ym, &inputs);
         for i in 0..N {
-            a[(i, j)] = (fp[i] - fm[i]) / (2.0 * h);
+            a[i][j] = (fp[i] - fm[i]) / (2.0 * h);
         }
     }
+    a
+}
+
+/// Numerical linearisation of a model at state `y0` with zero inputs.
+pub fn linearise<M: Model<N>, const N: usize>(
+    model: &M,
+    y0: &[f64; N],
+    scales: &[f64; N],
+    tau_s: f64,
+) -> LinearisedModel {
+    let jac = jacobian(model, y0, scales);
+    let a = DMatrix::from_fn(N, N, |i, j| jac[i][j]);
     let column = |make: &dyn Fn(f64) -> Inputs, h: f64| {
         let fp = model.derivatives(0.0, y0, &make(h));
         let fm = model.derivatives(0.0, y0, &make(-h));
@@ -222,7 +231,7 @@ pub fn linearise<M: Model<N>, const N: usize>(
 pub fn linearise_twin(params: &Params) -> LinearisedModel {
     let twin = Twin::new(*params);
     let y0 = twin.rest_state();
-    linearise(&twin, &y0, &TWIN_SCALES, params.valve.tau_s)
+    linearise(&twin, &y0, &twin.state_scales(), params.valve.tau_s)
 }
 
 impl LinearisedModel {

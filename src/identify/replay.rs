@@ -28,7 +28,6 @@
 
 use super::IdentifyError;
 use crate::dataset::Record;
-use crate::model::twin::Twin;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, PlatformMotion, SampledMotion};
 use crate::simulation::{Drive, Simulation, step_for_rate};
@@ -244,17 +243,14 @@ impl PreparedRecord {
     /// Replays the record through the twin with `params`.
     pub fn simulate(&self, params: &Params) -> Result<SimChannels, IdentifyError> {
         let h = step_for_rate(
-            params
-                .numerics
-                .max_step_s
-                .min(0.9 * params.rk4_step_limit_s()),
+            params.numerics.max_step_s.min(0.9 * params.step_limit_s()),
             1.0 / self.dt,
         );
         let drive = Drive::OpenLoop(CommandSignal::Sampled {
             dt: self.dt,
             values: self.v_in.clone(),
         });
-        let mut sim = Simulation::new(Twin::new(*params), h, drive, self.platform.clone());
+        let mut sim = Simulation::twin(params, h, drive, self.platform.clone());
         let every = (self.dt / h).round().max(1.0) as u64;
         let n = self.len;
         let mut out = SimChannels {

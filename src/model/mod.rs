@@ -137,4 +137,9 @@ pub trait Model<const N: usize>: Clone + Send + Sync {
 
     /// Largest magnitude a state may reach before the run is declared diverged.
     fn state_bound(&self, index: usize) -> f64;
+
+    /// Characteristic size of each state (finite-difference steps, matrix balancing).
+    fn state_scales(&self) -> [f64; N] {
+        [1.0; N]
+    }
 }

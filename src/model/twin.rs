@@ -378,6 +378,10 @@ impl Model<10> for Twin {
         const BOUNDS: [f64; 10] = [1.0, 100.0, 1.0e9, 1.0e9, 1.0, 1.0, 1.0e9, 1.0e9, 1.0, 1.0e4];
         BOUNDS[index]
     }
+
+    fn state_scales(&self) -> [f64; 10] {
+        [1e-2, 1e-1, 1e6, 1e6, 1e-4, 1e-4, 1e6, 1e6, 1e-4, 1e-1]
+    }
 }
 
 #[cfg(test)]
