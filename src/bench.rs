@@ -111,7 +111,7 @@ fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 }
 
 /// Largest |ÿ − ÿ_ref| between two traces on the same grid [m/s²].
-fn max_ydd_difference(a: &Trace, b: &Trace) -> f64 {
+pub fn max_ydd_difference(a: &Trace, b: &Trace) -> f64 {
     a.samples
         .iter()
         .zip(&b.samples)

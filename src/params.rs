@@ -698,18 +698,24 @@ impl Params {
         }
     }
 
+    /// Rate of the smoothed friction seen as a viscous damper of slope (Fc + Fs)/v_eps + b, per
+    /// unit mass [1/s] (a real eigenvalue); 0 with friction off.
+    fn friction_rate_rad_s(&self) -> f64 {
+        let fr = &self.effects.friction;
+        if fr.enabled {
+            ((fr.coulomb_n + fr.stribeck_n) / fr.smoothing_velocity_m_s + fr.viscous_n_s_per_m)
+                / self.body.mass_kg
+        } else {
+            0.0
+        }
+    }
+
     /// Largest stable step of the exponential integrator [s], capped at 1 ms. Its linear part
     /// (hoses, oil column, spool) is exact; what it treats explicitly and could destabilise is
     /// the end-stop contact (spring on the body while in contact) and smoothed friction.
     pub fn exponential_step_limit_s(&self) -> f64 {
         let w_contact = (self.cylinder.end_stop_stiffness_n_per_m / self.body.mass_kg).sqrt();
-        let fr = &self.effects.friction;
-        let w_friction = if fr.enabled {
-            ((fr.coulomb_n + fr.stribeck_n) / fr.smoothing_velocity_m_s + fr.viscous_n_s_per_m)
-                / self.body.mass_kg
-        } else {
-            0.0
-        };
+        let w_friction = self.friction_rate_rad_s();
         (0.85 * 2.83 / w_contact.max(w_friction)).min(1e-3)
     }
 
@@ -727,14 +733,7 @@ impl Params {
             ((k_oil + self.cylinder.end_stop_stiffness_n_per_m) / self.body.mass_kg).sqrt();
         let w_spool =
             self.valve.omega_n_rad_s * (self.valve.zeta + (self.valve.zeta.powi(2) + 1.0).sqrt());
-        // Smoothed friction acts like a viscous damper of slope (Fc + Fs)/v_eps + b (real axis).
-        let fr = &self.effects.friction;
-        let w_friction = if fr.enabled {
-            ((fr.coulomb_n + fr.stribeck_n) / fr.smoothing_velocity_m_s + fr.viscous_n_s_per_m)
-                / self.body.mass_kg
-        } else {
-            0.0
-        };
+        let w_friction = self.friction_rate_rad_s();
         let w_max = w_hose.max(w_body).max(w_spool).max(w_friction);
         0.85 * 2.83 / w_max
     }

@@ -3,7 +3,7 @@
 //! ride's accuracy against a 10× finer step at the preset's step (the figure `seat-twin bench`
 //! reports), and the exponential method against an independent fine RK4 run.
 
-use seat_twin::bench::{accuracy, bench_ride, ride_run};
+use seat_twin::bench::{accuracy, bench_ride, max_ydd_difference, ride_run};
 use seat_twin::model::ModelKind;
 use seat_twin::model::twin::Twin;
 use seat_twin::params::{Integrator, Params};
@@ -128,21 +128,11 @@ fn exponential_preset_step_matches_a_fine_rk4_ride() {
         params.numerics.max_step_s,
     )
     .expect("no divergence");
-    let max_e = run
-        .samples
-        .iter()
-        .zip(&truth.samples)
-        .map(|(a, b)| (a.ydd - b.ydd).abs())
-        .fold(0.0, f64::max);
+    let max_e = max_ydd_difference(&run, &truth);
     assert!(max_e <= 1e-4, "max |ÿ − ÿ_RK4,fine| = {max_e:.3e} m/s²");
     // RK4 at half that step is worse: it loses the lightly damped 912 Hz hose ringing.
     let rk4 = ride_run(&fine, ModelKind::Twin, &ride, 5.0, 2.5e-4).expect("no divergence");
-    let max_rk4 = rk4
-        .samples
-        .iter()
-        .zip(&truth.samples)
-        .map(|(a, b)| (a.ydd - b.ydd).abs())
-        .fold(0.0, f64::max);
+    let max_rk4 = max_ydd_difference(&rk4, &truth);
     assert!(
         max_rk4 > 2.0 * max_e,
         "RK4 {max_rk4:.3e}, exponential {max_e:.3e}"
