@@ -6,16 +6,16 @@ use crate::analysis::frequency_response as fr;
 use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::{Integrator, Params};
+use crate::scenario::{PlatformMotion, RandomRide};
+use crate::simulation::{SimError, Trace};
+use std::fmt::Write;
+use std::time::Instant;
 
 /// RK4's step for the same accuracy as the exponential method at 0.5 ms [s].
 pub const RK4_STEP_S: f64 = 1e-4;
 
 /// Step of the independent RK4 reference run [s].
 pub const REFERENCE_STEP_S: f64 = 1e-5;
-use crate::scenario::{PlatformMotion, RandomRide};
-use crate::simulation::{SimError, Trace};
-use std::fmt::Write;
-use std::time::Instant;
 
 /// Accuracy of a run against the same run at a 10× finer step.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -80,6 +80,11 @@ pub fn accuracy(
 ) -> Result<Accuracy, SimError> {
     let coarse = ride_run(params, ModelKind::Twin, ride, duration_s, step_s)?;
     let fine = ride_run(params, ModelKind::Twin, ride, duration_s, step_s / 10.0)?;
+    Ok(accuracy_of(&coarse, &fine, step_s))
+}
+
+/// Accuracy of `coarse` (run at `step_s`) against `fine` (the same run at a finer step).
+pub fn accuracy_of(coarse: &Trace, fine: &Trace, step_s: f64) -> Accuracy {
     let mut max_e: f64 = 0.0;
     let mut sum2 = 0.0;
     let mut max_u: f64 = 0.0;
@@ -90,12 +95,12 @@ pub fn accuracy(
         sum2 += e * e;
         max_u = max_u.max((a.u - b.u).abs());
     }
-    Ok(Accuracy {
+    Accuracy {
         step_s,
         max_ydd_error: max_e,
         rms_ydd_error: (sum2 / n.max(1) as f64).sqrt(),
         max_u_error: max_u,
-    })
+    }
 }
 
 fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
@@ -191,8 +196,9 @@ pub fn run_bench(params: &Params) -> Result<String, SimError> {
         if step > p.step_limit_s() {
             continue;
         }
-        let a = accuracy(&p, &ride, duration, step)?;
         let run = ride_run(&p, ModelKind::Twin, &ride, duration, step)?;
+        let fine = ride_run(&p, ModelKind::Twin, &ride, duration, step / 10.0)?;
+        let a = accuracy_of(&run, &fine, step);
         let _ = writeln!(
             out,
             "| {} | {:.1e} s | {:.2e} m/s² | {:.2e} m/s² | {:.2e} m | {:.2e} m/s² |",

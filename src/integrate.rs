@@ -49,19 +49,10 @@ pub fn rk4_step<const N: usize>(
 /// Column-major `N×N` matrix: `m[j]` is column `j`.
 type Columns<const N: usize> = [[f64; N]; N];
 
-/// `out += m·x`.
+/// `out += Σ_k cols[k]·x[k]`: a dense product with all `N` columns, or one restricted to the
+/// remainder's rows.
 #[inline(always)]
-fn mul_add<const N: usize>(out: &mut [f64; N], m: &Columns<N>, x: &[f64; N]) {
-    for (col, &xj) in m.iter().zip(x) {
-        for (o, &c) in out.iter_mut().zip(col) {
-            *o += c * xj;
-        }
-    }
-}
-
-/// `out += Σ_k cols[k]·x[k]` over the remainder's rows only.
-#[inline(always)]
-fn mul_add_rows<const N: usize>(out: &mut [f64; N], cols: &[[f64; N]], x: &[f64]) {
+fn mul_add<const N: usize>(out: &mut [f64; N], cols: &[[f64; N]], x: &[f64]) {
     for (col, &xk) in cols.iter().zip(x) {
         for (o, &c) in out.iter_mut().zip(col) {
             *o += c * xk;
@@ -218,11 +209,6 @@ impl<const N: usize> Etd4<N> {
         })
     }
 
-    /// The step these coefficients are for [s].
-    pub fn step_size(&self) -> f64 {
-        self.h
-    }
-
     /// Rows of the right-hand side handled explicitly.
     pub fn nonlinear_rows(&self) -> &[usize] {
         &self.rows
@@ -261,27 +247,27 @@ impl<const N: usize> Etd4<N> {
         let mut ez = [0.0; N];
         mul_add(&mut ez, &self.e, &z);
         let mut za = e2z;
-        mul_add_rows(&mut za, &self.p2, &nu[..k]);
+        mul_add(&mut za, &self.p2, &nu[..k]);
         let na = self.remainder(&f(t + 0.5 * h, &shift(&za)), &za);
         let mut zb = e2z;
-        mul_add_rows(&mut zb, &self.p2, &na[..k]);
+        mul_add(&mut zb, &self.p2, &na[..k]);
         let nb = self.remainder(&f(t + 0.5 * h, &shift(&zb)), &zb);
         // e^{hA/2}·za = e^{hA}·z + e^{hA/2}·(h/2)·φ1(hA/2)·nu.
         let mut zc = ez;
-        mul_add_rows(&mut zc, &self.e2p2, &nu[..k]);
+        mul_add(&mut zc, &self.e2p2, &nu[..k]);
         let mut w = [0.0; MAX_REMAINDER_ROWS];
         for i in 0..k {
             w[i] = 2.0 * nb[i] - nu[i];
         }
-        mul_add_rows(&mut zc, &self.p2, &w[..k]);
+        mul_add(&mut zc, &self.p2, &w[..k]);
         let nc = self.remainder(&f(t + h, &shift(&zc)), &zc);
         let mut out = ez;
-        mul_add_rows(&mut out, &self.b1, &nu[..k]);
+        mul_add(&mut out, &self.b1, &nu[..k]);
         for i in 0..k {
             w[i] = na[i] + nb[i];
         }
-        mul_add_rows(&mut out, &self.b2, &w[..k]);
-        mul_add_rows(&mut out, &self.b4, &nc[..k]);
+        mul_add(&mut out, &self.b2, &w[..k]);
+        mul_add(&mut out, &self.b4, &nc[..k]);
         *y = shift(&out);
     }
 }

@@ -179,7 +179,8 @@ pub struct Simulation<M: Model<N>, const N: usize> {
     stats: StepStats,
     contacts: Vec<ContactEvent>,
     in_contact: bool,
-    /// Exponential integrator coefficients when stepping with [`Method::Exponential`].
+    /// Exponential integrator coefficients when stepping with
+    /// [`Integrator::Exponential`](crate::params::Integrator::Exponential).
     exponential: Option<Box<Etd4<N>>>,
 }
 
