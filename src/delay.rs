@@ -83,23 +83,82 @@ impl DelayLine {
         // s ≥ 0: truncation is floor (and much cheaper than a libm call).
         let n = s as i64;
         let f = s - n as f64;
+        self.interpolate(n, f, &lagrange_weights(f))
+    }
+
+    /// A fixed read `delay` [s] behind the grid, for [`Self::value_at_tap`].
+    pub fn tap(&self, delay: f64) -> Tap {
+        let d = delay * self.inv_h;
+        let back = d.ceil();
+        let f = back - d;
+        Tap {
+            back: back as i64,
+            f,
+            w: lagrange_weights(f),
+        }
+    }
+
+    /// Whether a read through `tap` for the grid index `n + 1`, made while sample `n` is the
+    /// newest, equals the same read after sample `n + 1` is pushed (bit for bit): true when
+    /// the delay spans at least two steps, so that all four samples it reads are stored.
+    pub fn tap_is_settled(tap: &Tap) -> bool {
+        tap.back >= 3
+    }
+
+    /// The signal at `n·h − delay` for the grid index `n` and a [`Tap`] made for `delay`:
+    /// [`Self::value_at`] without the division, the floor and the weights, which a fixed delay
+    /// on the simulation's grid makes constant.
+    #[inline(always)]
+    pub fn value_at_tap(&self, n: u64, tap: &Tap) -> f64 {
+        self.interpolate(n as i64 - tap.back, tap.f, &tap.w)
+    }
+
+    /// Value at `base + f` (grid units, `0 ≤ f < 1`) with the cubic weights `w` of `f`.
+    #[inline(always)]
+    fn interpolate(&self, base: i64, f: f64, w: &[f64; 4]) -> f64 {
+        if base < 0 {
+            return self.initial;
+        }
         let newest = self.len as i64 - 1;
-        if n + 2 <= newest {
-            let (a, b, c, d) = (
-                self.at_index(n - 1),
-                self.at_index(n),
-                self.at_index(n + 1),
-                self.at_index(n + 2),
-            );
-            // Cubic Lagrange through (−1, a), (0, b), (1, c), (2, d).
-            b + f * (-a / 3.0 - b / 2.0 + c - d / 6.0)
-                + f * f * ((a + c) / 2.0 - b)
-                + f * f * f * ((d - a) / 6.0 + (b - c) / 2.0)
+        let oldest = self.len as i64 - self.ring.len() as i64;
+        if base >= 1 && base > oldest && base + 2 <= newest {
+            // Interior: all four samples (base − 1 ..= base + 2) in the window.
+            let at = |i: i64| self.ring[(i as u64 & self.mask) as usize];
+            w[0] * at(base - 1) + w[1] * at(base) + w[2] * at(base + 1) + w[3] * at(base + 2)
+        } else if base + 2 <= newest {
+            // At the start (the rest value before it) or older than the window (clamped).
+            w[0] * self.at_index(base - 1)
+                + w[1] * self.at_index(base)
+                + w[2] * self.at_index(base + 1)
+                + w[3] * self.at_index(base + 2)
         } else {
-            let (b, c) = (self.at_index(n), self.at_index(n + 1));
+            let (b, c) = (self.at_index(base), self.at_index(base + 1));
             b + f * (c - b)
         }
     }
+}
+
+/// A read of a [`DelayLine`] a fixed delay behind its grid: `value(n·h − delay)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tap {
+    /// Grid steps from the read time back to the sample at or before it.
+    back: i64,
+    /// Fraction of a step from that sample [-], `0 ≤ f < 1`.
+    f: f64,
+    /// Cubic Lagrange weights of the samples at −1, 0, 1, 2 for `f`.
+    w: [f64; 4],
+}
+
+/// Weights of the cubic Lagrange interpolant through the nodes −1, 0, 1, 2 at `f`.
+#[inline(always)]
+fn lagrange_weights(f: f64) -> [f64; 4] {
+    let (fm1, fm2, fp1) = (f - 1.0, f - 2.0, f + 1.0);
+    [
+        -f * fm1 * fm2 / 6.0,
+        fp1 * fm1 * fm2 / 2.0,
+        -fp1 * f * fm2 / 2.0,
+        fp1 * f * fm1 / 6.0,
+    ]
 }
 
 #[cfg(test)]
@@ -128,5 +187,50 @@ mod tests {
         }
         assert_eq!(d.last_time(), 99.0);
         assert!((d.value_at(97.5) - 97.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_tap_reads_what_value_at_reads() {
+        let h = 1e-3;
+        let mut d = DelayLine::new(h, 0.05, 0.0);
+        let g = |t: f64| (37.0 * t).sin() + 0.3 * t;
+        for delay in [0.0, 5e-4, 1e-3, 2.3e-3, 1.75e-2, 0.049] {
+            let tap = d.tap(delay);
+            let mut d = d.clone();
+            for n in 0..400u64 {
+                d.push(g(n as f64 * h));
+                for m in [n, n + 1] {
+                    let t = m as f64 * h - delay;
+                    let (a, b) = (d.value_at_tap(m, &tap), d.value_at(t));
+                    assert!(
+                        (a - b).abs() < 1e-12,
+                        "delay {delay} n {n} m {m}: {a} vs {b}"
+                    );
+                }
+            }
+        }
+        d.push(1.0);
+        assert_eq!(d.value_at_tap(0, &d.tap(2e-3)), 0.0);
+        // A settled tap reads the same before and after the next push; an unsettled one with
+        // a fractional delay does not (the newest-edge read is linear).
+        for (delay, settled) in [
+            (1.2e-3, false),
+            (1.5e-3, false),
+            (2.1e-3, true),
+            (1.75e-2, true),
+        ] {
+            let tap = d.tap(delay);
+            assert_eq!(DelayLine::tap_is_settled(&tap), settled, "delay {delay}");
+            let mut d = DelayLine::new(h, 0.05, 0.0);
+            let mut same = true;
+            for n in 0..100u64 {
+                d.push(g(n as f64 * h));
+                let before = d.value_at_tap(n + 1, &tap);
+                let mut e = d.clone();
+                e.push(g((n + 1) as f64 * h));
+                same &= before.to_bits() == e.value_at_tap(n + 1, &tap).to_bits();
+            }
+            assert_eq!(same, settled, "delay {delay}");
+        }
     }
 }

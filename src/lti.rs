@@ -21,13 +21,13 @@
 //! needs `τ ≥ h` (or no command at all); [`LtiSimulation::new`] returns `None` otherwise and
 //! the caller falls back to RK4.
 
-use crate::delay::DelayLine;
+use crate::delay::{DelayLine, Tap};
 use crate::integrate::StepStats;
 use crate::model::{Inputs, Model};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::PlatformMotion;
 use crate::simulation::{CommandPath, ContactEvent, Drive, Sample, SimError, Trace, track_contact};
-use nalgebra::{DMatrix, SMatrix, SVector};
+use nalgebra::{DMatrix, SMatrix};
 
 /// Marker for models whose derivatives are linear in state and inputs.
 pub trait LinearTimeInvariant {}
@@ -39,18 +39,34 @@ impl LinearTimeInvariant for crate::model::passive::PassiveModel {}
 #[derive(Debug, Clone)]
 pub struct LtiSimulation<M, const N: usize> {
     model: M,
-    phi: SMatrix<f64, N, N>,
-    gamma_a: SMatrix<f64, N, 2>,
-    gamma_b: SMatrix<f64, N, 2>,
+    /// Rows of Φ.
+    phi: [[f64; N]; N],
+    /// Rows of `Γa − Γb/h`, applied to the inputs at the start of a step.
+    g0: [[f64; 2]; N],
+    /// Rows of `Γb/h`, applied to the inputs at the end of a step.
+    g1: [[f64; 2]; N],
     h: f64,
     tau: f64,
     v_max: f64,
     drive: Drive,
     platform: PlatformMotion,
-    y: SVector<f64, N>,
+    y: [f64; N],
+    /// Divergence bound of each state (the model's [`Model::state_bound`]).
+    bounds: [f64; N],
     steps: u64,
     xdd_integral: f64,
     history: DelayLine,
+    /// The read of `history` at `t − τ` for grid times `t`.
+    tap: Tap,
+    /// Record samples per step when the platform is a record the grid lands on.
+    stride: Option<usize>,
+    /// Platform acceleration at the current time [m/s²] (the previous step's end value).
+    xdd_now: f64,
+    /// Command at the valve now [V], kept from the previous step when `reuse_valve`.
+    valve_now: f64,
+    /// Closed loop with a settled tap ([`DelayLine::tap_is_settled`]): the end-of-step read
+    /// is the next step's start read, bit for bit.
+    reuse_valve: bool,
     contacts: Vec<ContactEvent>,
     in_contact: bool,
 }
@@ -67,27 +83,44 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         }
         let (a, b) = state_space(&model);
         let (phi, gamma_a, gamma_b) = foh(&a, &b, h);
+        // x_{k+1} = Φ·x_k + (Γa − Γb/h)·w_k + (Γb/h)·w_{k+1}, by rows.
+        let g1 = gamma_b / h;
+        let g0 = gamma_a - g1;
+        let rows2 = |m: SMatrix<f64, N, 2>| std::array::from_fn(|i| [m[(i, 0)], m[(i, 1)]]);
+        let bounds = std::array::from_fn(|i| model.state_bound(i));
         let mut history = DelayLine::new(h, MAX_DELAY_S + h, 0.0);
-        let y = SVector::from(model.rest_state());
+        let y = model.rest_state();
+        let tap = history.tap(tau);
+        let stride = platform.grid_stride(h);
+        let xdd_now = platform.xdd_at_grid(0, h, stride);
         let mut sim = Self {
             model,
-            phi,
-            gamma_a,
-            gamma_b,
+            phi: std::array::from_fn(|i| std::array::from_fn(|j| phi[(i, j)])),
+            g0: rows2(g0),
+            g1: rows2(g1),
             h,
             tau,
             v_max,
             drive,
             platform,
             y,
+            bounds,
             steps: 0,
             xdd_integral: 0.0,
             history: DelayLine::new(h, 0.0, 0.0),
+            tap,
+            stride,
+            xdd_now,
+            valve_now: 0.0,
+            reuse_valve: false,
             contacts: Vec::new(),
             in_contact: false,
         };
         history.push(sim.command_now());
         sim.history = history;
+        sim.reuse_valve =
+            matches!(sim.drive, Drive::ClosedLoop(_)) && DelayLine::tap_is_settled(&sim.tap);
+        sim.valve_now = sim.valve_command(0, 1.0);
         Some(sim)
     }
 
@@ -96,6 +129,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
     }
 
     /// Command as sent at the current time (before the delay) [V].
+    #[inline(always)]
     fn command_now(&self) -> f64 {
         let v = match &self.drive {
             Drive::ClosedLoop(c) => c.kp_v_per_m * self.y[0] + c.ki_v_s_per_m * self.xdd_integral,
@@ -104,14 +138,19 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         v.clamp(-self.v_max, self.v_max)
     }
 
-    /// Command at the valve at time `t` (after the delay) [V]; `side` = +1 reads a jump of an
-    /// open-loop command as its right limit, −1 as its left limit (see `Simulation`).
-    #[inline]
-    fn valve_command(&self, t: f64, side: f64) -> f64 {
+    /// Command at the valve at the grid time `n·h` (after the delay) [V]; `side` = +1 reads a
+    /// jump of an open-loop command as its right limit, −1 as its left limit (see
+    /// `Simulation`).
+    #[inline(always)]
+    fn valve_command(&self, n: u64, side: f64) -> f64 {
+        if self.v_max == 0.0 {
+            // No valve (the passive seat): nothing to read.
+            return 0.0;
+        }
         match &self.drive {
-            Drive::ClosedLoop(_) => self.history.value_at(t - self.tau),
+            Drive::ClosedLoop(_) => self.history.value_at_tap(n, &self.tap),
             Drive::OpenLoop(sig) => sig
-                .at(t - self.tau + side * 1e-6 * self.h)
+                .at(n as f64 * self.h - self.tau + side * 1e-6 * self.h)
                 .clamp(-self.v_max, self.v_max),
         }
     }
@@ -119,14 +158,35 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
     /// Advances one step.
     #[inline]
     pub fn step(&mut self) -> Result<(), SimError> {
-        let t0 = self.time();
-        let t1 = t0 + self.h;
-        let xdd0 = self.platform.xdd_at(t0);
-        let xdd1 = self.platform.xdd_at(t1);
-        let w0 = SVector::<f64, 2>::new(self.valve_command(t0, 1.0), xdd0);
-        let w1 = SVector::<f64, 2>::new(self.valve_command(t1, -1.0), xdd1);
-        self.y = self.phi * self.y + self.gamma_a * w0 + self.gamma_b * ((w1 - w0) / self.h);
+        let xdd1 = self
+            .platform
+            .xdd_at_grid(self.steps + 1, self.h, self.stride);
+        self.advance(xdd1)
+    }
+
+    /// Advances one step to a time where the platform's acceleration is `xdd1` [m/s²].
+    #[inline(always)]
+    fn advance(&mut self, xdd1: f64) -> Result<(), SimError> {
+        let n = self.steps;
+        let xdd0 = self.xdd_now;
+        let v0 = if self.reuse_valve {
+            self.valve_now
+        } else {
+            self.valve_command(n, 1.0)
+        };
+        let v1 = self.valve_command(n + 1, -1.0);
+        self.valve_now = v1;
+        let y = self.y;
+        for (i, yi) in self.y.iter_mut().enumerate() {
+            let (g0, g1) = (self.g0[i], self.g1[i]);
+            let mut acc = g0[0] * v0 + g0[1] * xdd0 + g1[0] * v1 + g1[1] * xdd1;
+            for (p, yj) in self.phi[i].iter().zip(&y) {
+                acc += p * yj;
+            }
+            *yi = acc;
+        }
         self.steps += 1;
+        self.xdd_now = xdd1;
         // The controller's ∫ẍ with the same hold as the plant's input (trapezoid).
         self.xdd_integral += 0.5 * self.h * (xdd0 + xdd1);
         self.check_state()?;
@@ -136,9 +196,14 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         Ok(())
     }
 
+    #[inline(always)]
     fn check_state(&self) -> Result<(), SimError> {
+        // `|v| ≤ bound` is false for NaN as well.
+        if self.y.iter().zip(&self.bounds).all(|(v, b)| v.abs() <= *b) {
+            return Ok(());
+        }
         for (i, v) in self.y.iter().enumerate() {
-            let bound = self.model.state_bound(i);
+            let bound = self.bounds[i];
             if !v.is_finite() || v.abs() > bound {
                 return Err(SimError::Diverged {
                     model: M::KIND.name(),
@@ -153,7 +218,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
     }
 
     fn track_contact(&mut self) {
-        let u = self.model.relative_position(&self.y.into());
+        let u = self.model.relative_position(&self.y);
         let half = self.model.half_stroke();
         let t = self.time();
         track_contact(&mut self.contacts, &mut self.in_contact, t, u, half);
@@ -161,19 +226,28 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
 
     /// The current instant as a recorded sample.
     pub fn sample(&self) -> Sample {
-        let t = self.time();
-        let p = self.platform.at(t);
+        self.sample_with(self.platform.at_grid(self.steps, self.h, self.stride))
+    }
+
+    /// The current instant as a recorded sample, the platform's motion now being `p`.
+    #[inline(always)]
+    fn sample_with(&self, p: crate::scenario::PlatformSample) -> Sample {
+        let v_valve = if self.reuse_valve {
+            self.valve_now
+        } else {
+            self.valve_command(self.steps, 0.0)
+        };
         let inputs = Inputs {
-            v_valve: self.valve_command(t, 0.0),
+            v_valve,
             xdd: p.xdd,
         };
-        let o = self.model.outputs(&self.y.into(), &inputs);
+        let o = self.model.outputs(&self.y, &inputs);
         let v_in = if M::KIND.has_command() {
             self.history.last_value()
         } else {
             f64::NAN
         };
-        Sample::assemble(t, p, &o, v_in, self.model.half_stroke())
+        Sample::assemble(self.time(), p, &o, v_in, self.model.half_stroke())
     }
 
     /// Runs from rest to `t_end` [s] and returns the trace recorded at `rate_hz` (a whole
@@ -183,10 +257,19 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         let n_end = (t_end / self.h - 1e-9).ceil() as u64;
         let mut samples = Vec::with_capacity((n_end / every) as usize + 2);
         samples.push(self.sample());
+        // A countdown rather than `steps % every`: a division per step is a fair share of a
+        // step this cheap.
+        let mut to_record = every;
         while self.steps < n_end {
-            self.step()?;
-            if self.steps.is_multiple_of(every) {
-                samples.push(self.sample());
+            to_record -= 1;
+            if to_record == 0 {
+                to_record = every;
+                // A recorded step: read the platform's whole motion once, for both.
+                let p = self.platform.at_grid(self.steps + 1, self.h, self.stride);
+                self.advance(p.xdd)?;
+                samples.push(self.sample_with(p));
+            } else {
+                self.step()?;
             }
         }
         Ok(Trace {

@@ -208,6 +208,25 @@ impl SampledMotion {
     pub fn xdd_at(&self, t: f64) -> f64 {
         catmull_rom(&self.xdd, t / self.dt)
     }
+
+    /// Motion at sample `i` (held at the last sample after the end): what [`Self::at`] gives
+    /// at `t = i·dt`, without interpolating.
+    #[inline(always)]
+    pub fn at_sample(&self, i: usize) -> PlatformSample {
+        let i = i.min(self.xdd.len().saturating_sub(1));
+        PlatformSample {
+            x: self.x.get(i).copied().unwrap_or(0.0),
+            xd: self.xd.get(i).copied().unwrap_or(0.0),
+            xdd: self.xdd.get(i).copied().unwrap_or(0.0),
+        }
+    }
+
+    /// Acceleration at sample `i` (held after the end).
+    #[inline(always)]
+    pub fn xdd_at_sample(&self, i: usize) -> f64 {
+        let i = i.min(self.xdd.len().saturating_sub(1));
+        self.xdd.get(i).copied().unwrap_or(0.0)
+    }
 }
 
 /// A platform sine dwell `x = X·sin(ωt)` under a quintic fade-in, for transmissibility.
@@ -296,6 +315,39 @@ impl PlatformMotion {
             PlatformMotion::Still => 0.0,
             PlatformMotion::Sampled(s) => s.xdd_at(t),
             other => other.at(t).xdd,
+        }
+    }
+
+    /// Record samples per step `h` [s] when this is a record sampled on a grid that the
+    /// step lands on exactly (`h` a whole multiple of its sample step): then grid times can be
+    /// read from the samples themselves ([`Self::at_grid`]).
+    pub fn grid_stride(&self, h: f64) -> Option<usize> {
+        match self {
+            PlatformMotion::Sampled(s) => {
+                let k = h / s.dt();
+                let r = k.round();
+                (r >= 1.0 && (k - r).abs() < 1e-9 * r).then_some(r as usize)
+            }
+            _ => None,
+        }
+    }
+
+    /// Motion at the grid time `n·h` [s]; with `stride` from [`Self::grid_stride`] a record's
+    /// own samples (what the interpolation gives there, without its cost).
+    #[inline(always)]
+    pub fn at_grid(&self, n: u64, h: f64, stride: Option<usize>) -> PlatformSample {
+        match (self, stride) {
+            (PlatformMotion::Sampled(s), Some(k)) => s.at_sample(n as usize * k),
+            _ => self.at(n as f64 * h),
+        }
+    }
+
+    /// Acceleration at the grid time `n·h` [s] (see [`Self::at_grid`]).
+    #[inline(always)]
+    pub fn xdd_at_grid(&self, n: u64, h: f64, stride: Option<usize>) -> f64 {
+        match (self, stride) {
+            (PlatformMotion::Sampled(s), Some(k)) => s.xdd_at_sample(n as usize * k),
+            _ => self.xdd_at(n as f64 * h),
         }
     }
 }
@@ -471,6 +523,40 @@ impl CommandSignal {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn grid_reads_are_the_interpolated_values_at_grid_times() {
+        let m = PlatformMotion::Sampled(
+            RandomRide {
+                duration_s: 2.0,
+                fade_in_s: 0.5,
+                ..Default::default()
+            }
+            .generate(),
+        );
+        assert_eq!(m.grid_stride(1e-3), Some(1));
+        assert_eq!(m.grid_stride(2e-3), Some(2));
+        assert_eq!(m.grid_stride(5e-4), None);
+        assert_eq!(PlatformMotion::Still.grid_stride(1e-3), None);
+        for (h, stride) in [(1e-3, Some(1)), (2e-3, Some(2)), (5e-4, None)] {
+            // Past the end (n·h > 2 s) both hold the last sample.
+            for n in [0u64, 1, 7, 333, 999, 1000, 1001, 4000] {
+                let (a, b) = (m.at_grid(n, h, stride), m.at(n as f64 * h));
+                let tol = 1e-9 * (1.0 + b.xdd.abs());
+                assert!(
+                    (a.x - b.x).abs() < tol && (a.xd - b.xd).abs() < tol,
+                    "n {n} h {h}"
+                );
+                assert!(
+                    (a.xdd - b.xdd).abs() < tol,
+                    "n {n} h {h}: {} vs {}",
+                    a.xdd,
+                    b.xdd
+                );
+                assert_eq!(m.xdd_at_grid(n, h, stride), a.xdd);
+            }
+        }
+    }
 
     #[test]
     fn cycloid_is_consistent_and_reaches_height() {

@@ -8,7 +8,7 @@
 //!       (or an open-loop V_in(t))
 //! ```
 
-use crate::delay::DelayLine;
+use crate::delay::{DelayLine, Tap};
 use crate::integrate::{Etd4, StepStats, rk4_step};
 use crate::model::{Inputs, Model, ModelKind, Outputs};
 use crate::params::{ControllerParams, MAX_DELAY_S};
@@ -176,6 +176,13 @@ pub struct Simulation<M: Model<N>, const N: usize> {
     /// Controller integral `∫ẍ dt` [m/s].
     xdd_integral: f64,
     history: DelayLine,
+    /// Reads of `history` at `t − τ`, `t + h/2 − τ`, `t + h − τ` for grid times `t`, when
+    /// τ ≥ h (then the three are stored before the step).
+    taps: Option<[Tap; 3]>,
+    /// Record samples per step when the platform is a record the grid lands on.
+    stride: Option<usize>,
+    /// Platform acceleration at the current time [m/s²] (the previous step's end value).
+    xdd_now: f64,
     stats: StepStats,
     contacts: Vec<ContactEvent>,
     in_contact: bool,
@@ -228,6 +235,9 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         let tau = model.command_delay();
         let v_max = model.command_limit();
         let mut history = DelayLine::new(h, MAX_DELAY_S + h, 0.0);
+        let taps = stage_taps(&history, tau, h);
+        let stride = platform.grid_stride(h);
+        let xdd_now = platform.xdd_at_grid(0, h, stride);
         let mut sim = Self {
             model,
             y,
@@ -240,6 +250,9 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             platform,
             xdd_integral: 0.0,
             history: DelayLine::new(h, 0.0, 0.0),
+            taps,
+            stride,
+            xdd_now,
             stats: StepStats::default(),
             contacts: Vec::new(),
             in_contact: false,
@@ -284,6 +297,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     pub fn set_model(&mut self, model: M) {
         self.tau = model.command_delay();
         self.v_max = model.command_limit();
+        self.taps = stage_taps(&self.history, self.tau, self.h);
         self.model = model;
         if self.exponential.is_some() && self.use_exponential().is_err() {
             self.exponential = None;
@@ -385,20 +399,18 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     /// Advances one internal step.
     #[inline]
     pub fn step(&mut self) -> Result<(), SimError> {
-        let (t, h) = (self.t, self.h);
-        let xdd0 = self.platform.xdd_at(t);
+        let (t, h, n) = (self.t, self.h, self.steps);
+        let xdd0 = self.xdd_now;
         let xdd_mid = self.platform.xdd_at(t + 0.5 * h);
-        let xdd1 = self.platform.xdd_at(t + h);
+        let xdd1 = self.platform.xdd_at_grid(n + 1, h, self.stride);
         let mut y = self.y;
         let this = &*self;
         // Closed loop with τ ≥ h (the usual case): the delayed command at the three distinct
         // stage times is already in the history, so read it once per step, not per stage.
-        let pre = match &self.drive {
-            Drive::ClosedLoop(_) if t + h - self.tau <= self.history.last_time() => Some([
-                self.history.value_at(t - self.tau),
-                self.history.value_at(t + 0.5 * h - self.tau),
-                self.history.value_at(t + h - self.tau),
-            ]),
+        let pre = match (&self.drive, &self.taps) {
+            (Drive::ClosedLoop(_), Some(taps)) => {
+                Some(taps.map(|tap| self.history.value_at_tap(n, &tap)))
+            }
             _ => None,
         };
         let rhs = |ts: f64, ys: &[f64; N]| {
@@ -426,6 +438,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         self.steps += 1;
         self.t = self.steps as f64 * h;
         self.y = y;
+        self.xdd_now = xdd1;
         self.xdd_integral += h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1);
         self.check_state()?;
         let v = self.command_now();
@@ -461,9 +474,12 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         Inputs {
             v_valve: match &self.drive {
                 Drive::OpenLoop(sig) => self.saturate(sig.at(self.t - self.tau)),
-                Drive::ClosedLoop(_) => self.history.value_at(self.t - self.tau),
+                Drive::ClosedLoop(_) => match &self.taps {
+                    Some([tap, ..]) => self.history.value_at_tap(self.steps, tap),
+                    None => self.history.value_at(self.t - self.tau),
+                },
             },
-            xdd: self.platform.xdd_at(self.t),
+            xdd: self.xdd_now,
         }
     }
 
@@ -481,7 +497,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         };
         Sample::assemble(
             self.t,
-            self.platform.at(self.t),
+            self.platform.at_grid(self.steps, self.h, self.stride),
             &self.outputs(),
             v_in,
             self.model.half_stroke(),
@@ -501,9 +517,13 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             record(self.sample());
         }
         let n_end = (t_end / self.h - 1e-9).ceil() as u64;
+        // Steps until the next multiple of `every` (a countdown, not a division per step).
+        let mut to_record = every - self.steps % every;
         while self.steps < n_end {
             self.step()?;
-            if self.steps.is_multiple_of(every) {
+            to_record -= 1;
+            if to_record == 0 {
+                to_record = every;
                 record(self.sample());
             }
         }
@@ -522,6 +542,11 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             stats: self.stats,
         })
     }
+}
+
+/// The reads of the delayed command at a step's three stage times, when τ ≥ h.
+fn stage_taps(history: &DelayLine, tau: f64, h: f64) -> Option<[Tap; 3]> {
+    (tau >= h).then(|| [tau, tau - 0.5 * h, tau - h].map(|d| history.tap(d)))
 }
 
 /// Largest step ≤ `max_step` [s] that divides the output interval `1/rate_hz` exactly.
