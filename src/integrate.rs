@@ -84,23 +84,21 @@ pub struct Etd4<const N: usize> {
     y_ref: [f64; N],
     /// Rows in which the remainder can be non-zero.
     rows: Vec<usize>,
-    /// For each of `rows`, the non-zero entries `(column, value)` of that row of `A`.
-    a_rows: Vec<Vec<(usize, f64)>>,
+    /// For each of `rows`, that row of `A`.
+    a_rows: Vec<[f64; N]>,
     /// `e^{hA}`.
     e: Columns<N>,
     /// `e^{hA/2}`.
     e2: Columns<N>,
     /// Columns `rows` of `(h/2)·φ1(hA/2)`.
     p2: Vec<[f64; N]>,
-    /// Columns `rows` of `e^{hA/2}·(h/2)·φ1(hA/2)` (so that the third stage can start from
-    /// `e^{hA}·z`, which the last stage needs anyway: one dense product fewer per step).
-    e2p2: Vec<[f64; N]>,
-    /// Columns `rows` of `h·(φ1 − 3φ2 + 4φ3)(hA)`, weight of the first stage.
-    b1: Vec<[f64; N]>,
-    /// Columns `rows` of `h·(2φ2 − 4φ3)(hA)`, weight of the two middle stages.
-    b2: Vec<[f64; N]>,
-    /// Columns `rows` of `h·(4φ3 − φ2)(hA)`, weight of the last stage.
-    b4: Vec<[f64; N]>,
+    /// Weights of the third stage: columns `rows` of `e^{hA/2}·(h/2)·φ1(hA/2)` (so that the
+    /// stage can start from `e^{hA}·z`, which the last stage needs anyway: one dense product
+    /// fewer per step), then those of `(h/2)·φ1(hA/2)`.
+    c3: Vec<[f64; N]>,
+    /// Weights of the update: columns `rows` of `h·(φ1 − 3φ2 + 4φ3)(hA)` (first stage), of
+    /// `h·(2φ2 − 4φ3)(hA)` (the two middle stages) and of `h·(4φ3 − φ2)(hA)` (last stage).
+    c4: Vec<[f64; N]>,
 }
 
 /// Why [`Etd4::new`] could not build its coefficients.
@@ -178,7 +176,7 @@ impl<const N: usize> Etd4<N> {
         };
         let e2 = all(&half);
         let p2 = cols(&half, &[(1, 0.5 * h)]);
-        let e2p2 = p2
+        let mut c3: Vec<[f64; N]> = p2
             .iter()
             .map(|c| {
                 let mut out = [0.0; N];
@@ -186,25 +184,19 @@ impl<const N: usize> Etd4<N> {
                 out
             })
             .collect();
+        c3.extend_from_slice(&p2);
+        let mut c4 = cols(&full, &[(1, h), (2, -3.0 * h), (3, 4.0 * h)]);
+        c4.extend(cols(&full, &[(2, 2.0 * h), (3, -4.0 * h)]));
+        c4.extend(cols(&full, &[(2, -h), (3, 4.0 * h)]));
         Ok(Self {
             h,
             y_ref,
-            a_rows: rows
-                .iter()
-                .map(|&i| {
-                    (0..N)
-                        .filter(|&j| a[i][j] != 0.0)
-                        .map(|j| (j, a[i][j]))
-                        .collect()
-                })
-                .collect(),
+            a_rows: rows.iter().map(|&i| a[i]).collect(),
             e: all(&full),
             e2,
             p2,
-            e2p2,
-            b1: cols(&full, &[(1, h), (2, -3.0 * h), (3, 4.0 * h)]),
-            b2: cols(&full, &[(2, 2.0 * h), (3, -4.0 * h)]),
-            b4: cols(&full, &[(2, -h), (3, 4.0 * h)]),
+            c3,
+            c4,
             rows,
         })
     }
@@ -219,7 +211,11 @@ impl<const N: usize> Etd4<N> {
     fn remainder(&self, fy: &[f64; N], z: &[f64; N]) -> [f64; MAX_REMAINDER_ROWS] {
         let mut r = [0.0; MAX_REMAINDER_ROWS];
         for ((rk, &i), row) in r.iter_mut().zip(&self.rows).zip(&self.a_rows) {
-            *rk = fy[i] - row.iter().map(|&(j, v)| v * z[j]).sum::<f64>();
+            let mut az = 0.0;
+            for (a, zj) in row.iter().zip(z) {
+                az += a * zj;
+            }
+            *rk = fy[i] - az;
         }
         r
     }
@@ -253,21 +249,20 @@ impl<const N: usize> Etd4<N> {
         mul_add(&mut zb, &self.p2, &na[..k]);
         let nb = self.remainder(&f(t + 0.5 * h, &shift(&zb)), &zb);
         // e^{hA/2}·za = e^{hA}·z + e^{hA/2}·(h/2)·φ1(hA/2)·nu.
+        let mut w = [0.0; 3 * MAX_REMAINDER_ROWS];
+        for i in 0..k {
+            w[i] = nu[i];
+            w[k + i] = 2.0 * nb[i] - nu[i];
+        }
         let mut zc = ez;
-        mul_add(&mut zc, &self.e2p2, &nu[..k]);
-        let mut w = [0.0; MAX_REMAINDER_ROWS];
-        for i in 0..k {
-            w[i] = 2.0 * nb[i] - nu[i];
-        }
-        mul_add(&mut zc, &self.p2, &w[..k]);
+        mul_add(&mut zc, &self.c3, &w[..2 * k]);
         let nc = self.remainder(&f(t + h, &shift(&zc)), &zc);
-        let mut out = ez;
-        mul_add(&mut out, &self.b1, &nu[..k]);
         for i in 0..k {
-            w[i] = na[i] + nb[i];
+            w[k + i] = na[i] + nb[i];
+            w[2 * k + i] = nc[i];
         }
-        mul_add(&mut out, &self.b2, &w[..k]);
-        mul_add(&mut out, &self.b4, &nc[..k]);
+        let mut out = ez;
+        mul_add(&mut out, &self.c4, &w[..3 * k]);
         *y = shift(&out);
     }
 }
