@@ -217,9 +217,14 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         Ok(())
     }
 
+    #[inline(always)]
     fn track_contact(&mut self) {
         let u = self.model.relative_position(&self.y);
         let half = self.model.half_stroke();
+        // Nothing to open, extend or close (the usual step).
+        if !self.in_contact && u.abs() <= half {
+            return;
+        }
         let t = self.time();
         track_contact(&mut self.contacts, &mut self.in_contact, t, u, half);
     }
