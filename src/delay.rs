@@ -98,13 +98,6 @@ impl DelayLine {
         }
     }
 
-    /// Whether a read through `tap` for the grid index `n + 1`, made while sample `n` is the
-    /// newest, equals the same read after sample `n + 1` is pushed (bit for bit): true when
-    /// the delay spans at least two steps, so that all four samples it reads are stored.
-    pub fn tap_is_settled(tap: &Tap) -> bool {
-        tap.back >= 3
-    }
-
     /// The signal at `n·h − delay` for the grid index `n` and a [`Tap`] made for `delay`:
     /// [`Self::value_at`] without the division, the floor and the weights, which a fixed delay
     /// on the simulation's grid makes constant.
@@ -147,6 +140,15 @@ pub struct Tap {
     f: f64,
     /// Cubic Lagrange weights of the samples at −1, 0, 1, 2 for `f`.
     w: [f64; 4],
+}
+
+impl Tap {
+    /// Whether a read through this tap for the grid index `n + 1`, made while sample `n` is
+    /// the newest, equals the same read after sample `n + 1` is pushed (bit for bit): true
+    /// when the delay spans at least two steps, so that all four samples it reads are stored.
+    pub fn is_settled(&self) -> bool {
+        self.back >= 3
+    }
 }
 
 /// Weights of the cubic Lagrange interpolant through the nodes −1, 0, 1, 2 at `f`.
@@ -220,7 +222,7 @@ mod tests {
             (1.75e-2, true),
         ] {
             let tap = d.tap(delay);
-            assert_eq!(DelayLine::tap_is_settled(&tap), settled, "delay {delay}");
+            assert_eq!(tap.is_settled(), settled, "delay {delay}");
             let mut d = DelayLine::new(h, 0.05, 0.0);
             let mut same = true;
             for n in 0..100u64 {

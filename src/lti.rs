@@ -64,7 +64,7 @@ pub struct LtiSimulation<M, const N: usize> {
     xdd_now: f64,
     /// Command at the valve now [V], kept from the previous step when `reuse_valve`.
     valve_now: f64,
-    /// Closed loop with a settled tap ([`DelayLine::tap_is_settled`]): the end-of-step read
+    /// Closed loop with a settled tap ([`Tap::is_settled`]): the end-of-step read
     /// is the next step's start read, bit for bit.
     reuse_valve: bool,
     contacts: Vec<ContactEvent>,
@@ -118,8 +118,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         };
         history.push(sim.command_now());
         sim.history = history;
-        sim.reuse_valve =
-            matches!(sim.drive, Drive::ClosedLoop(_)) && DelayLine::tap_is_settled(&sim.tap);
+        sim.reuse_valve = matches!(sim.drive, Drive::ClosedLoop(_)) && sim.tap.is_settled();
         sim.valve_now = sim.valve_command(0, 1.0);
         Some(sim)
     }
@@ -155,6 +154,17 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         }
     }
 
+    /// Command at the valve now [V]: kept from the previous step's end when `reuse_valve`,
+    /// else read with `side` as in [`Self::valve_command`].
+    #[inline(always)]
+    fn valve_command_now(&self, side: f64) -> f64 {
+        if self.reuse_valve {
+            self.valve_now
+        } else {
+            self.valve_command(self.steps, side)
+        }
+    }
+
     /// Advances one step.
     #[inline]
     pub fn step(&mut self) -> Result<(), SimError> {
@@ -169,11 +179,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
     fn advance(&mut self, xdd1: f64) -> Result<(), SimError> {
         let n = self.steps;
         let xdd0 = self.xdd_now;
-        let v0 = if self.reuse_valve {
-            self.valve_now
-        } else {
-            self.valve_command(n, 1.0)
-        };
+        let v0 = self.valve_command_now(1.0);
         let v1 = self.valve_command(n + 1, -1.0);
         self.valve_now = v1;
         let y = self.y;
@@ -221,10 +227,6 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
     fn track_contact(&mut self) {
         let u = self.model.relative_position(&self.y);
         let half = self.model.half_stroke();
-        // Nothing to open, extend or close (the usual step).
-        if !self.in_contact && u.abs() <= half {
-            return;
-        }
         let t = self.time();
         track_contact(&mut self.contacts, &mut self.in_contact, t, u, half);
     }
@@ -237,11 +239,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
     /// The current instant as a recorded sample, the platform's motion now being `p`.
     #[inline(always)]
     fn sample_with(&self, p: crate::scenario::PlatformSample) -> Sample {
-        let v_valve = if self.reuse_valve {
-            self.valve_now
-        } else {
-            self.valve_command(self.steps, 0.0)
-        };
+        let v_valve = self.valve_command_now(0.0);
         let inputs = Inputs {
             v_valve,
             xdd: p.xdd,

@@ -102,6 +102,8 @@ impl Sample {
 }
 
 /// Opens, extends or closes the end-stop contact event at time `t` for stroke `u` [m].
+/// Called every step: the usual step (no contact before or after) writes nothing.
+#[inline(always)]
 pub(crate) fn track_contact(
     contacts: &mut Vec<ContactEvent>,
     in_contact: &mut bool,
@@ -123,7 +125,7 @@ pub(crate) fn track_contact(
             c.t_end = t;
             c.max_penetration_m = c.max_penetration_m.max(pen);
         }
-    } else {
+    } else if *in_contact {
         *in_contact = false;
     }
 }
