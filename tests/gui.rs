@@ -299,9 +299,26 @@ fn frame_cost_with_full_scopes() {
         "slider frame (Kp change, curves recomputed): {drag:.2} ms, of which curves {:.2} ms",
         h.state().curves().compute_ms
     );
+    // A plant parameter: the twin is re-linearised and its responses re-evaluated in-frame.
+    let mut cd_ms = Vec::new();
+    let mut cd_curves_ms = Vec::new();
+    for cd in [0.14, 0.145, 0.15, 0.155, 0.16] {
+        h.get_by_role_and_label(Role::Slider, "Cd")
+            .set_value_accesskit(cd);
+        let t0 = Instant::now();
+        h.step();
+        cd_ms.push(t0.elapsed().as_secs_f64() * 1e3);
+        cd_curves_ms.push(h.state().curves().compute_ms);
+        assert_eq!(h.state().curves().params.unwrap().valve.cd, cd);
+    }
+    let (cd_drag, cd_curves) = (median(&mut cd_ms), median(&mut cd_curves_ms));
+    println!(
+        "slider frame (Cd change, twin re-linearised): {cd_drag:.2} ms, of which curves \
+         {cd_curves:.2} ms"
+    );
     // No assertion on the times: speed is measured and reported (README, "Speed"), not
     // asserted by a timed test that a busy CI machine could fail. The figures must exist.
-    assert!(u.is_finite() && t.is_finite() && drag.is_finite());
+    assert!(u.is_finite() && t.is_finite() && drag.is_finite() && cd_drag.is_finite());
 }
 
 /// Steps frames until `done` holds, with a longer limit for background calibrations.

@@ -8,7 +8,7 @@
 
 use super::units::{db, deg};
 use crate::analysis::frequency_response::{
-    self as fr, Crossing, DwellOptions, LinearisedModel, LoopMargins,
+    self as fr, Crossing, DwellOptions, LoopMargins, OpenLoop,
 };
 use crate::model::ModelKind;
 use crate::params::{ControllerParams, Params};
@@ -73,68 +73,11 @@ fn margin_grid() -> Vec<f64> {
     fr::log_space(0.01, 200.0, 2000)
 }
 
-/// Open-loop responses of the linearised twin (without the delay) at one frequency:
-/// `u/V`, `u/ẍ`, `ÿ/V`, `ÿ/ẍ` and `u̇/V`.
-#[derive(Debug, Clone, Copy)]
-pub struct PlantPoint {
-    /// Frequency [Hz].
-    pub freq_hz: f64,
-    u_v: Complex64,
-    u_x: Complex64,
-    y_v: Complex64,
-    y_x: Complex64,
-    du_v: Complex64,
-}
-
-impl PlantPoint {
-    /// From the delay-free linearisation `lin0`, through its public responses: `u̇/V` from
-    /// the Bode, `ÿ/ẍ` from T with zero gains, `u/ẍ` from T with Kp = 1.
-    fn new(lin0: &LinearisedModel, freq_hz: f64) -> Self {
-        let jw = Complex64::new(0.0, 2.0 * PI * freq_hz);
-        let du_v = lin0.bode(freq_hz);
-        let u_v = du_v / jw;
-        let y_v = jw * du_v;
-        let zero = ControllerParams {
-            kp_v_per_m: 0.0,
-            ki_v_s_per_m: 0.0,
-        };
-        let unit = ControllerParams {
-            kp_v_per_m: 1.0,
-            ki_v_s_per_m: 0.0,
-        };
-        let y_x = lin0.transmissibility(&zero, freq_hz);
-        let t1 = lin0.transmissibility(&unit, freq_hz);
-        let u_x = (t1 - y_x) * (1.0 - u_v) / y_v;
-        Self {
-            freq_hz,
-            u_v,
-            u_x,
-            y_v,
-            y_x,
-            du_v,
-        }
-    }
-
-    /// Closed-loop `ÿ/ẍ` with the controller `V = Kp·u + Ki·ẍ/s` and the delay `tau_s`.
-    pub fn transmissibility(&self, c: &ControllerParams, tau_s: f64) -> Complex64 {
-        let jw = Complex64::new(0.0, 2.0 * PI * self.freq_hz);
-        let e = (-jw * tau_s).exp();
-        let v_per_x =
-            (c.kp_v_per_m * self.u_x + c.ki_v_s_per_m / jw) / (1.0 - c.kp_v_per_m * self.u_v * e);
-        self.y_v * e * v_per_x + self.y_x
-    }
-
-    /// `u̇/V_in` with the delay `tau_s`.
-    pub fn bode(&self, tau_s: f64) -> Complex64 {
-        self.du_v * Complex64::new(0.0, -2.0 * PI * self.freq_hz * tau_s).exp()
-    }
-}
-
 /// The linearised twin's open-loop responses on the plot grid and the margin grid.
 pub struct PlantCache {
     key: Params,
-    /// On the plot frequencies.
-    pub points: Vec<PlantPoint>,
+    /// On the plot frequencies (delay excluded).
+    pub points: Vec<OpenLoop>,
     margin_freqs: Vec<f64>,
     margin_u_v: Vec<Complex64>,
 }
@@ -144,11 +87,11 @@ impl PlantCache {
     pub fn new(params: &Params, freqs: &[f64]) -> Self {
         let key = plant_key(params);
         let lin0 = fr::linearise_twin(&key);
-        let points = freqs.iter().map(|&f| PlantPoint::new(&lin0, f)).collect();
+        let points = freqs.iter().map(|&f| lin0.open_loop(f)).collect();
         let margin_freqs = margin_grid();
         let margin_u_v = margin_freqs
             .iter()
-            .map(|&f| lin0.bode(f) / Complex64::new(0.0, 2.0 * PI * f))
+            .map(|&f| lin0.open_loop(f).u_v)
             .collect();
         Self {
             key,
