@@ -118,3 +118,73 @@ fn a_new_excitation_restarts_from_rest() {
     };
     assert!(b.twin.iter().all(|s| s.xdd == 0.0));
 }
+
+/// An unstable loop (positive Kp feeds the position back with the wrong sign) makes the
+/// linear model grow without bound. The engine reports the divergence by model and state,
+/// streams no non-finite sample, stops stepping, and Reset with stable gains brings it back.
+#[test]
+fn a_divergence_is_reported_and_reset_with_stable_gains_recovers() {
+    let mut unstable = Params::paper();
+    unstable.controller.kp_v_per_m = 20.0;
+    let h = engine::spawn(unstable, || {});
+    h.send(Command::SetSpeed(Speed::Max));
+    let events = until(&h, |e| matches!(e, Event::Error(_)));
+    let Some(Event::Error(msg)) = events.last() else {
+        unreachable!()
+    };
+    assert!(msg.contains("linear model diverged"), "{msg}");
+    assert!(msg.contains("Reset"), "{msg}");
+    // Motion channels of all three models, and the twin's pressures (the linear and passive
+    // models have none: NaN there means "not modelled"), stay finite up to the error.
+    let batches: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Samples(b) => Some(b),
+            _ => None,
+        })
+        .collect();
+    let motion = batches
+        .iter()
+        .flat_map(|b| b.linear.iter().chain(&b.twin).chain(&b.passive));
+    let mut n = 0;
+    for s in motion {
+        n += 1;
+        assert!(
+            [s.ydd, s.u, s.du, s.xdd].iter().all(|v| v.is_finite()),
+            "a non-finite sample reached the UI: {s:?}"
+        );
+    }
+    assert!(n > 0, "samples before the divergence");
+    assert!(
+        batches
+            .iter()
+            .flat_map(|b| &b.twin)
+            .all(|s| s.p1.is_finite() && s.p2.is_finite())
+    );
+    // Stopped: nothing more arrives until Reset.
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(
+        !h.events
+            .try_iter()
+            .any(|e| matches!(e, Event::Samples(b) if !b.twin.is_empty())),
+        "the engine keeps stepping after the error"
+    );
+    h.send(Command::SetParams(Box::new(Params::paper())));
+    h.send(Command::Reset);
+    let back = until(
+        &h,
+        |e| matches!(e, Event::Samples(b) if !b.linear.is_empty()),
+    );
+    let Some(Event::Samples(b)) = back.last() else {
+        unreachable!()
+    };
+    assert!(
+        b.linear[0].t < 1.0,
+        "restarted from t = 0: {}",
+        b.linear[0].t
+    );
+    until(
+        &h,
+        |e| matches!(e, Event::Status { t, running: true, .. } if *t > 2.0),
+    );
+}

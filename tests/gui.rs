@@ -521,3 +521,37 @@ fn simulated_bode_points_follow_the_paper_gain_and_the_linearised_phase() {
         last.y
     );
 }
+
+/// Gains that make the loop unstable: the linear model diverges in the engine thread. The app
+/// shows the engine's error in the red banner (naming the model), keeps drawing frames, and
+/// Reset, with stable gains set again, clears the banner and restarts the stream.
+#[test]
+fn a_divergence_shows_the_engine_banner_and_reset_recovers() {
+    let mut h = harness();
+    h.step();
+    h.get_by_label("max").click();
+    h.step();
+    h.get_by_role_and_label(Role::Slider, "Kp")
+        .set_value_accesskit(20.0);
+    h.step();
+    step_until(&mut h, "the engine's error", |a| a.engine_error().is_some());
+    h.step();
+    let msg = h.state().engine_error().unwrap_or_default().to_string();
+    assert!(msg.contains("linear model diverged"), "{msg}");
+    let banner = format!("{:?}", h.get_by_label_contains("Engine stopped"));
+    assert!(banner.contains("diverged"), "{banner}");
+
+    let kp = seat_twin::params::Params::paper().controller.kp_v_per_m;
+    h.get_by_role_and_label(Role::Slider, "Kp")
+        .set_value_accesskit(kp);
+    h.step();
+    let reset = h.query_all_by_label("Reset").next();
+    reset.expect("a Reset button").click();
+    h.step();
+    assert!(h.state().engine_error().is_none());
+    assert!(h.query_by_label_contains("Engine stopped").is_none());
+    step_until(&mut h, "the stream to resume", |a| {
+        a.engine_view().running && a.traces().t_now() > 1.0
+    });
+    assert!(h.state().engine_error().is_none(), "stable gains stay up");
+}
