@@ -74,7 +74,7 @@ fn linearisation(c: &mut Criterion) {
     });
     // What the app does on a plant-slider frame (Cd, mass, k, supply): re-linearise, then the
     // open-loop responses on its 2 000-point margin grid and 240 plot frequencies.
-    let margin = fr::log_space(0.01, 200.0, 2000);
+    let margin = fr::margin_frequencies();
     let plot = fr::log_space(0.1, 100.0, 240);
     c.bench_function("linearise_twin_and_2240_open_loop_points", |b| {
         b.iter(|| {

@@ -618,9 +618,28 @@ impl LoopMargins {
     }
 }
 
-/// Margins of the position loop for a `u/V_valve` response function (without the delay).
+/// Frequencies at which the loop margins are evaluated [Hz]: 2 000 points, 0.01–200 Hz.
+pub fn margin_frequencies() -> Vec<f64> {
+    log_space(0.01, 200.0, 2000)
+}
+
+/// Margins of the position loop for a `u/V_valve` response function (without the delay),
+/// evaluated on [`margin_frequencies`].
 pub fn loop_margins(
     u_per_v: impl Fn(f64) -> Complex64,
+    tau_s: f64,
+    kp_v_per_m: f64,
+) -> LoopMargins {
+    let freqs = margin_frequencies();
+    let values = freqs.iter().map(|&f| u_per_v(f));
+    loop_margins_on(&freqs, values, tau_s, kp_v_per_m)
+}
+
+/// Margins of the position loop from `u/V_valve` (without the delay) already evaluated at
+/// `freqs_hz` (ascending; `u_per_v` pairs with them in order, and is not read when Kp > 0).
+pub fn loop_margins_on(
+    freqs_hz: &[f64],
+    u_per_v: impl IntoIterator<Item = Complex64>,
     tau_s: f64,
     kp_v_per_m: f64,
 ) -> LoopMargins {
@@ -633,13 +652,15 @@ pub fn loop_margins(
             crossover_hz: f64::NAN,
         };
     }
-    let freqs = log_space(0.01, 200.0, 2000);
+    let freqs = freqs_hz;
+    // Pairs up to the shorter of the two.
     let loop_gain: Vec<Complex64> = freqs
         .iter()
-        .map(|&f| {
+        .zip(u_per_v)
+        .map(|(&f, p)| {
             let w = 2.0 * PI * f;
             // Negative feedback form: V = Kp·u with Kp < 0 ⇒ L = −Kp·P.
-            -kp_v_per_m * u_per_v(f) * Complex64::new(0.0, -w * tau_s).exp()
+            -kp_v_per_m * p * Complex64::new(0.0, -w * tau_s).exp()
         })
         .collect();
     let mags: Vec<f64> = loop_gain.iter().map(|l| l.norm()).collect();
@@ -650,7 +671,7 @@ pub fn loop_margins(
         phase_margin_deg: f64::INFINITY,
         crossover_hz: f64::NAN,
     };
-    for i in 1..freqs.len() {
+    for i in 1..loop_gain.len() {
         if m.crossover_hz.is_nan() && (mags[i - 1] - 1.0) * (mags[i] - 1.0) <= 0.0 {
             m.crossover_hz = freqs[i];
             m.phase_margin_deg = 180.0 + phases[i].to_degrees();

@@ -68,11 +68,6 @@ fn plant_key(p: &Params) -> Params {
     k
 }
 
-/// Frequencies at which [`fr::loop_margins`] evaluates the loop.
-fn margin_grid() -> Vec<f64> {
-    fr::log_space(0.01, 200.0, 2000)
-}
-
 /// The linearised twin's open-loop responses on the plot grid and the margin grid.
 pub struct PlantCache {
     key: Params,
@@ -88,7 +83,7 @@ impl PlantCache {
         let key = plant_key(params);
         let lin0 = fr::linearise_twin(&key);
         let points = freqs.iter().map(|&f| lin0.open_loop(f)).collect();
-        let margin_freqs = margin_grid();
+        let margin_freqs = fr::margin_frequencies();
         let margin_u_v = margin_freqs
             .iter()
             .map(|&f| lin0.open_loop(f).u_v)
@@ -103,14 +98,9 @@ impl PlantCache {
 
     /// Position-loop margins of the twin for a gain and delay (as [`fr::twin_margins`]).
     pub fn margins(&self, kp_v_per_m: f64, tau_s: f64) -> LoopMargins {
-        fr::loop_margins(
-            |f| {
-                let i = self
-                    .margin_freqs
-                    .partition_point(|&g| g < f)
-                    .min(self.margin_freqs.len() - 1);
-                self.margin_u_v[i]
-            },
+        fr::loop_margins_on(
+            &self.margin_freqs,
+            self.margin_u_v.iter().copied(),
             tau_s,
             kp_v_per_m,
         )
