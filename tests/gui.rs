@@ -16,6 +16,16 @@ fn harness() -> Harness<'static, SeatTwinApp> {
         .build_ui_state(|ui, app: &mut SeatTwinApp| app.ui(ui), app)
 }
 
+/// The app after its first frame, with the speed button "max" clicked (engine as fast as it
+/// can go).
+fn harness_at_max_speed() -> Harness<'static, SeatTwinApp> {
+    let mut h = harness();
+    h.step();
+    h.get_by_label("max").click();
+    h.step();
+    h
+}
+
 /// Steps frames (with short sleeps so the engine can work) until `done` holds.
 fn step_until(
     h: &mut Harness<'static, SeatTwinApp>,
@@ -244,10 +254,7 @@ fn csv_export_table_holds_ten_seconds_of_finite_rows() {
 /// the frame tessellates and a Kp change reaches the curves within the frame.
 #[test]
 fn frame_cost_with_full_scopes() {
-    let mut h = harness();
-    h.step();
-    h.get_by_label("max").click();
-    h.step();
+    let mut h = harness_at_max_speed();
     step_until(&mut h, "10 s of history", |a| a.traces().t_now() > 10.5);
     h.key_press(egui::Key::Space);
     h.step();
@@ -527,10 +534,7 @@ fn simulated_bode_points_follow_the_paper_gain_and_the_linearised_phase() {
 /// Reset, with stable gains set again, clears the banner and restarts the stream.
 #[test]
 fn a_divergence_shows_the_engine_banner_and_reset_recovers() {
-    let mut h = harness();
-    h.step();
-    h.get_by_label("max").click();
-    h.step();
+    let mut h = harness_at_max_speed();
     h.get_by_role_and_label(Role::Slider, "Kp")
         .set_value_accesskit(20.0);
     h.step();
