@@ -1,0 +1,13 @@
+//! All integration tests in one binary: linking the engine (and, with the `gui` feature, eframe)
+//! once instead of once per file keeps a cold `cargo test` several minutes shorter.
+//! Each module is one area; its own docs say what it proves.
+
+mod cli;
+mod dataset_props;
+mod engine;
+mod gui;
+mod identify;
+mod integrator;
+mod paper;
+mod physics;
+mod presets;
