@@ -27,6 +27,7 @@
 
 pub mod analysis;
 pub mod bench;
+pub mod control;
 pub mod dataset;
 pub mod delay;
 pub mod engine;

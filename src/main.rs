@@ -400,7 +400,9 @@ fn run(cmd: Command) -> Result<()> {
                     let lin = fr::linearise_twin(&params);
                     freqs
                         .iter()
-                        .map(|&f| lin.transmissibility(&params.controller, f))
+                        .map(|&f| {
+                            lin.transmissibility(&seat_twin::control::ControlLaw::new(&params), f)
+                        })
                         .collect()
                 }
                 (_, MethodArg::Simulated) => {

@@ -6,6 +6,7 @@ pub mod plot;
 
 use crate::analysis::frequency_response::{self as fr, FrequencyPoint};
 use crate::analysis::metrics;
+use crate::control::ControlLaw;
 use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::Params;
@@ -155,7 +156,7 @@ fn crossing_sets(params: &Params, freqs: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<Com
     let lin = fr::linearise_twin(params);
     let twin: Vec<Complex64> = freqs
         .iter()
-        .map(|&f| lin.transmissibility(&params.controller, f))
+        .map(|&f| lin.transmissibility(&ControlLaw::new(params), f))
         .collect();
     (passive, linear, twin)
 }

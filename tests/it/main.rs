@@ -3,6 +3,7 @@
 //! Each module is one area; its own docs say what it proves.
 
 mod cli;
+mod control;
 mod dataset_props;
 mod engine;
 mod gui;

@@ -3,6 +3,7 @@
 //! against G(s) at small amplitude.
 
 use seat_twin::analysis::frequency_response as fr;
+use seat_twin::control::ControlLaw;
 use seat_twin::experiments;
 use seat_twin::model::ModelKind;
 use seat_twin::params::{Params, derived};
@@ -174,7 +175,7 @@ fn twin_transmissibility_linearised_vs_simulated() {
     let opt = fr::DwellOptions::default();
     for f in [1.0, 4.0, 8.0, 12.0] {
         let sim = fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt).unwrap();
-        let l = lin.transmissibility(&p.controller, f);
+        let l = lin.transmissibility(&ControlLaw::new(&p), f);
         assert!(
             (sim - l).norm() < 0.03 * l.norm().max(0.1),
             "{f} Hz: {sim} vs {l}"
@@ -196,7 +197,7 @@ fn unity_crossings_match_the_paper_and_notes() {
     let lc = fr::isolation_upper_edge(&freqs, &linear).unwrap();
     assert!((lc - 9.0).abs() < 0.6, "linear active {lc}");
     let lin = fr::linearise_twin(&p);
-    let twin = mag(&|f| lin.transmissibility(&p.controller, f).norm());
+    let twin = mag(&|f| lin.transmissibility(&ControlLaw::new(&p), f).norm());
     let tc = fr::isolation_upper_edge(&freqs, &twin).unwrap();
     assert!((tc - 8.0).abs() < 0.6, "twin {tc}");
     assert!(
