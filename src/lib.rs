@@ -43,3 +43,4 @@ pub mod preset;
 pub mod report;
 pub mod scenario;
 pub mod simulation;
+pub mod tune;

@@ -177,6 +177,38 @@ enum Command {
         #[arg(long, default_value = "paper")]
         preset: String,
     },
+    /// Tune a controller's gains on the nonlinear twin (ISO 2631-1 objective of the body,
+    /// no end-stop contact, max |u| ≤ 30 mm, GM ≥ 6 dB, PM ≥ 45°); writes tuned.toml,
+    /// report.md, report.json and plots to DIR.
+    Tune {
+        /// Preset file or shipped preset name (its plant, and its gains as the start).
+        #[arg(long, default_value = "paper")]
+        preset: String,
+        /// Controller structure: paper, predictive, skyhook or smith (default: the preset's).
+        #[arg(long)]
+        controller: Option<String>,
+        /// Objective: aw (Wk-weighted RMS), vdv or seat.
+        #[arg(long, default_value = "aw")]
+        objective: String,
+        /// Tuning input: `ride` (the paper's random ride).
+        #[arg(long, default_value = "ride")]
+        excitation: String,
+        /// Number of tuning rides (seeds 1..=N); as many held-out rides use seeds 101...
+        #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
+        seeds: i64,
+        /// Duration of each ride [s], 5..=600.
+        #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
+        duration: f64,
+        /// Optimise the worst case over Cd ±10 %, τ ±3 ms, mass ±20 %.
+        #[arg(long)]
+        robust: bool,
+        /// Budget of objective evaluations, 10..=10000.
+        #[arg(long, default_value_t = 120, allow_negative_numbers = true)]
+        evaluations: i64,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn main() {
@@ -527,7 +559,106 @@ fn run(cmd: Command) -> Result<()> {
             println!("{text}");
             Ok(())
         }
+        Command::Tune {
+            preset,
+            controller,
+            objective,
+            excitation,
+            seeds,
+            duration,
+            robust,
+            evaluations,
+            out,
+        } => run_tune(
+            &preset,
+            controller.as_deref(),
+            &objective,
+            &excitation,
+            seeds,
+            duration,
+            robust,
+            evaluations,
+            &out,
+        ),
     }
+}
+
+/// `seat-twin tune`.
+#[allow(clippy::too_many_arguments)]
+fn run_tune(
+    preset: &str,
+    controller: Option<&str>,
+    objective: &str,
+    excitation: &str,
+    seeds: i64,
+    duration: f64,
+    robust: bool,
+    evaluations: i64,
+    out: &Path,
+) -> Result<()> {
+    use seat_twin::tune;
+    let params = load_params(preset)?;
+    let kind = match controller {
+        Some(k) => k.parse().map_err(anyhow::Error::msg)?,
+        None => params.controller.kind,
+    };
+    let objective: tune::Objective = objective.parse().map_err(anyhow::Error::msg)?;
+    if excitation != "ride" {
+        bail!(
+            "--excitation {excitation}: this build tunes on `ride` (the paper's random ride) only"
+        );
+    }
+    check_range("--seeds", seeds as f64, 1.0, 20.0, "")?;
+    check_range("--duration", duration, 5.0, 600.0, "s")?;
+    check_range("--evaluations", evaluations as f64, 10.0, 10_000.0, "")?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let n = seeds as u64;
+    let opts = tune::TuneOptions {
+        kind,
+        objective,
+        tune_seeds: (1..=n).collect(),
+        heldout_seeds: (101..101 + n).collect(),
+        duration_s: duration,
+        robust,
+        max_evaluations: evaluations as usize,
+    };
+    let started = std::time::Instant::now();
+    eprintln!(
+        "tuning {kind} for {} on {n} ride(s) of {duration:.0} s (held out: {n}){}",
+        objective.name(),
+        if robust {
+            ", worst case over the spread"
+        } else {
+            ""
+        }
+    );
+    let result = tune::tune(&params, &opts, None)?;
+    let wall = started.elapsed().as_secs_f64();
+    let mut start = params;
+    start.controller.kind = kind;
+    let files = tune::report::write_outputs(&result, &start, out, wall)?;
+    let unit = objective.unit();
+    println!(
+        "{}: start {:.4} {unit} -> tuned {:.4} {unit} (held out {:.4} -> {:.4}); {} evaluations in {wall:.1} s",
+        objective.name(),
+        result.baseline.objective,
+        result.tuned.objective,
+        result.baseline_heldout.objective,
+        result.tuned_heldout.objective,
+        result.evaluations
+    );
+    for (k, v) in &result.tuned.gains {
+        println!("  {k} = {v:.4}");
+    }
+    println!(
+        "  GM {:.1} dB, PM {:.1} deg, max |u| {:.1} mm, contacts {}",
+        result.tuned.gain_margin_db,
+        result.tuned.phase_margin_deg,
+        result.tuned.max_abs_u_m * 1e3,
+        result.tuned.contacts
+    );
+    println!("wrote {} files to {}", files.len(), out.display());
+    Ok(())
 }
 
 fn check_range(name: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<()> {

@@ -12,3 +12,4 @@ mod integrator;
 mod paper;
 mod physics;
 mod presets;
+mod tune;
