@@ -214,10 +214,12 @@ impl Controller {
             next.lead.w = self.lead.w;
             next.sky.w = self.sky.w;
             next.sky_lp.w = self.sky_lp.w;
-            if let (Some(new), Some(old)) = (next.smith.as_mut(), self.smith.take()) {
-                if new.tap == old.tap && new.phi == old.phi && new.gamma == old.gamma {
-                    *new = old;
-                }
+            if let (Some(new), Some(old)) = (next.smith.as_mut(), self.smith.take())
+                && new.tap == old.tap
+                && new.phi == old.phi
+                && new.gamma == old.gamma
+            {
+                *new = old;
             }
         }
         *self = next;

@@ -102,7 +102,7 @@ impl Default for Excitation {
 impl Excitation {
     /// The platform motion and the drive of the active models, and how long it lasts [s].
     fn build(&self, params: &Params) -> (PlatformMotion, Drive, f64) {
-        let closed = Drive::ClosedLoop(ControlLaw::new(&params));
+        let closed = Drive::ClosedLoop(ControlLaw::new(params));
         match self {
             Excitation::Random(r) => (PlatformMotion::Sampled(r.generate()), closed, r.duration_s),
             Excitation::Cycloid { bump, period_s } => {
