@@ -1,5 +1,8 @@
 //! # seat-twin — digital twin of a hydraulic active seat suspension
 //!
+//! The model — equations as implemented, units, parameters, the corrections to the paper and
+//! the validity range — is documented in `docs/model.md` in the repository.
+//!
 //! The engine of seat-twin, a pure library with no UI, clock, thread or file access in its
 //! core. The main types and how data flows:
 //!

@@ -2,7 +2,7 @@
 //!
 //! Every field is in SI units, documents its unit and valid range, and is checked by
 //! [`Params::validate`]. Defaults are the paper's adjusted twin (section 3 and 4.2, with the
-//! corrections listed in `MODEL_NOTES.md`): `Cd = 0.1506`, `τ = 17.5 ms`, `k = 3680 N/m` in total.
+//! corrections listed in `docs/model.md`): `Cd = 0.1506`, `τ = 17.5 ms`, `k = 3680 N/m` in total.
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -56,7 +56,7 @@ pub(crate) fn check(
 pub struct BodyParams {
     /// Suspended mass incl. seat and operator [kg], 1 ..= 500. Paper: 11.7.
     pub mass_kg: f64,
-    /// Equivalent stiffness of all springs together [N/m], 1 ..= 1e6. Paper: 3680 (MODEL_NOTES 3).
+    /// Equivalent stiffness of all springs together [N/m], 1 ..= 1e6. Paper: 3680 (docs/model.md, correction 3).
     pub stiffness_n_per_m: f64,
 }
 
@@ -162,7 +162,7 @@ pub struct ValveParams {
     pub tau_s: f64,
     /// Command saturation `±Vmax` [V], 0.1 ..= 100. Paper: 10 V.
     pub v_max_v: f64,
-    /// Width of the laminar core of the signed square root [Pa], 1 ..= 1e6 (MODEL_NOTES 10).
+    /// Width of the laminar core of the signed square root [Pa], 1 ..= 1e6 (docs/model.md, correction 10).
     pub laminar_core_pa: f64,
 }
 
@@ -188,9 +188,9 @@ impl Default for ValveParams {
 pub struct FluidParams {
     /// Density `ρ` [kg/m³], 500 ..= 2000. Paper: 840.
     pub density_kg_m3: f64,
-    /// Dynamic viscosity `μ` [Pa·s], 1e-4 ..= 10. Paper: 0.02 (MODEL_NOTES 2).
+    /// Dynamic viscosity `μ` [Pa·s], 1e-4 ..= 10. Paper: 0.02 (docs/model.md, correction 2).
     pub viscosity_pa_s: f64,
-    /// Bulk modulus `β` [Pa], 1e6 ..= 1e10. Paper: 1200 MPa (MODEL_NOTES 2).
+    /// Bulk modulus `β` [Pa], 1e6 ..= 1e10. Paper: 1200 MPa (docs/model.md, correction 2).
     pub bulk_modulus_pa: f64,
 }
 

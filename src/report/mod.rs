@@ -405,7 +405,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
                 "{:.4} at 70 bar, {:.4} at 100 bar",
                 n.cd_from_eq12[0], n.cd_from_eq12[1]
             ),
-            "The paper's 0.1074 follows from Δp = 100 bar (pA), not 70 bar (MODEL_NOTES 4).".into(),
+            "The paper's 0.1074 follows from Δp = 100 bar (pA), not 70 bar (docs/model.md, correction 4).".into(),
         ],
         [
             "Gain of u̇/V_in at low frequency".into(),
@@ -425,7 +425,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
                 n.linear_phase_delay_s * 1e3
             ),
             "Does not reproduce by design: the paper puts the measured *total* 17.5 ms into the \
-             spool equation, whose own lag adds ≈ 2ζs/ωn = 3.2 ms (MODEL_NOTES 6). The \
+             spool equation, whose own lag adds ≈ 2ζs/ωn = 3.2 ms (docs/model.md, correction 6). The \
              `consistent-delay` preset (τ = 14.3 ms) restores 17.5 ms."
                 .into(),
         ],
@@ -433,7 +433,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
             "Passive |T| = 1 crossing".into(),
             "≈ 4 Hz".into(),
             format!("{} Hz", fmt_opt(n.passive_crossing_hz, 2)),
-            "√2·fn with k = 3680 N/m in total (MODEL_NOTES 3).".into(),
+            "√2·fn with k = 3680 N/m in total (docs/model.md, correction 3).".into(),
         ],
         [
             "Active |T| = 1 crossing (end of isolation)".into(),
@@ -469,7 +469,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
             "0.16 m/s²".into(),
             format!("{} m/s²", spread_cell(&n.ride_rms_ydd_twin, 1.0, 3)),
             "Above the paper's value: the longer total delay leaves more residual \
-             acceleration (MODEL_NOTES 6)."
+             acceleration (docs/model.md, correction 6)."
                 .into(),
         ],
         [
@@ -486,7 +486,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
                 n.ride_pressure_mean_pa / 1e5,
                 n.ride_pressure_symmetry_pa / 1e5
             ),
-            "Exact symmetry of the corrected model (MODEL_NOTES 11).".into(),
+            "Exact symmetry of the corrected model (docs/model.md, correction 11).".into(),
         ],
         [
             "Flows Q1 = Q2 within the valve's 20 L/min".into(),
@@ -502,7 +502,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
                 n.ride_twin_contact_seeds
             ),
             "The platform RMS displacement is ≈ 9 mm; some realisations exceed ±35 mm \
-             (MODEL_NOTES 8). Contacts are flagged, not hidden."
+             (docs/model.md, correction 8). Contacts are flagged, not hidden."
                 .into(),
         ],
         [
@@ -526,7 +526,7 @@ fn markdown(n: &ReportNumbers, params: &Params) -> String {
     let _ = writeln!(
         s,
         "Reproduction of sections 4–6 of *Development of a Digital Twin for a Hydraulic, Active \
-         Seat Suspension System* with the corrections of `MODEL_NOTES.md` (Eq. 5 sign, μ/β names, \
+         Seat Suspension System* with the corrections of seat-twin's `docs/model.md` (Eq. 5 sign, μ/β names, \
          k in total). Parameters: Cd = {}, τ = {:.1} ms, Kp = {} V/m, Ki = {} V·s/m. Random-ride \
          statistics are over {} seeds of {:.0} s (the first 2 s fade-in excluded); they are \
          mean ± standard deviation (min–max).\n",

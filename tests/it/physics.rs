@@ -21,7 +21,7 @@ fn ride(seconds: f64, seed: u64) -> PlatformMotion {
     )
 }
 
-/// MODEL_NOTES 11: with equal areas and a symmetric valve, p1 + p2 = pA + p0 and Q1 = Q2 hold
+/// docs/model.md, correction 11: with equal areas and a symmetric valve, p1 + p2 = pA + p0 and Q1 = Q2 hold
 /// to round-off. A wrong sign in Eq. (5) breaks both (and blows the model up).
 #[test]
 fn chamber_pressures_stay_symmetric_and_flows_equal() {
@@ -54,7 +54,7 @@ fn chamber_pressures_stay_symmetric_and_flows_equal() {
     );
 }
 
-/// MODEL_NOTES 9: the body on the oil column rings near 480 rad/s, almost undamped; the hose
+/// docs/model.md, correction 9: the body on the oil column rings near 480 rad/s, almost undamped; the hose
 /// L–C modes sit near 5.8e3 rad/s. Hand derivation: per side the chamber and hose capacitances
 /// act in parallel at low frequency, k_oil = 2·A²/(Cc + C), ω = √((k_oil + k)/m).
 #[test]
@@ -109,7 +109,7 @@ fn twin_static_gain_matches_g_and_delay_is_counted_twice() {
     );
     // Adjusted Cd reproduces Kg = 133.25 mm/(s·V) within 1 %.
     assert!((low / p.linear.kg_m_per_s_v - 1.0).abs() < 0.01);
-    // MODEL_NOTES 6: total phase-slope delay ≈ τ + 2ζs/ωn ≈ 20.7 ms.
+    // docs/model.md, correction 6: total phase-slope delay ≈ τ + 2ζs/ωn ≈ 20.7 ms.
     let freqs: Vec<f64> = (1..=20).map(|i| i as f64).collect();
     let phases: Vec<f64> = freqs.iter().map(|&f| lin.bode(f).arg()).collect();
     let tau = fr::delay_from_phase_slope(&freqs, &phases);
@@ -184,7 +184,7 @@ fn twin_transmissibility_linearised_vs_simulated() {
 }
 
 /// Crossing frequencies: passive √2·fn ≈ 3.99 Hz; linear active ≈ 9 Hz (paper, Fig. 12);
-/// twin as written ≈ 8 Hz because its delay is counted twice (MODEL_NOTES 6).
+/// twin as written ≈ 8 Hz because its delay is counted twice (docs/model.md, correction 6).
 #[test]
 fn unity_crossings_match_the_paper_and_notes() {
     let p = Params::paper();
