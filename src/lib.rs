@@ -38,6 +38,7 @@ pub mod integrate;
 pub mod lti;
 pub mod model;
 pub mod params;
+pub mod plot;
 pub mod preset;
 pub mod report;
 pub mod scenario;
