@@ -367,7 +367,7 @@ mod tests {
             dashed: false,
         };
         let a = zigzag(upper_right);
-        occ.mark_series(line, &[a.clone()], 1.0);
+        occ.mark_series(line, std::slice::from_ref(&a), 1.0);
         let b = place_box(&occ, w, h);
         assert!(!b.intersects(&bbox(&a)), "{b:?} over {:?}", bbox(&a));
         assert_eq!(
@@ -377,7 +377,7 @@ mod tests {
         );
 
         let c = zigzag(upper_left);
-        occ.mark_series(line, &[c.clone()], 1.0);
+        occ.mark_series(line, std::slice::from_ref(&c), 1.0);
         let b = place_box(&occ, w, h);
         for data in [bbox(&a), bbox(&c)] {
             assert!(!b.intersects(&data), "{b:?} over {data:?}");
