@@ -42,6 +42,7 @@ pub mod integrate;
 pub mod lti;
 pub mod model;
 pub mod params;
+pub mod plot;
 pub mod preset;
 pub mod report;
 pub mod scenario;

@@ -2,19 +2,17 @@
 //! PNG + SVG plots (Table 1 Bode, Fig. 12 transmissibility, Figs. 13–14 cycloid,
 //! Figs. 15–16 random ride) — with an honest *paper value | this twin | note* table.
 
-pub mod plot;
-
 use crate::analysis::frequency_response::{self as fr, FrequencyPoint};
 use crate::analysis::metrics;
 use crate::control::ControlLaw;
 use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::Params;
+use crate::plot::{self, Figure, Panel, Scale, Series, SeriesStyle};
 use crate::preset::write_atomic;
 use crate::scenario::{Cycloid, PlatformMotion, RandomRide};
 use crate::simulation::{SimError, Trace};
 use num_complex::Complex64;
-use plot::{Figure, Panel, Scale, Series, SeriesStyle};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
