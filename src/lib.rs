@@ -41,4 +41,5 @@ pub mod params;
 pub mod preset;
 pub mod report;
 pub mod scenario;
+pub mod seat_test;
 pub mod simulation;

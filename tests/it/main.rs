@@ -11,3 +11,4 @@ mod integrator;
 mod paper;
 mod physics;
 mod presets;
+mod seat_test;
