@@ -184,12 +184,6 @@ fn response_figure(r: &SeatTestResult, path: &Path) -> Result<(), SeatReportErro
         "displacement [mm]",
     );
     stroke.series = vec![
-        Series::line(
-            "u",
-            all.iter().map(|s| s.t).collect(),
-            all.iter().map(|s| 1e3 * s.u).collect(),
-            palette(2),
-        ),
         Series {
             label: "platform x".into(),
             x: all.iter().map(|s| s.t).collect(),
@@ -200,6 +194,12 @@ fn response_figure(r: &SeatTestResult, path: &Path) -> Result<(), SeatReportErro
                 dashed: false,
             },
         },
+        Series::line(
+            "u",
+            all.iter().map(|s| s.t).collect(),
+            all.iter().map(|s| 1e3 * s.u).collect(),
+            palette(2),
+        ),
     ];
     stroke.hlines = vec![
         (
@@ -277,8 +277,9 @@ pub fn markdown(r: &SeatTestResult, class: &InputClass, preset: &str) -> String 
     let _ = writeln!(s, "## Generated platform motion\n");
     let _ = writeln!(
         s,
-        "A random-phase multisine on the record's frequency grid, 0.2–50 Hz, with quintic \
-         fades of {:.0} s at both ends (starts and ends at rest, no drift).\n",
+        "A random-phase multisine on the record's frequency grid, 0.2–50 Hz, its line \
+         amplitudes equalised to the target as a shaker controller equalises its drive, with \
+         quintic fades of {:.0} s at both ends (starts and ends at rest, no drift).\n",
         r.motion.fade_s
     );
     let _ = writeln!(s, "| check | value | requirement |\n|---|---|---|");
@@ -381,10 +382,10 @@ pub fn markdown(r: &SeatTestResult, class: &InputClass, preset: &str) -> String 
     let _ = writeln!(s, "## What this model is valid for\n");
     let _ = writeln!(
         s,
-        "The model is the paper's scaled rig: a {RIG_MASS_KG} kg suspended body on springs of \
+        "The model is the paper's scaled rig: a suspended body of {RIG_MASS_KG} kg on springs of \
          {:.0} N/m in total, a double-rod cylinder with ±{:.0} mm of stroke and a proportional \
          valve with its delay. The \"seat\" is that suspended body: no cushion and no human \
-         body are modelled, and gravity is not (the static load is taken as balanced).",
+         body are modelled, and gravity is not (the static load is taken as balanced).\n",
         n.spring_stiffness_n_per_m, n.half_stroke_mm
     );
     if (n.mass_kg - RIG_MASS_KG).abs() > 1e-9 {
@@ -393,7 +394,7 @@ pub fn markdown(r: &SeatTestResult, class: &InputClass, preset: &str) -> String 
             "This run uses {:.1} kg instead of the rig's {RIG_MASS_KG} kg: only the inertia \
              changes; springs, cylinder, valve and controller gains stay those of the rig, so \
              this is what the same hardware would do with that mass, not a model of a real \
-             seat built for it.",
+             seat built for it.\n",
             n.mass_kg
         );
     } else {
@@ -402,7 +403,7 @@ pub fn markdown(r: &SeatTestResult, class: &InputClass, preset: &str) -> String 
             "This run uses the rig's own {RIG_MASS_KG} kg. The standards test with people \
              (ISO 10326-1: a light and a heavy test person) or, for the run-in of ISO 7096, a \
              75 kg inert mass (both from secondary notes, not read in the standards); use \
-             `--mass 75` to see the rig's hardware carry 75 kg."
+             `--mass 75` to see the rig's hardware carry 75 kg.\n"
         );
     }
     let _ = writeln!(

@@ -20,6 +20,13 @@
 //! `√(target/estimate)`, repeat (`ClassMotion::equalise`). The phases stay random; only the
 //! amplitudes move, by a few tens of per cent at most.
 //!
+//! **The tolerance is met for that estimator** (Welch, Hann, 16.384 s segments, 50 % overlap,
+//! over the steady part): below 3 % of the peak for every class. Measured at other
+//! resolutions on the same 3-min records (16 classes × seeds 1–2), a record scatters more, as
+//! any random record of that length does: up to 21 % of the peak with 8.192 s segments and
+//! up to 67 % with 32.768 s segments (9 averages). The standards' own analysis settings were
+//! not read; say which estimator a tolerance claim refers to.
+//!
 //! # The check
 //!
 //! [`welch_psd`] is the plain Welch estimate (Hann window, 50 % overlap, mean removed per
@@ -227,12 +234,15 @@ impl ClassMotion {
     ) {
         let (_, peak) = self.class.peak();
         let range = self.steady_range();
-        for _ in 0..EQUALISATION_PASSES {
+        let mut settled = [false; EQUALISATION_SEGMENTS.len()];
+        for pass in 0..EQUALISATION_PASSES {
+            // Alternate between the resolutions, so the record meets the target at each.
+            let which = pass % EQUALISATION_SEGMENTS.len();
             let xdd = inverse(spec);
             let Some(steady) = xdd.get(range.clone()) else {
                 return;
             };
-            let Ok(est) = welch_psd(steady, CLASS_RATE_HZ, WELCH_SEGMENT) else {
+            let Ok(est) = welch_psd(steady, CLASS_RATE_HZ, EQUALISATION_SEGMENTS[which]) else {
                 return;
             };
             let mut worst: f64 = 0.0;
@@ -249,9 +259,15 @@ impl ClassMotion {
                     (g / p).sqrt().clamp(0.5, 2.0)
                 })
                 .collect();
-            if worst <= EQUALISATION_GOAL {
+            settled[which] = worst <= EQUALISATION_GOAL;
+            if settled.iter().all(|s| *s) {
                 return;
             }
+            if settled[which] {
+                continue;
+            }
+            // Moving the lines may unsettle the other resolution: measure it again.
+            settled.iter_mut().for_each(|s| *s = false);
             let bin = est.freq_hz.get(1).copied().unwrap_or(1.0);
             for (k, line) in spec.iter_mut().enumerate() {
                 let pos = k as f64 * df / bin;
@@ -265,6 +281,11 @@ impl ClassMotion {
         }
     }
 }
+
+/// Welch segments [samples] the drive is equalised for (taken in turn when there are
+/// several): the check's own, 16.384 s. Equalising for 8.192 s segments as well was tried and
+/// does not converge for every class: the two resolutions pull the same lines apart.
+pub const EQUALISATION_SEGMENTS: [usize; 1] = [WELCH_SEGMENT];
 
 /// Passes of the drive equalisation at most.
 pub const EQUALISATION_PASSES: usize = 20;
