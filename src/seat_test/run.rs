@@ -153,7 +153,7 @@ pub fn run_seat_test(
     params: &Params,
     opts: &SeatTestOptions,
 ) -> Result<SeatTestResult, SeatTestError> {
-    let mut params = params.clone();
+    let mut params = *params;
     if let Some(m) = opts.mass_kg {
         params.body.mass_kg = m;
     }
