@@ -25,9 +25,9 @@
 //!
 //! `G0` is *not* the peak of the PSD: the band-pass product stays below 1 (for AG1 the peak is
 //! 5.55, not 9.25 (m/s²)²/Hz). The tolerance is ±10 % of the true peak
-//! ([`InputClass::peak`]), as `hvtestspectrum.m` computes it; that it comes from
-//! ISO 10326-1 clause 8.1, which the application standards cite, is as the toolbox and the
-//! standards' tables of contents show, not read in the standard.
+//! ([`InputClass::peak`]), as `hvtestspectrum.m` computes it. ISO 5007's public table of
+//! contents has a clause "Tolerances on input vibration (see ISO 10326-1:1992, 8.1)"; the
+//! ±10 % figure itself is the toolbox's, not read in the standard.
 //!
 //! Further uncertain points, stated once here and per class in [`InputClass::note`]:
 //! * the toolbox cites ISO 7096:2000; the 2020 edition (which adds machines such as crawler
