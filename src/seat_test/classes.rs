@@ -44,7 +44,7 @@
 pub struct Butterworth {
     /// Order `n` (poles), 1 ..= 8.
     pub order: u8,
-    /// Corner frequency `fc` [Hz].
+    /// Corner frequency `fc` \[Hz\].
     pub corner_hz: f64,
 }
 
@@ -101,7 +101,7 @@ pub struct InputClass {
     /// Overall rms of the platform acceleration [m/s²] that `hvtestsignal.m` states, measured
     /// in [`Self::rms_band_hz`].
     pub rms_m_s2: f64,
-    /// Band of that rms [Hz] (8-pole Butterworth edges); also the band over which the
+    /// Band of that rms \[Hz\] (8-pole Butterworth edges); also the band over which the
     /// generated PSD is checked.
     pub rms_band_hz: (f64, f64),
     /// What is uncertain about this class in particular (empty if nothing beyond the module's
@@ -113,7 +113,7 @@ pub struct InputClass {
 /// (`hvtestspectrum.m`: `G ± 0.1 · max G`).
 pub const PSD_TOLERANCE_OF_PEAK: f64 = 0.10;
 
-/// Band limits of the stated rms [Hz]: 0.89–11.22 Hz (1–10 Hz third-octave edges) …
+/// Band limits of the stated rms \[Hz\]: 0.89–11.22 Hz (1–10 Hz third-octave edges) …
 const BAND_11: (f64, f64) = (0.89, 11.22);
 /// … or 0.89–17.78 Hz (1–16 Hz third-octave edges).
 const BAND_17: (f64, f64) = (0.89, 17.78);
@@ -339,7 +339,7 @@ impl InputClass {
         self.g0 * self.high_pass.high_pass_sq(f_hz) * self.low_pass.low_pass_sq(f_hz)
     }
 
-    /// Peak of the target PSD: `(frequency [Hz], value [(m/s²)²/Hz])`, found on a 1 mHz grid
+    /// Peak of the target PSD: `(frequency \[Hz\], value [(m/s²)²/Hz])`, found on a 1 mHz grid
     /// from 0.1 to 50 Hz and refined by golden-section search.
     pub fn peak(&self) -> (f64, f64) {
         let df = 1e-3;
@@ -405,7 +405,7 @@ impl InputClass {
         sum * h / 3.0
     }
 
-    /// `[low, high]` frequencies [Hz] where the target PSD is at least `fraction` of its peak.
+    /// `[low, high]` frequencies \[Hz\] where the target PSD is at least `fraction` of its peak.
     pub fn band_above(&self, fraction: f64) -> (f64, f64) {
         let (fp, gp) = self.peak();
         let level = fraction * gp;

@@ -7,7 +7,7 @@ use crate::report::plot::{self, Figure, Panel, Series, SeriesStyle, palette};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// Suspended mass of the paper's rig [kg].
+/// Suspended mass of the paper's rig \[kg\].
 pub const RIG_MASS_KG: f64 = 11.7;
 
 /// Why the report could not be written.
@@ -54,7 +54,7 @@ pub fn write_seat_test(
     Ok(())
 }
 
-/// The x range [Hz] of the spectra: up to the class band's upper edge, at most 20 Hz.
+/// The x range \[Hz\] of the spectra: up to the class band's upper edge, at most 20 Hz.
 fn freq_range(class: &InputClass) -> (f64, f64) {
     (0.0, class.rms_band_hz.1.min(20.0))
 }

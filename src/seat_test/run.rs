@@ -14,11 +14,11 @@ use crate::params::{ParamError, Params};
 use crate::scenario::PlatformMotion;
 use crate::simulation::{SimError, Trace};
 
-/// Default duration of a seat-test record [s], fades included (a choice made here: the
+/// Default duration of a seat-test record \[s\], fades included (a choice made here: the
 /// standards' run length was not read).
 pub const DEFAULT_DURATION_S: f64 = 180.0;
 
-/// Output rate of the seat-test trace [Hz] (the Wk filter wants ≥ 1 kHz for 0.5 % accuracy).
+/// Output rate of the seat-test trace \[Hz\] (the Wk filter wants ≥ 1 kHz for 0.5 % accuracy).
 pub const SEAT_TEST_RATE_HZ: f64 = 1000.0;
 
 /// Crest factor above which ISO 2631-1 (§6.2.1) says the weighted rms may underestimate and
@@ -49,9 +49,9 @@ pub struct SeatTestOptions {
     pub class: &'static InputClass,
     /// Which model.
     pub model: ModelKind,
-    /// Suspended mass [kg]; `None` keeps the preset's (the paper's rig: 11.7 kg).
+    /// Suspended mass \[kg\]; `None` keeps the preset's (the paper's rig: 11.7 kg).
     pub mass_kg: Option<f64>,
-    /// Record length, fades included [s].
+    /// Record length, fades included \[s\].
     pub duration_s: f64,
     /// Seed of the class motion.
     pub seed: u64,
@@ -79,7 +79,7 @@ pub struct SeatTestNumbers {
     pub standard: String,
     /// Model run.
     pub model: String,
-    /// Suspended mass used [kg].
+    /// Suspended mass used \[kg\].
     pub mass_kg: f64,
     /// Wk-weighted rms of the platform (floor) acceleration [m/s²].
     pub aw_floor: f64,
@@ -97,11 +97,11 @@ pub struct SeatTestNumbers {
     pub crest_factor_floor: f64,
     /// Crest factor of the weighted seat acceleration [-].
     pub crest_factor_seat: f64,
-    /// Largest |u| over the whole run [mm].
+    /// Largest |u| over the whole run \[mm\].
     pub max_abs_u_mm: f64,
-    /// Half stroke: the end stops sit at ±this [mm].
+    /// Half stroke: the end stops sit at ±this \[mm\].
     pub half_stroke_mm: f64,
-    /// Total spring stiffness of the preset [N/m].
+    /// Total spring stiffness of the preset \[N/m\].
     pub spring_stiffness_n_per_m: f64,
     /// End-stop contacts (twin) or stroke overruns (linear, passive: no stops modelled).
     pub contacts: usize,
@@ -109,7 +109,7 @@ pub struct SeatTestNumbers {
     pub psd_error_percent: f64,
     /// Whether that is within the ±10 % tolerance.
     pub psd_within_tolerance: bool,
-    /// Where the largest deviation is [Hz].
+    /// Where the largest deviation is \[Hz\].
     pub psd_error_at_hz: f64,
     /// rms of the platform acceleration in the class band [m/s²].
     pub floor_band_rms: f64,
@@ -117,15 +117,15 @@ pub struct SeatTestNumbers {
     pub target_band_rms: f64,
     /// rms the source states for the class [m/s²].
     pub stated_rms: f64,
-    /// Largest |x| of the platform: the travel the class needs [mm].
+    /// Largest |x| of the platform: the travel the class needs \[mm\].
     pub platform_max_abs_x_mm: f64,
-    /// Peak-to-peak platform displacement [mm].
+    /// Peak-to-peak platform displacement \[mm\].
     pub platform_peak_to_peak_mm: f64,
-    /// rms platform displacement [mm].
+    /// rms platform displacement \[mm\].
     pub platform_rms_x_mm: f64,
-    /// Record length [s].
+    /// Record length \[s\].
     pub duration_s: f64,
-    /// Evaluated interval (fades left out) [s].
+    /// Evaluated interval (fades left out) \[s\].
     pub evaluated_s: f64,
     /// Seed of the class motion.
     pub seed: u64,

@@ -43,15 +43,15 @@ use rand_chacha::ChaCha8Rng;
 use realfft::RealFftPlanner;
 use std::f64::consts::PI;
 
-/// Sample rate of the generated motions [Hz] (as the random ride's).
+/// Sample rate of the generated motions \[Hz\] (as the random ride's).
 pub const CLASS_RATE_HZ: f64 = crate::scenario::RANDOM_RIDE_RATE_HZ;
 
-/// Band of the generated lines [Hz]. Below 0.2 Hz every class's PSD is below 1e-4 of its peak
+/// Band of the generated lines \[Hz\]. Below 0.2 Hz every class's PSD is below 1e-4 of its peak
 /// but would dominate the displacement; above 50 Hz the slowest tail (EM5) is below 0.5 % of
 /// the peak.
 pub const GEN_BAND_HZ: (f64, f64) = (0.2, 50.0);
 
-/// Welch segment length used by the checks [samples]: 16.384 s at 1 kHz, `Δf` = 0.061 Hz
+/// Welch segment length used by the checks \[samples\]: 16.384 s at 1 kHz, `Δf` = 0.061 Hz
 /// (fine enough for the 0.5 Hz-wide AG bands; a choice made here, not the standard's).
 pub const WELCH_SEGMENT: usize = 16_384;
 
@@ -63,11 +63,11 @@ pub enum SignalError {
     OutOfRange {
         /// Which setting.
         name: &'static str,
-        /// Its value [s].
+        /// Its value \[s\].
         value: f64,
-        /// Smallest allowed [s].
+        /// Smallest allowed \[s\].
         min: f64,
-        /// Largest allowed [s].
+        /// Largest allowed \[s\].
         max: f64,
     },
     /// A signal too short for one Welch segment.
@@ -85,9 +85,9 @@ pub enum SignalError {
 pub struct ClassMotion {
     /// The class.
     pub class: &'static InputClass,
-    /// Duration of the whole record, fades included [s], 20 ..= 3600.
+    /// Duration of the whole record, fades included \[s\], 20 ..= 3600.
     pub duration_s: f64,
-    /// Length of each quintic fade (start and end) [s], 0.5 ..= duration/4.
+    /// Length of each quintic fade (start and end) \[s\], 0.5 ..= duration/4.
     pub fade_s: f64,
     /// Seed of the phases (ChaCha8): same seed, same record, bit for bit.
     pub seed: u64,
@@ -141,7 +141,7 @@ impl ClassMotion {
         fade..=n.saturating_sub(1 + fade)
     }
 
-    /// The interval free of fades `[start, end]` [s] (see [`Self::steady_range`]).
+    /// The interval free of fades `[start, end]` \[s\] (see [`Self::steady_range`]).
     pub fn steady_interval_s(&self) -> (f64, f64) {
         let r = self.steady_range();
         (
@@ -282,7 +282,7 @@ impl ClassMotion {
     }
 }
 
-/// Welch segments [samples] the drive is equalised for (taken in turn when there are
+/// Welch segments \[samples\] the drive is equalised for (taken in turn when there are
 /// several): the check's own, 16.384 s. Equalising for 8.192 s segments as well was tried and
 /// does not converge for every class: the two resolutions pull the same lines apart.
 pub const EQUALISATION_SEGMENTS: [usize; 1] = [WELCH_SEGMENT];
@@ -310,7 +310,7 @@ fn faded_both_ends(t: f64, t_end: f64, fade: f64, m: PlatformSample) -> Platform
 /// A one-sided PSD estimate.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Psd {
-    /// Frequencies [Hz], `k·fs/N` for `k = 0 ..= N/2`.
+    /// Frequencies \[Hz\], `k·fs/N` for `k = 0 ..= N/2`.
     pub freq_hz: Vec<f64>,
     /// PSD [(unit)²/Hz].
     pub psd: Vec<f64>,
@@ -318,7 +318,7 @@ pub struct Psd {
     pub segments: usize,
 }
 
-/// Welch's estimate of the one-sided PSD of `x` sampled at `fs` [Hz]: Hann-windowed segments
+/// Welch's estimate of the one-sided PSD of `x` sampled at `fs` \[Hz\]: Hann-windowed segments
 /// of `segment` samples (even, ≥ 16), 50 % overlap, each segment's mean removed, scaled so that
 /// `Σ PSD·Δf` equals the variance.
 pub fn welch_psd(x: &[f64], fs: f64, segment: usize) -> Result<Psd, SignalError> {
@@ -407,7 +407,7 @@ pub struct PsdCheck {
     /// Largest |PSD − target| in the class's rms band, as a fraction of the target's peak [-]
     /// (the tolerance is [`super::classes::PSD_TOLERANCE_OF_PEAK`]).
     pub max_error_of_peak: f64,
-    /// Where that largest deviation is [Hz].
+    /// Where that largest deviation is \[Hz\].
     pub at_hz: f64,
     /// Peak of the target [(m/s²)²/Hz].
     pub target_peak: f64,
