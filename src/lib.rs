@@ -46,5 +46,6 @@ pub mod plot;
 pub mod preset;
 pub mod report;
 pub mod scenario;
+pub mod seat_test;
 pub mod simulation;
 pub mod tune;

@@ -55,6 +55,8 @@ enum ScenarioArg {
     Sine,
     /// Valve linear chirp from --f0 to --f1, platform still, open loop.
     Chirp,
+    /// A seat-test input spectral class (--class NAME: EM1–EM9, IT1–IT4, AG1–AG3), closed loop.
+    Class,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -107,6 +109,9 @@ enum Command {
         /// A platform record (CSV: `t` and `x` and/or `xdd`, SI); runs closed loop on it.
         #[arg(long)]
         excitation: Option<PathBuf>,
+        /// Input spectral class of `--scenario class` (EM1–EM9, IT1–IT4, AG1–AG3).
+        #[arg(long)]
+        class: Option<String>,
         /// Output sample rate [Hz].
         #[arg(long, default_value_t = 1000.0)]
         rate: f64,
@@ -171,6 +176,9 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// A standard laboratory seat test: a seat-test input class on the platform, closed loop;
+    /// writes report.md, numbers.json and PNG+SVG plots to DIR.
+    SeatTest(SeatTestArgs),
     /// Real-time factors, accuracy against a 10× finer step, and the Table 1 sweep time.
     Bench {
         /// Preset file or shipped preset name.
@@ -209,6 +217,92 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+}
+
+/// Arguments of `seat-twin seat-test`.
+#[derive(clap::Args)]
+struct SeatTestArgs {
+    /// Input spectral class: EM1–EM9 (ISO 7096), IT1–IT4 (EN 13490), AG1–AG3 (ISO 5007).
+    #[arg(long)]
+    class: String,
+    /// Preset file or shipped preset name.
+    #[arg(long, default_value = "paper")]
+    preset: String,
+    #[arg(long, value_enum, default_value = "twin")]
+    model: ModelArg,
+    /// Suspended mass [kg] (default: the preset's; the paper's rig carries 11.7 kg).
+    #[arg(long)]
+    mass: Option<f64>,
+    /// Record length including 2 s fades at both ends [s].
+    #[arg(long, default_value_t = seat_twin::seat_test::run::DEFAULT_DURATION_S)]
+    duration: f64,
+    /// Seed of the class motion's phases.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn find_class(name: &str) -> Result<&'static seat_twin::seat_test::InputClass> {
+    seat_twin::seat_test::find(name).with_context(|| {
+        format!(
+            "unknown input class `{name}`; the classes are {}",
+            seat_twin::seat_test::classes::names()
+        )
+    })
+}
+
+fn run_seat_test_command(a: SeatTestArgs) -> Result<()> {
+    use seat_twin::seat_test::{SeatTestOptions, report, run_seat_test};
+    let class = find_class(&a.class)?;
+    let params = load_params(&a.preset)?;
+    if let Some(m) = a.mass {
+        check_range("--mass", m, 1.0, 500.0, "kg")?;
+    }
+    let opts = SeatTestOptions {
+        mass_kg: a.mass,
+        duration_s: a.duration,
+        seed: a.seed,
+        ..SeatTestOptions::new(class, a.model.into())
+    };
+    let result = run_seat_test(&params, &opts).with_context(|| {
+        format!(
+            "seat test {} on the {} model",
+            class.name,
+            opts.model.name()
+        )
+    })?;
+    report::write_seat_test(&result, class, &a.preset, &a.out)
+        .with_context(|| format!("writing the seat-test report to {}", a.out.display()))?;
+    let n = &result.numbers;
+    println!(
+        "{} on the {} model, {:.1} kg: a_w floor {:.3} m/s², seat {:.3} m/s², SEAT {:.1} %, \
+         VDV seat {:.3} m/s^1.75, max |u| {:.1} mm, {} contact(s), PSD error {:.1} % of peak{}",
+        n.class,
+        n.model,
+        n.mass_kg,
+        n.aw_floor,
+        n.aw_seat,
+        n.seat_percent,
+        n.vdv_seat,
+        n.max_abs_u_mm,
+        n.contacts,
+        n.psd_error_percent,
+        if n.psd_within_tolerance {
+            ""
+        } else {
+            " (outside the ±10 % tolerance)"
+        }
+    );
+    if n.contacts > 0 {
+        eprintln!(
+            "warning: the seat reached its ±{:.0} mm stops {} time(s)",
+            n.half_stroke_mm, n.contacts
+        );
+    }
+    println!("report written to {}", a.out.join("report.md").display());
+    Ok(())
 }
 
 fn main() {
@@ -260,6 +354,7 @@ fn run(cmd: Command) -> Result<()> {
             f0,
             f1,
             excitation,
+            class,
             rate,
             out,
         } => {
@@ -336,8 +431,34 @@ fn run(cmd: Command) -> Result<()> {
                         format!("valve chirp {f0}–{f1} Hz {amp} V"),
                     )
                 }
+                (Some(ScenarioArg::Class), None) => {
+                    let Some(name) = class.as_deref() else {
+                        bail!(
+                            "--scenario class needs --class NAME ({})",
+                            seat_twin::seat_test::classes::names()
+                        );
+                    };
+                    let class = find_class(name)?;
+                    let motion = seat_twin::seat_test::ClassMotion {
+                        seed,
+                        ..seat_twin::seat_test::ClassMotion::new(
+                            class,
+                            duration.unwrap_or(seat_twin::seat_test::run::DEFAULT_DURATION_S),
+                        )
+                    };
+                    let sampled = motion.generate()?;
+                    let d = sampled.duration_s();
+                    (
+                        experiments::closed_loop(&params),
+                        PlatformMotion::Sampled(sampled),
+                        d,
+                        format!("seat-test input class {} seed {seed}", class.name),
+                    )
+                }
                 (None, None) => {
-                    bail!("give --scenario cycloid|random|sine|chirp or --excitation FILE.csv")
+                    bail!(
+                        "give --scenario cycloid|random|sine|chirp|class or --excitation FILE.csv"
+                    )
                 }
             };
             let duration = duration.unwrap_or(default_duration);
@@ -553,6 +674,7 @@ fn run(cmd: Command) -> Result<()> {
             );
             Ok(())
         }
+        Command::SeatTest(args) => run_seat_test_command(args),
         Command::Bench { preset } => {
             let params = load_params(&preset)?;
             let text = seat_twin::bench::run_bench(&params)?;

@@ -12,4 +12,5 @@ mod integrator;
 mod paper;
 mod physics;
 mod presets;
+mod seat_test;
 mod tune;
