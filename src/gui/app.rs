@@ -1049,9 +1049,12 @@ impl SeatTwinApp {
                     .show(ui, |ui| {
                         ui.horizontal_wrapped(|ui| {
                             ui.label(
-                                RichText::new(format!("Engine stopped: {err}"))
-                                    .color(Color32::WHITE)
-                                    .strong(),
+                                RichText::new(format!(
+                                    "Engine stopped: {}",
+                                    super::format::shorten_numbers(&err)
+                                ))
+                                .color(Color32::WHITE)
+                                .strong(),
                             );
                             if ui.button("Reset").clicked() {
                                 self.reset();

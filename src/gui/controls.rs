@@ -184,7 +184,7 @@ fn knobs_rig() -> [Knob; 4] {
 fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -> bool {
     let (lo, hi) = knob.accepted();
     let unit = knob.suffix.trim();
-    let fmt = |v: f64| super::format::value_pm(v, f64::NAN);
+    let fmt = super::format::compact;
     if !(shown.is_finite() && shown >= lo && shown <= hi) {
         errors.insert(
             knob.label,
@@ -203,7 +203,8 @@ fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -
     match candidate.validate() {
         Ok(()) => {
             *p = candidate;
-            errors.remove(knob.label);
+            // A message is about the last attempt: an accepted value anywhere ends it.
+            errors.clear();
             true
         }
         Err(e) => {

@@ -61,6 +61,67 @@ pub fn fitted(name: &str, value_si: f64, std_si: f64) -> String {
     }
 }
 
+/// A number with at most four significant digits and no trailing zeros ("1", "200",
+/// "0.1506", "−5").
+pub fn compact(v: f64) -> String {
+    let s = format!("{v:.prec$}", prec = decimals_for(v));
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    };
+    minus(s)
+}
+
+/// Rewrites every number in `text` that carries more than six significant digits
+/// ("1.000365001548847e0", "80.871000") with four ("1", "80.87"); other text is kept.
+pub fn shorten_numbers(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let b = text.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        let starts = b[i].is_ascii_digit()
+            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'));
+        if !starts {
+            let c = text[i..].chars().next().unwrap_or(' ');
+            out.push(c);
+            i += c.len_utf8();
+            continue;
+        }
+        let mut j = i;
+        while j < b.len() && (b[j].is_ascii_digit() || b[j] == b'.') {
+            j += 1;
+        }
+        if j < b.len() && (b[j] == b'e' || b[j] == b'E') {
+            let mut k = j + 1;
+            if k < b.len() && (b[k] == b'-' || b[k] == b'+') {
+                k += 1;
+            }
+            if k < b.len() && b[k].is_ascii_digit() {
+                while k < b.len() && b[k].is_ascii_digit() {
+                    k += 1;
+                }
+                j = k;
+            }
+        }
+        let token = &text[i..j];
+        let digits = token
+            .split(['e', 'E'])
+            .next()
+            .unwrap_or("")
+            .chars()
+            .filter(|c| c.is_ascii_digit())
+            .collect::<String>();
+        let significant = digits.trim_start_matches('0').len();
+        match token.parse::<f64>() {
+            Ok(v) if significant > 6 || token.contains(['e', 'E']) => out.push_str(&compact(v)),
+            _ => out.push_str(token),
+        }
+        i = j;
+    }
+    out
+}
+
 fn minus(s: String) -> String {
     s.replacen('-', "−", 1)
 }
@@ -173,6 +234,23 @@ mod tests {
             fitted("bias_v", -0.0123, 1e-9),
             "V_bias = −12.30 ± <0.01 mV"
         );
+    }
+
+    #[test]
+    fn long_numbers_in_messages_are_shortened() {
+        assert_eq!(
+            shorten_numbers(
+                "linear model diverged at t = 80.871000 s: state u [m] = 1.000365001548847e0 (bound ±1e0); p1 2"
+            ),
+            "linear model diverged at t = 80.87 s: state u [m] = 1 (bound ±1); p1 2"
+        );
+        assert_eq!(
+            shorten_numbers("max_step_s = 0.5, x2"),
+            "max_step_s = 0.5, x2"
+        );
+        assert_eq!(compact(200.0), "200");
+        assert_eq!(compact(-5.0), "−5");
+        assert_eq!(compact(0.1506), "0.1506");
     }
 
     #[test]

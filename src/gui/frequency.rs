@@ -503,9 +503,11 @@ fn freq_plot<'a>(id: &str, y_label: &str, unit: &'static str, height: f32) -> Pl
         .link_axis(egui::Id::unique("freq"), [true, false])
 }
 
-/// Colour of the simulated (sine dwell) points: darker than the twin's line, so points on
-/// the line stay visible.
-pub const DWELL: Color32 = Color32::from_rgb(10, 30, 80);
+/// Colour of the simulated (sine dwell) points: the theme's strongest text colour (white on
+/// dark, black on light), so points on the twin's blue line stay visible in either theme.
+pub fn dwell_color(ui: &egui::Ui) -> Color32 {
+    ui.visuals().strong_text_color()
+}
 
 /// What the frequency panel asks the app to do.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -621,6 +623,7 @@ pub fn frequency_ui(
         (1.6, LineStyle::dotted_dense()),
     ];
     let dwell_name = "twin simulated (dwell)";
+    let dwell_c = dwell_color(ui);
     let t_items = |ui: &mut egui::Ui, id: &str, hidden: &mut BTreeSet<String>| {
         let mut items: Vec<LegendItem<'_>> = (0..3)
             .map(|i| LegendItem {
@@ -632,7 +635,7 @@ pub fn frequency_ui(
         if show_dwell {
             items.push(LegendItem {
                 name: dwell_name,
-                color: DWELL,
+                color: dwell_c,
                 swatch: Swatch::Marker,
             });
         }
@@ -661,7 +664,7 @@ pub fn frequency_ui(
         if show_dwell && !plotkit::hidden(&hid, "t_mag", dwell_name) {
             pu.points(
                 Points::new(dwell_name, dwell.mag.as_slice())
-                    .color(DWELL)
+                    .color(dwell_c)
                     .shape(MarkerShape::Diamond)
                     .radius(5.0)
                     .filled(true),
@@ -728,7 +731,7 @@ pub fn frequency_ui(
             let pts: Vec<PlotPoint> = shown_phase(&dwell.phase, unwrapped).concat();
             pu.points(
                 Points::new(dwell_name, PlotPoints::Owned(pts))
-                    .color(DWELL)
+                    .color(dwell_c)
                     .shape(MarkerShape::Diamond)
                     .radius(5.0)
                     .filled(true),
@@ -752,7 +755,7 @@ pub fn frequency_ui(
         if show_dwell {
             items.push(LegendItem {
                 name: b_names[2],
-                color: DWELL,
+                color: dwell_c,
                 swatch: Swatch::Marker,
             });
         }
@@ -796,7 +799,7 @@ pub fn frequency_ui(
             if show_dwell && !plotkit::hidden(hid, id, b_names[2]) {
                 pu.points(
                     Points::new(b_names[2], PlotPoints::Owned(seg(points).concat()))
-                        .color(DWELL)
+                        .color(dwell_c)
                         .shape(MarkerShape::Diamond)
                         .radius(5.0)
                         .filled(true),
