@@ -114,7 +114,9 @@ pub fn shorten_numbers(text: &str) -> String {
             .collect::<String>();
         let significant = digits.trim_start_matches('0').len();
         match token.parse::<f64>() {
-            Ok(v) if significant > 6 || token.contains(['e', 'E']) => out.push_str(&compact(v)),
+            // Four significant digits, trailing zeros kept ("1.000" says it is not exactly 1).
+            Ok(v) if significant > 6 => out.push_str(&value_pm(v, f64::NAN)),
+            Ok(v) if token.contains(['e', 'E']) => out.push_str(&compact(v)),
             _ => out.push_str(token),
         }
         i = j;
@@ -242,7 +244,7 @@ mod tests {
             shorten_numbers(
                 "linear model diverged at t = 80.871000 s: state u [m] = 1.000365001548847e0 (bound ±1e0); p1 2"
             ),
-            "linear model diverged at t = 80.87 s: state u [m] = 1 (bound ±1); p1 2"
+            "linear model diverged at t = 80.87 s: state u [m] = 1.000 (bound ±1); p1 2"
         );
         assert_eq!(
             shorten_numbers("max_step_s = 0.5, x2"),

@@ -835,7 +835,10 @@ pub fn frequency_ui(
 }
 
 fn margin_text(m: &LoopMargins) -> String {
-    let gm = if m.gain_margin.is_finite() {
+    let gm = if m.gain_margin.is_finite() && m.gain_margin <= 0.0 {
+        // No gain keeps it stable (positive feedback).
+        "−∞ dB".into()
+    } else if m.gain_margin.is_finite() {
         format!("{:.1} dB", db(m.gain_margin))
     } else {
         "∞".into()
