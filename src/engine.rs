@@ -177,6 +177,12 @@ pub enum Command {
     Reset,
     /// End the thread.
     Shutdown,
+    /// TEST HOOK, never sent by the app: the next engine step panics inside the
+    /// simulation, as an internal error would. It exercises the fault path (the step is
+    /// caught, [`Event::Error`] is sent, the thread waits for [`Command::Reset`]). Harmless
+    /// in production: it changes nothing but that one step, and nothing in the app sends it.
+    #[doc(hidden)]
+    InjectFault,
 }
 
 /// A batch of samples of the three models at the same instants.
@@ -197,9 +203,11 @@ pub enum Event {
     Samples(Batch),
     /// Progress and pacing.
     Status {
-        /// Simulated time [s].
+        /// Simulated time [s] since the last reset or new excitation. It keeps increasing
+        /// when the excitation ends and restarts by itself, like the scopes' time axis.
         t: f64,
-        /// Achieved simulated/wall time over the last second.
+        /// Achieved simulated/wall time over the last second while running (never negative;
+        /// 0 while paused or stopped).
         realtime_factor: f64,
         /// Running or paused.
         running: bool,
@@ -337,6 +345,13 @@ struct Loop<W: Fn()> {
     rtf_window: (Instant, f64),
     rtf: f64,
     seed_bump: u64,
+    /// Simulated time of the runs before the last automatic restart [s].
+    epoch: f64,
+    /// Simulated time stepped since the thread started [s] (monotonic; the real-time
+    /// factor is measured on it, so restarts cannot make it negative).
+    stepped: f64,
+    /// A fault injected by [`Command::InjectFault`] waits for the next step.
+    fault_armed: bool,
 }
 
 fn engine_loop<W: Fn()>(
@@ -361,6 +376,9 @@ fn engine_loop<W: Fn()>(
         rtf_window: (Instant::now(), 0.0),
         rtf: 0.0,
         seed_bump: 0,
+        epoch: 0.0,
+        stepped: 0.0,
+        fault_armed: false,
     };
     let tick = Duration::from_millis(10);
     loop {
@@ -402,6 +420,11 @@ impl<W: Fn()> Loop<W> {
         self.sim_anchor = self.sims.time();
     }
 
+    /// A new measuring window for the real-time factor (the pacing changed).
+    fn new_rtf_window(&mut self) {
+        self.rtf_window = (Instant::now(), self.stepped);
+    }
+
     fn restart(&mut self) {
         let excitation = match &self.excitation {
             Excitation::Random(r) => Excitation::Random(RandomRide {
@@ -429,32 +452,42 @@ impl<W: Fn()> Loop<W> {
             Command::SetExcitation(e) => {
                 self.excitation = *e;
                 self.seed_bump = 0;
+                self.epoch = 0.0;
                 self.restart();
             }
             Command::SetSpeed(s) => {
                 self.speed = s;
                 self.reanchor();
+                self.new_rtf_window();
             }
             Command::Run => {
                 self.running = true;
                 self.reanchor();
+                self.new_rtf_window();
             }
-            Command::Pause => self.running = false,
+            Command::Pause => {
+                self.running = false;
+                self.rtf = 0.0;
+            }
             Command::Reset => {
                 self.seed_bump = 0;
+                self.epoch = 0.0;
+                self.rtf = 0.0;
                 self.restart();
             }
             Command::Shutdown => return false,
+            Command::InjectFault => self.fault_armed = true,
         }
         self.status();
         true
     }
 
     fn status(&self) {
+        let running = self.running && !self.failed;
         self.send(Event::Status {
-            t: self.sims.time(),
-            realtime_factor: self.rtf,
-            running: self.running && !self.failed,
+            t: self.epoch + self.sims.time(),
+            realtime_factor: if running { self.rtf.max(0.0) } else { 0.0 },
+            running,
             params: Box::new(self.params),
         });
         (self.waker)();
@@ -473,7 +506,15 @@ impl<W: Fn()> Loop<W> {
         let t_end = target.min(self.sims.duration);
         let mut batch = Batch::default();
         let sims = &mut self.sims;
-        let result = std::panic::catch_unwind(AssertUnwindSafe(|| sims.advance(t_end, &mut batch)));
+        let t_before = sims.time();
+        let fault = std::mem::take(&mut self.fault_armed);
+        let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
+            if fault {
+                panic!("fault injected by Command::InjectFault (test hook)");
+            }
+            sims.advance(t_end, &mut batch)
+        }));
+        self.stepped += (self.sims.time() - t_before).max(0.0);
         if !batch.twin.is_empty() {
             self.send(Event::Samples(batch));
         }
@@ -504,11 +545,12 @@ impl<W: Fn()> Loop<W> {
         let (w0, s0) = self.rtf_window;
         let dt_wall = now.duration_since(w0).as_secs_f64();
         if dt_wall > 1.0 {
-            self.rtf = (self.sims.time() - s0) / dt_wall;
-            self.rtf_window = (now, self.sims.time());
+            self.rtf = (self.stepped - s0) / dt_wall;
+            self.rtf_window = (now, self.stepped);
         }
         if self.sims.time() >= self.sims.duration - 1e-9 && self.sims.duration.is_finite() {
             self.seed_bump += 1;
+            self.epoch += self.sims.time();
             self.restart();
             self.send(Event::Restarted);
         }

@@ -6,19 +6,19 @@
 
 use super::controls::{self, ExcitationAction, ExcitationEditor, ExcitationKind, LoadedRecord};
 use super::files::{self, CsvTable, Dialogs, Purpose, Writer};
-use super::frequency::{self, Analytic, Curves, Dwell};
+use super::frequency::{self, Analytic, Curves, Dwell, FreqAction, FreqView};
 use super::measured::{MeasuredAction, MeasuredData};
 use super::schematic;
 use super::scopes;
 use super::traces::{Ch, Traces};
 use super::units::{BAR_PER_PA, MM_PER_M};
 use crate::engine::{self, Command, EngineHandle, Event, Speed};
-use crate::params::Params;
+use crate::params::{ControllerParams, Params};
 use crate::plot::{Figure, Panel, Rgb, Scale, Series};
 use crate::preset::{self, Preset, PresetMeta};
 use egui::{Color32, Key, RichText};
 use serde::{Deserialize, Serialize};
-use std::collections::VecDeque;
+use std::collections::{BTreeSet, VecDeque};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -63,6 +63,8 @@ pub struct Settings {
     pub dwell_auto: bool,
     /// The excitation editor.
     pub excitation: ExcitationEditor,
+    /// Unwrapped phase in the frequency plots (default: wrapped into ±180°).
+    pub phase_unwrapped: bool,
 }
 
 impl Default for Settings {
@@ -75,6 +77,7 @@ impl Default for Settings {
             show_schematic: true,
             dwell_auto: true,
             excitation: ExcitationEditor::default(),
+            phase_unwrapped: false,
         }
     }
 }
@@ -196,6 +199,11 @@ pub struct SeatTwinApp {
     frame_stats: FrameStats,
     title: String,
     measured: MeasuredData,
+    field_errors: controls::FieldErrors,
+    hidden_curves: BTreeSet<String>,
+    last_stable: Option<ControllerParams>,
+    scope_frames: Vec<egui::Rect>,
+    path_prompt: Option<(Purpose, String)>,
 }
 
 impl SeatTwinApp {
@@ -259,6 +267,11 @@ impl SeatTwinApp {
             title: String::new(),
             measured,
             settings,
+            field_errors: controls::FieldErrors::new(),
+            hidden_curves: BTreeSet::new(),
+            last_stable: None,
+            scope_frames: Vec::new(),
+            path_prompt: None,
         };
         if app.settings.excitation.kind == ExcitationKind::Record {
             // The record itself is not persisted.
@@ -357,6 +370,66 @@ impl SeatTwinApp {
     /// Frame timing.
     pub fn frame_stats(&self) -> &FrameStats {
         &self.frame_stats
+    }
+
+    /// Refused parameter values, by control label (shown next to the control).
+    pub fn field_errors(&self) -> &controls::FieldErrors {
+        &self.field_errors
+    }
+
+    /// Curves switched off in the legends (`plot/name`).
+    pub fn hidden_curves(&self) -> &BTreeSet<String> {
+        &self.hidden_curves
+    }
+
+    /// The last gains with which both loops were stable.
+    pub fn last_stable_gains(&self) -> Option<ControllerParams> {
+        self.last_stable
+    }
+
+    /// The scopes' data areas drawn last frame, top to bottom.
+    pub fn scope_frames(&self) -> &[egui::Rect] {
+        &self.scope_frames
+    }
+
+    /// The typed-path prompt shown when no file dialog is available: purpose and text.
+    pub fn path_prompt(&self) -> Option<&(Purpose, String)> {
+        self.path_prompt.as_ref()
+    }
+
+    /// The text of the toolbar clock (simulated time and real-time factor).
+    pub fn clock_text(&self) -> String {
+        let v = &self.engine_view;
+        if self.engine_error.is_some() {
+            format!("t = {:8.2} s   stopped", v.t)
+        } else if !v.running {
+            format!("t = {:8.2} s   paused", v.t)
+        } else {
+            format!(
+                "t = {:8.2} s   ×{:.2} real time",
+                v.t,
+                v.realtime_factor.max(0.0)
+            )
+        }
+    }
+
+    /// TEST HOOK: makes the engine's next step panic (see `Command::InjectFault`). The UI
+    /// never calls it.
+    #[doc(hidden)]
+    pub fn inject_engine_fault(&mut self) {
+        self.send(Command::InjectFault);
+    }
+
+    /// Puts back the last gains with which both loops were stable and restarts the
+    /// simulation from rest with them.
+    pub fn reset_to_last_stable_gains(&mut self) {
+        if let Some(g) = self.last_stable {
+            self.params.controller = g;
+            self.field_errors.remove("Kp");
+            self.field_errors.remove("Ki");
+            self.apply_params();
+        }
+        self.reset();
     }
 
     /// The shipped presets `(name, file)` in the Presets menu.
@@ -498,6 +571,16 @@ impl SeatTwinApp {
                 self.info(format!("record loaded from {}", path.display()));
             }
             Err(e) => self.error(format!("record not loaded: {e:#}")),
+        }
+    }
+
+    /// Switches the excitation editor to `kind` and applies it (restarts from rest).
+    pub fn set_excitation_kind(&mut self, kind: ExcitationKind) {
+        self.settings.excitation.kind = kind;
+        if let Some(p) = self.settings.excitation.problem() {
+            self.error(format!("excitation not applied: {p}"));
+        } else {
+            self.apply_excitation();
         }
     }
 
@@ -669,7 +752,7 @@ impl SeatTwinApp {
         ];
         let mut freq = Figure::new(
             format!(
-                "seat-twin — {} (Kp = {} V/m, Ki = {} V·s/m)",
+                "seat-twin — {} (Kp = {:.2} V/m, Ki = {:.2} V·s/m)",
                 self.preset.name,
                 self.params.controller.kp_v_per_m,
                 self.params.controller.ki_v_s_per_m
@@ -766,14 +849,72 @@ impl SeatTwinApp {
     }
 
     fn poll_files(&mut self, ctx: &egui::Context) {
-        while let Some((purpose, mut paths)) = self.dialogs.poll() {
+        while let Some((purpose, paths)) = self.dialogs.poll() {
             if paths.is_empty() {
-                self.info("no file chosen (dialog cancelled, or no file dialog available on this desktop)");
+                // Cancelled, or no dialog on this desktop: offer a typed path instead.
+                let suggested = match purpose {
+                    Purpose::ExportCsv => "traces.csv",
+                    Purpose::ExportPng => "plots.png",
+                    Purpose::SavePreset => "preset.toml",
+                    _ => "",
+                };
+                self.path_prompt = Some((purpose, suggested.to_string()));
+                self.info("no file chosen (dialog cancelled, or no file dialog on this desktop): type a path below");
                 continue;
             }
+            self.use_paths(purpose, paths, ctx);
+        }
+        while let Some(r) = self.writer.poll() {
+            match r {
+                Ok(m) => self.info(m),
+                Err(e) => self.error(format!("export failed: {e}")),
+            }
+        }
+    }
+
+    /// Opens the typed-path prompt for `purpose` (the fallback when no file dialog shows).
+    pub fn prompt_path(&mut self, purpose: Purpose, suggested: &str) {
+        self.path_prompt = Some((purpose, suggested.to_string()));
+    }
+
+    fn path_prompt_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
+        let Some((purpose, mut text)) = self.path_prompt.clone() else {
+            return;
+        };
+        let mut done: Option<bool> = None;
+        ui.horizontal(|ui| {
+            ui.label(format!("{} — file path:", purpose.title()));
+            let r = ui.add(
+                egui::TextEdit::singleline(&mut text)
+                    .id(egui::Id::unique("path_prompt"))
+                    .desired_width(360.0)
+                    .hint_text("path/to/file"),
+            );
+            let enter = r.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
+            if ui.button("OK").clicked() || enter {
+                done = Some(true);
+            }
+            if ui.button("Cancel").clicked() {
+                done = Some(false);
+            }
+        });
+        match done {
+            Some(true) if !text.trim().is_empty() => {
+                self.path_prompt = None;
+                let path = PathBuf::from(text.trim());
+                self.use_paths(purpose, vec![path], ctx);
+            }
+            Some(true) => self.error("type a file path first"),
+            Some(false) => self.path_prompt = None,
+            None => self.path_prompt = Some((purpose, text)),
+        }
+    }
+
+    fn use_paths(&mut self, purpose: Purpose, mut paths: Vec<PathBuf>, ctx: &egui::Context) {
+        {
             if purpose == Purpose::LoadMeasured {
                 self.measured.load_files(paths);
-                continue;
+                return;
             }
             let path = paths.swap_remove(0);
             match purpose {
@@ -794,12 +935,6 @@ impl SeatTwinApp {
                     let figs = self.plot_figures();
                     self.writer.write_figures(ctx, stem, figs);
                 }
-            }
-        }
-        while let Some(r) = self.writer.poll() {
-            match r {
-                Ok(m) => self.info(m),
-                Err(e) => self.error(format!("export failed: {e}")),
             }
         }
     }
@@ -829,7 +964,15 @@ impl SeatTwinApp {
             MeasuredAction::Apply(p) => {
                 self.params = *p;
                 self.apply_params();
-                self.info("calibrated parameters applied to the live twin");
+                let effects = super::format::active_effects(&self.params);
+                self.info(if effects.is_empty() {
+                    "calibrated parameters applied to the live twin (no model effects)".to_string()
+                } else {
+                    format!(
+                        "calibrated parameters applied to the live twin; effects on: {}",
+                        effects.join("; ")
+                    )
+                });
             }
             MeasuredAction::ApplyAndSave(p) => {
                 self.params = *p;
@@ -863,6 +1006,9 @@ impl SeatTwinApp {
             egui::MenuBar::new().ui(ui, |ui| self.menu_ui(ui, &ctx));
         });
         egui::Panel::top("toolbar").show(ui, |ui| self.toolbar_ui(ui));
+        if self.path_prompt.is_some() {
+            egui::Panel::top("path_prompt").show(ui, |ui| self.path_prompt_ui(ui, &ctx));
+        }
 
         let mut params_changed = false;
         egui::Panel::left("controls")
@@ -878,7 +1024,14 @@ impl SeatTwinApp {
         }
         // Same frame as the slider: the analytic curves follow the edited parameters.
         self.analytic.update(&self.params);
-        let dwell_busy = self.dwell.poll(&self.params, self.settings.dwell_auto);
+        let unstable = self.analytic.curves().unstable();
+        if !unstable {
+            self.last_stable = Some(self.params.controller);
+        }
+        // No sine dwell of an unstable loop: it would only diverge.
+        let dwell_busy = self
+            .dwell
+            .poll(&self.params, self.settings.dwell_auto && !unstable);
 
         egui::Panel::right("side")
             .resizable(true)
@@ -896,29 +1049,59 @@ impl SeatTwinApp {
                     .show(ui, |ui| {
                         ui.horizontal_wrapped(|ui| {
                             ui.label(
-                                RichText::new(format!("Engine stopped: {err}"))
-                                    .color(Color32::WHITE)
-                                    .strong(),
+                                RichText::new(format!(
+                                    "Engine stopped: {}",
+                                    super::format::shorten_numbers(&err)
+                                ))
+                                .color(Color32::WHITE)
+                                .strong(),
                             );
                             if ui.button("Reset").clicked() {
                                 self.reset();
                             }
+                            if unstable
+                                && self.last_stable.is_some()
+                                && ui
+                                    .button("Reset to last stable gains")
+                                    .on_hover_text(
+                                        "The current gains make the loop unstable: Reset alone \
+                                         would diverge again",
+                                    )
+                                    .clicked()
+                            {
+                                self.reset_to_last_stable_gains();
+                            }
                         });
                     });
             }
+            let mut action = FreqAction::None;
             ui.columns(2, |cols| {
                 let t_scopes = Instant::now();
-                scopes::scopes_ui(&mut cols[0], &self.traces, &self.params);
+                self.scope_frames = scopes::scopes_ui(
+                    &mut cols[0],
+                    &self.traces,
+                    &self.params,
+                    &mut self.hidden_curves,
+                );
                 self.frame_stats.scopes_ms = t_scopes.elapsed().as_secs_f64() * 1e3;
                 let t_freq = Instant::now();
-                frequency::frequency_ui(
+                let last_stable = self.last_stable.filter(|g| *g != self.params.controller);
+                action = frequency::frequency_ui(
                     &mut cols[1],
                     self.analytic.curves(),
                     &mut self.dwell,
                     &self.params,
+                    FreqView {
+                        phase_unwrapped: &mut self.settings.phase_unwrapped,
+                        hidden: &mut self.hidden_curves,
+                        last_stable,
+                    },
                 );
                 self.frame_stats.freq_ms = t_freq.elapsed().as_secs_f64() * 1e3;
             });
+            if action == FreqAction::ResetToStableGains {
+                self.reset_to_last_stable_gains();
+            }
         });
 
         if self.measured.open {
@@ -1045,10 +1228,8 @@ impl SeatTwinApp {
                 RichText::new("paused")
             };
             ui.label(state);
-            ui.monospace(format!(
-                "t = {:7.2} s   ×{:5.2} real time",
-                v.t, v.realtime_factor
-            ));
+            ui.monospace(self.clock_text())
+                .on_hover_text("Simulated time (the scopes' time axis) and how fast it runs");
             ui.separator();
             let modified = self.is_modified();
             let name = RichText::new(format!(
@@ -1072,9 +1253,18 @@ impl SeatTwinApp {
 
     fn controls_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) -> bool {
         ui.heading("Parameters");
-        let changed = controls::params_ui(ui, &mut self.params);
+        let changed = controls::params_ui(ui, &mut self.params, &mut self.field_errors);
         if let Some(e) = &self.param_error {
             ui.colored_label(Color32::from_rgb(220, 50, 40), e);
+        }
+        let effects = super::format::active_effects(&self.params);
+        ui.label(RichText::new("Model effects").strong());
+        if effects.is_empty() {
+            ui.weak("none (the paper's model)");
+        } else {
+            for e in effects {
+                ui.label(format!("on: {e}"));
+            }
         }
         ui.horizontal(|ui| {
             if ui
@@ -1082,6 +1272,7 @@ impl SeatTwinApp {
                 .clicked()
             {
                 self.params = self.preset.baseline;
+                self.field_errors.clear();
                 self.apply_params();
             }
         });
@@ -1097,6 +1288,7 @@ impl SeatTwinApp {
                 }
             }
             ExcitationAction::LoadRecord => self.dialogs.request(Purpose::LoadRecord, "", ctx),
+            ExcitationAction::LoadRecordPath(p) => self.load_record_file(&p),
         }
         if let Some(p) = self.dialogs.open() {
             ui.weak(format!("file dialog open ({p:?})…"));
@@ -1108,7 +1300,13 @@ impl SeatTwinApp {
         if self.settings.show_schematic {
             ui.heading("Rig");
             let h = (ui.available_width() * 1.15).clamp(260.0, 460.0);
-            schematic::schematic_ui(ui, self.traces.last_row().map(|r| &r.twin), &self.params, h);
+            schematic::schematic_ui(
+                ui,
+                self.traces.last_row().map(|r| &r.twin),
+                &self.params,
+                h,
+                self.traces.pressure_range_pa(),
+            );
             ui.separator();
         }
         ui.heading("Metrics");

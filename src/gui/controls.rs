@@ -3,164 +3,242 @@
 
 use super::units::{BAR_PER_PA, KN_PER_N, MM_PER_M, MS_PER_S};
 use crate::engine::Excitation;
-use crate::params::Params;
+use crate::params::{ParamError, Params};
 use crate::scenario::{Cycloid, RandomRide, SampledMotion};
 use egui::{Response, Slider, SliderClamping};
 use serde::{Deserialize, Serialize};
 use std::ops::RangeInclusive;
 
-/// One slider over an SI value shown as `value·scale` with a unit suffix. Typed values may
-/// leave the slider's range (validation decides). Returns the response; the value is written
-/// back only when the slider changed it.
-#[allow(clippy::too_many_arguments)]
-fn si_slider(
-    ui: &mut egui::Ui,
-    label: &str,
-    value_si: &mut f64,
+/// One parameter control: a slider over an SI value shown as `value·scale` with a unit.
+struct Knob {
+    label: &'static str,
+    get: fn(&Params) -> f64,
+    set: fn(&mut Params, f64),
     scale: f64,
     range: RangeInclusive<f64>,
-    suffix: &str,
+    suffix: &'static str,
     logarithmic: bool,
     decimals: usize,
-    hover: &str,
-) -> Response {
-    let mut shown = *value_si * scale;
-    let mut slider = Slider::new(&mut shown, range)
-        .text(label)
-        .suffix(suffix)
-        .clamping(SliderClamping::Never)
-        .logarithmic(logarithmic)
-        .max_decimals(decimals)
-        .min_decimals(decimals.min(2));
-    if logarithmic {
-        slider = slider.smallest_positive(0.1);
-    }
-    let response = ui.add(slider).on_hover_text(hover);
-    if response.changed() && shown.is_finite() {
-        *value_si = shown / scale;
-    }
-    response
+    hover: &'static str,
 }
 
-/// The parameter sliders. Returns true if a parameter changed this frame.
-pub fn params_ui(ui: &mut egui::Ui, p: &mut Params) -> bool {
+/// The range [SI] that [`Params::validate`] accepts for one parameter, read from the
+/// validation itself: the paper's parameters with this one set far out of range must fail
+/// with an out-of-range error that names the bounds.
+pub fn validation_range(set: fn(&mut Params, f64)) -> Option<(f64, f64)> {
+    let mut p = Params::paper();
+    set(&mut p, f64::NEG_INFINITY);
+    match p.validate() {
+        Err(ParamError::OutOfRange { min, max, .. }) => Some((min, max)),
+        _ => None,
+    }
+}
+
+impl Knob {
+    /// The range a typed or dragged value must lie in [display units]: the slider's range
+    /// within the range the parameter's validation accepts.
+    fn accepted(&self) -> (f64, f64) {
+        let (mut lo, mut hi) = (*self.range.start(), *self.range.end());
+        if let Some((a, b)) = validation_range(self.set) {
+            lo = lo.max(a * self.scale);
+            hi = hi.min(b * self.scale);
+        }
+        (lo, hi)
+    }
+
+    /// Draws the slider (typed values apply on Enter or focus loss only, never per
+    /// keystroke) and returns the new value [display units] when the user set one.
+    fn ui(&self, ui: &mut egui::Ui, p: &Params) -> Option<f64> {
+        let mut shown = (self.get)(p) * self.scale;
+        let before = shown;
+        let mut slider = Slider::new(&mut shown, self.range.clone())
+            .text(self.label)
+            .suffix(self.suffix)
+            .clamping(SliderClamping::Never)
+            .update_while_editing(false)
+            .logarithmic(self.logarithmic)
+            .max_decimals(self.decimals)
+            .min_decimals(self.decimals.min(2));
+        if self.logarithmic {
+            slider = slider.smallest_positive(0.1);
+        }
+        let response = ui.add(slider).on_hover_text(self.hover);
+        (response.changed() && shown != before).then_some(shown)
+    }
+}
+
+/// Refused values, by control label, shown next to the control until a value is accepted.
+pub type FieldErrors = std::collections::BTreeMap<&'static str, String>;
+
+fn knobs_controller() -> [Knob; 2] {
+    [
+        Knob {
+            label: "Kp",
+            get: |p| p.controller.kp_v_per_m,
+            set: |p, v| p.controller.kp_v_per_m = v,
+            scale: 1.0,
+            range: -2000.0..=200.0,
+            suffix: " V/m",
+            logarithmic: true,
+            decimals: 2,
+            hover: "Position gain Kp [V/m] of V = Kp·u + (Ki/s)·a_platform. Negative is negative \
+                    feedback; paper: −5.",
+        },
+        Knob {
+            label: "Ki",
+            get: |p| p.controller.ki_v_s_per_m,
+            set: |p, v| p.controller.ki_v_s_per_m = v,
+            scale: 1.0,
+            range: -200.0..=200.0,
+            suffix: " V·s/m",
+            logarithmic: true,
+            decimals: 2,
+            hover: "Gain Ki [V·s/m] on the integral of the platform acceleration; paper: −7.5.",
+        },
+    ]
+}
+
+fn knobs_valve() -> [Knob; 2] {
+    [
+        Knob {
+            label: "Cd",
+            get: |p| p.valve.cd,
+            set: |p, v| p.valve.cd = v,
+            scale: 1.0,
+            range: 0.01..=0.5,
+            suffix: "",
+            logarithmic: false,
+            decimals: 4,
+            hover: "Flow coefficient Cd [-]; paper: 0.1074 initial, 0.1506 adjusted.",
+        },
+        Knob {
+            label: "τ",
+            get: |p| p.valve.tau_s,
+            // The linear model's delay follows the twin's: one τ, as in the paper.
+            set: |p, v| {
+                p.valve.tau_s = v;
+                p.linear.tau_s = v;
+            },
+            scale: MS_PER_S,
+            range: 0.0..=60.0,
+            suffix: " ms",
+            logarithmic: false,
+            decimals: 1,
+            hover: "Pure input delay of the valve command (twin) [ms]; paper: 17.5 ms. The linear \
+                    model G(s) follows it.",
+        },
+    ]
+}
+
+fn knobs_rig() -> [Knob; 4] {
+    [
+        Knob {
+            label: "mass",
+            get: |p| p.body.mass_kg,
+            set: |p, v| p.body.mass_kg = v,
+            scale: 1.0,
+            range: 1.0..=200.0,
+            suffix: " kg",
+            logarithmic: true,
+            decimals: 1,
+            hover: "Suspended mass incl. seat, operator and payload [kg]; paper: 11.7 kg.",
+        },
+        Knob {
+            label: "stiffness",
+            get: |p| p.body.stiffness_n_per_m,
+            set: |p, v| p.body.stiffness_n_per_m = v,
+            scale: KN_PER_N,
+            range: 0.1..=100.0,
+            suffix: " kN/m",
+            logarithmic: true,
+            decimals: 2,
+            hover: "Equivalent stiffness of the springs [kN/m]; paper: 3.68 kN/m.",
+        },
+        Knob {
+            label: "supply",
+            get: |p| p.supply.supply_pressure_pa,
+            set: |p, v| p.supply.supply_pressure_pa = v,
+            scale: BAR_PER_PA,
+            range: 15.0..=250.0,
+            suffix: " bar",
+            logarithmic: false,
+            decimals: 0,
+            hover: "Supply pressure pA [bar]; paper: 100 bar (return 10 bar).",
+        },
+        Knob {
+            label: "passive ζ",
+            get: |p| p.passive.zeta,
+            set: |p, v| p.passive.zeta = v,
+            scale: 1.0,
+            range: 0.0..=2.0,
+            suffix: "",
+            logarithmic: false,
+            decimals: 2,
+            hover: "Damping ratio of the passive reference suspension; paper: 0.3.",
+        },
+    ]
+}
+
+/// Tries one edit: the value must lie in the control's accepted range and the whole
+/// parameter set must validate. Only then is it written to `p`.
+fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -> bool {
+    let (lo, hi) = knob.accepted();
+    let unit = knob.suffix.trim();
+    let fmt = super::format::compact;
+    if !(shown.is_finite() && shown >= lo && shown <= hi) {
+        errors.insert(
+            knob.label,
+            format!(
+                "{} = {} {unit} refused: allowed {} … {} {unit}",
+                knob.label,
+                fmt(shown),
+                fmt(lo),
+                fmt(hi)
+            ),
+        );
+        return false;
+    }
+    let mut candidate = *p;
+    (knob.set)(&mut candidate, shown / knob.scale);
+    match candidate.validate() {
+        Ok(()) => {
+            *p = candidate;
+            // A message is about the last attempt: an accepted value anywhere ends it.
+            errors.clear();
+            true
+        }
+        Err(e) => {
+            errors.insert(knob.label, format!("{} refused: {e}", knob.label));
+            false
+        }
+    }
+}
+
+/// The parameter sliders. A value is written to `p` only when it is accepted (in range and
+/// valid as a whole); a refused value leaves `p` as it was (the field shows the old value
+/// again) and its message stays next to the control. Returns true if a parameter changed.
+pub fn params_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors) -> bool {
     let mut changed = false;
     ui.spacing_mut().slider_width = 150.0;
+    let mut group = |ui: &mut egui::Ui, knobs: &[Knob]| {
+        for k in knobs {
+            if let Some(v) = k.ui(ui, p) {
+                changed |= try_edit(k, p, v, errors);
+            }
+            if let Some(e) = errors.get(k.label) {
+                ui.colored_label(egui::Color32::from_rgb(220, 50, 40), e);
+            }
+        }
+    };
     egui::CollapsingHeader::new("Controller")
         .default_open(true)
-        .show(ui, |ui| {
-            changed |= si_slider(
-                ui,
-                "Kp",
-                &mut p.controller.kp_v_per_m,
-                1.0,
-                -2000.0..=200.0,
-                " V/m",
-                true,
-                2,
-                "Position gain Kp [V/m] of V = Kp·u + (Ki/s)·a_platform. Negative is negative feedback; \
-                 paper: −5.",
-            )
-            .changed();
-            changed |= si_slider(
-                ui,
-                "Ki",
-                &mut p.controller.ki_v_s_per_m,
-                1.0,
-                -200.0..=200.0,
-                " V·s/m",
-                true,
-                2,
-                "Gain Ki [V·s/m] on the integral of the platform acceleration; paper: −7.5.",
-            )
-            .changed();
-        });
+        .show(ui, |ui| group(ui, &knobs_controller()));
     egui::CollapsingHeader::new("Valve")
         .default_open(true)
-        .show(ui, |ui| {
-            changed |= si_slider(
-                ui,
-                "Cd",
-                &mut p.valve.cd,
-                1.0,
-                0.01..=0.5,
-                "",
-                false,
-                4,
-                "Flow coefficient Cd [-]; paper: 0.1074 initial, 0.1506 adjusted.",
-            )
-            .changed();
-            let tau = si_slider(
-                ui,
-                "τ",
-                &mut p.valve.tau_s,
-                MS_PER_S,
-                0.0..=60.0,
-                " ms",
-                false,
-                1,
-                "Pure input delay of the valve command (twin) [ms]; paper: 17.5 ms. The linear \
-                 model G(s) follows it.",
-            )
-            .changed();
-            if tau {
-                // The linear model's delay follows the twin's: one τ, as in the paper.
-                p.linear.tau_s = p.valve.tau_s;
-            }
-            changed |= tau;
-        });
+        .show(ui, |ui| group(ui, &knobs_valve()));
     egui::CollapsingHeader::new("Rig")
         .default_open(true)
-        .show(ui, |ui| {
-            changed |= si_slider(
-                ui,
-                "mass",
-                &mut p.body.mass_kg,
-                1.0,
-                1.0..=200.0,
-                " kg",
-                true,
-                1,
-                "Suspended mass incl. seat, operator and payload [kg]; paper: 11.7 kg.",
-            )
-            .changed();
-            changed |= si_slider(
-                ui,
-                "stiffness",
-                &mut p.body.stiffness_n_per_m,
-                KN_PER_N,
-                0.1..=100.0,
-                " kN/m",
-                true,
-                2,
-                "Equivalent stiffness of the springs [kN/m]; paper: 3.68 kN/m.",
-            )
-            .changed();
-            changed |= si_slider(
-                ui,
-                "supply",
-                &mut p.supply.supply_pressure_pa,
-                BAR_PER_PA,
-                15.0..=250.0,
-                " bar",
-                false,
-                0,
-                "Supply pressure pA [bar]; paper: 100 bar (return 10 bar).",
-            )
-            .changed();
-            changed |= si_slider(
-                ui,
-                "passive ζ",
-                &mut p.passive.zeta,
-                1.0,
-                0.0..=2.0,
-                "",
-                false,
-                2,
-                "Damping ratio of the passive reference suspension; paper: 0.3.",
-            )
-            .changed();
-        });
+        .show(ui, |ui| group(ui, &knobs_rig()));
     changed
 }
 
@@ -224,6 +302,9 @@ pub struct ExcitationEditor {
     /// The loaded record (not persisted).
     #[serde(skip)]
     pub record: Option<LoadedRecord>,
+    /// A record path typed by hand (for desktops without a file dialog; not persisted).
+    #[serde(skip)]
+    pub typed_path: String,
 }
 
 impl Default for ExcitationEditor {
@@ -241,6 +322,7 @@ impl Default for ExcitationEditor {
             valve_amplitude_v: 1.0,
             valve_freq_hz: 2.0,
             record: None,
+            typed_path: String::new(),
         }
     }
 }
@@ -281,7 +363,7 @@ impl ExcitationEditor {
 }
 
 /// What the excitation editor asks the app to do.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ExcitationAction {
     /// Nothing.
     None,
@@ -289,6 +371,8 @@ pub enum ExcitationAction {
     Apply,
     /// Open the file dialog for a CSV record.
     LoadRecord,
+    /// Load the CSV record at a typed path.
+    LoadRecordPath(std::path::PathBuf),
 }
 
 /// Applies a slider when the user lets go (or typed a value), not on every drag frame.
@@ -327,6 +411,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                 ui.add(
                     Slider::new(&mut ed.random.s0, 0.001..=1.0)
                         .logarithmic(true)
+                        .update_while_editing(false)
                         .text("S0")
                         .suffix(" (m/s²)²/Hz"),
                 ),
@@ -335,6 +420,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                 ui.add(
                     Slider::new(&mut ed.random.f_low_hz, 0.05..=20.0)
                         .logarithmic(true)
+                        .update_while_editing(false)
                         .text("f low")
                         .suffix(" Hz"),
                 ),
@@ -343,6 +429,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                 ui.add(
                     Slider::new(&mut ed.random.f_high_hz, 0.5..=100.0)
                         .logarithmic(true)
+                        .update_while_editing(false)
                         .text("f high")
                         .suffix(" Hz"),
                 ),
@@ -352,6 +439,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
             let mut h = ed.cycloid.height_m * MM_PER_M;
             let r = ui.add(
                 Slider::new(&mut h, -60.0..=60.0)
+                    .update_while_editing(false)
                     .text("height")
                     .suffix(" mm"),
             );
@@ -362,6 +450,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
             commit(
                 ui.add(
                     Slider::new(&mut ed.cycloid.rise_time_s, 0.05..=3.0)
+                        .update_while_editing(false)
                         .text("rise time")
                         .suffix(" s"),
                 ),
@@ -369,6 +458,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
             commit(
                 ui.add(
                     Slider::new(&mut ed.cycloid_period_s, 1.0..=20.0)
+                        .update_while_editing(false)
                         .text("period")
                         .suffix(" s"),
                 ),
@@ -379,6 +469,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                 ui.add(
                     Slider::new(&mut ed.sine_accel_m_s2, 0.01..=5.0)
                         .logarithmic(true)
+                        .update_while_editing(false)
                         .text("amplitude")
                         .suffix(" m/s²"),
                 ),
@@ -387,6 +478,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                 ui.add(
                     Slider::new(&mut ed.sine_freq_hz, 0.1..=50.0)
                         .logarithmic(true)
+                        .update_while_editing(false)
                         .text("frequency")
                         .suffix(" Hz"),
                 ),
@@ -397,6 +489,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                 ui.add(
                     Slider::new(&mut ed.valve_amplitude_v, 0.01..=10.0)
                         .logarithmic(true)
+                        .update_while_editing(false)
                         .text("amplitude")
                         .suffix(" V"),
                 ),
@@ -405,6 +498,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                 ui.add(
                     Slider::new(&mut ed.valve_freq_hz, 0.1..=100.0)
                         .logarithmic(true)
+                        .update_while_editing(false)
                         .text("frequency")
                         .suffix(" Hz"),
                 ),
@@ -419,6 +513,19 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                     Some(r) => ui.label(format!("{} ({:.1} s)", r.name, r.motion.duration_s())),
                     None => ui.weak("none loaded"),
                 };
+            });
+            ui.horizontal(|ui| {
+                ui.label("or path:");
+                let r = ui.add(
+                    egui::TextEdit::singleline(&mut ed.typed_path)
+                        .desired_width(170.0)
+                        .hint_text("record.csv"),
+                );
+                let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+                if (ui.button("Load").clicked() || enter) && !ed.typed_path.trim().is_empty() {
+                    action =
+                        ExcitationAction::LoadRecordPath(ed.typed_path.trim().to_string().into());
+                }
             });
         }
     }

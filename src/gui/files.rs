@@ -26,7 +26,8 @@ pub enum Purpose {
 }
 
 impl Purpose {
-    fn title(self) -> &'static str {
+    /// What the dialog is for, as its title.
+    pub fn title(self) -> &'static str {
         match self {
             Purpose::OpenPreset => "Open preset",
             Purpose::SavePreset => "Save preset",

@@ -6,6 +6,7 @@
 //! The analytic curves are recomputed on the frame the parameters change (the twin's
 //! linearisation only when a plant parameter changes, not for a gain).
 
+use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};
 use super::units::{db, deg};
 use crate::analysis::frequency_response::{
     self as fr, Crossing, DwellOptions, LoopMargins, OpenLoop,
@@ -14,8 +15,9 @@ use crate::control::ControlLaw;
 use crate::model::ModelKind;
 use crate::params::{ControllerParams, Params};
 use egui::{Color32, RichText};
-use egui_plot::{Corner, Legend, Line, LineStyle, MarkerShape, Plot, PlotPoint, Points, VLine};
+use egui_plot::{Line, LineStyle, MarkerShape, Plot, PlotPoint, PlotPoints, Points, VLine};
 use num_complex::Complex64;
+use std::collections::BTreeSet;
 use std::f64::consts::PI;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -467,45 +469,97 @@ fn log_grid(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     out
 }
 
-fn freq_plot<'a>(id: &str, y_label: &str) -> Plot<'a> {
+fn freq_plot<'a>(id: &str, y_label: &str, unit: &'static str, height: f32) -> Plot<'a> {
     Plot::new(id)
+        .height(height)
         .x_axis_label("frequency [Hz]")
-        .y_axis_label(y_label.to_owned())
+        .custom_y_axes(vec![y_axis(y_label)])
         .x_axis_formatter(hz_axis)
         .x_grid_spacer(log_grid)
-        .label_formatter(|pos| {
+        .y_grid_spacer(move |input| y_marks(input, height))
+        .label_formatter(move |pos| {
             Some(match pos {
                 egui_plot::HoverPosition::NearDataPoint {
                     plot_name,
                     position,
                     ..
                 } => format!(
-                    "{plot_name}\n{:.2} Hz\n{:.1}",
+                    "{plot_name}\n{:.2} Hz\n{:.1} {unit}",
                     10f64.powf(position.x),
                     position.y
                 ),
                 egui_plot::HoverPosition::Elsewhere { position } => {
-                    format!("{:.2} Hz\n{:.1}", 10f64.powf(position.x), position.y)
+                    format!("{:.2} Hz\n{:.1} {unit}", 10f64.powf(position.x), position.y)
                 }
             })
         })
         .default_x_bounds(F_RANGE_HZ.0.log10(), F_RANGE_HZ.1.log10())
         .allow_scroll(false)
-        .y_axis_min_width(40.0)
-        .legend(
-            Legend::default()
-                .position(Corner::LeftBottom)
-                .text_style(egui::TextStyle::Small)
-                .background_alpha(0.6),
-        )
+        .link_axis(egui::Id::unique("freq"), [true, false])
+}
+
+/// Colour of the simulated (sine dwell) points: the theme's strongest text colour (white on
+/// dark, black on light), so points on the twin's blue line stay visible in either theme.
+pub fn dwell_color(ui: &egui::Ui) -> Color32 {
+    ui.visuals().strong_text_color()
+}
+
+/// What the frequency panel asks the app to do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FreqAction {
+    /// Nothing.
+    None,
+    /// Put back the last gains with which both loops were stable.
+    ResetToStableGains,
+}
+
+/// View options of the frequency panel.
+pub struct FreqView<'a> {
+    /// Unwrapped phase (else wrapped into ±180°, the default).
+    pub phase_unwrapped: &'a mut bool,
+    /// Curves hidden in the legends.
+    pub hidden: &'a mut BTreeSet<String>,
+    /// The last stable gains, if they differ from the current ones.
+    pub last_stable: Option<ControllerParams>,
+}
+
+/// The phase curve as shown: wrapped into ±180° (default) or unwrapped. Wrapping breaks the
+/// line where it jumps, so no vertical stroke crosses the plot.
+pub fn shown_phase(c: &[PlotPoint], unwrapped: bool) -> Vec<Vec<PlotPoint>> {
+    if unwrapped {
+        return vec![c.to_vec()];
+    }
+    let mut out: Vec<Vec<PlotPoint>> = vec![Vec::new()];
+    let mut prev: Option<f64> = None;
+    for p in c {
+        let y = wrap_deg(p.y);
+        if prev.is_some_and(|q| (y - q).abs() > 180.0) {
+            out.push(Vec::new());
+        }
+        if let Some(seg) = out.last_mut() {
+            seg.push(PlotPoint::new(p.x, y));
+        }
+        prev = Some(y);
+    }
+    out
 }
 
 /// Draws the stability banner (if needed), the four frequency plots and the dwell progress.
-pub fn frequency_ui(ui: &mut egui::Ui, curves: &Curves, dwell: &mut Dwell, params: &Params) {
-    stability_ui(ui, curves);
+pub fn frequency_ui(
+    ui: &mut egui::Ui,
+    curves: &Curves,
+    dwell: &mut Dwell,
+    params: &Params,
+    view: FreqView<'_>,
+) -> FreqAction {
+    let action = stability_ui(ui, curves, view.last_stable);
+    let unstable = curves.unstable();
     ui.horizontal(|ui| {
         ui.label(RichText::new("Simulated twin (sine dwell):").strong());
         match dwell.progress() {
+            _ if unstable => {
+                ui.label("not shown: the closed loop is unstable");
+            }
             Some((done, total)) => {
                 ui.add(
                     egui::ProgressBar::new(done as f32 / total.max(1) as f32)
@@ -529,7 +583,7 @@ pub fn frequency_ui(ui: &mut egui::Ui, curves: &Curves, dwell: &mut Dwell, param
                 ui.label("waiting for the sliders to settle…");
             }
         }
-        if !dwell.failures.is_empty() {
+        if !unstable && !dwell.failures.is_empty() {
             ui.colored_label(
                 Color32::from_rgb(200, 60, 40),
                 format!("{} point(s) diverged", dwell.failures.len()),
@@ -543,149 +597,243 @@ pub fn frequency_ui(ui: &mut egui::Ui, curves: &Curves, dwell: &mut Dwell, param
                     .join("\n"),
             );
         }
+        ui.separator();
+        ui.checkbox(&mut *view.phase_unwrapped, "unwrapped phase")
+            .on_hover_text("Off: phase wrapped into ±180°. On: continuous (unwrapped) phase.");
     });
-    let unstable = curves.unstable();
-    let h = ((ui.available_height() - 12.0) / 4.0).max(80.0);
+    // Points simulated for other parameters, or for an unstable loop, are not shown.
+    let show_dwell = !unstable && (dwell.is_current(params) || dwell.progress().is_some());
+    let hidden = view.hidden;
+    let unwrapped = *view.phase_unwrapped;
+    let legend_h = 18.0 + ui.spacing().item_spacing.y;
+    let h = ((ui.available_height() - 12.0 - 4.0 * legend_h) / 4.0).max(80.0);
     let crossings = curves.crossings.clone();
-    let active_style = if unstable {
-        LineStyle::dashed_loose()
-    } else {
-        LineStyle::Solid
-    };
+    // Unstable: the active curves are faint (not a steady state).
+    let active = |c: Color32| if unstable { c.gamma_multiply(0.45) } else { c };
     let names = ["linear active", "twin active (linearised)", "passive"];
-    let colors = [LINEAR, TWIN, PASSIVE];
-    freq_plot("t_mag", "|T| [dB]")
-        .height(h)
-        .link_axis(egui::Id::unique("freq"), [true, false])
-        .show(ui, |pu| {
-            pu.hline(
-                egui_plot::HLine::new("", 0.0)
-                    .color(Color32::GRAY)
-                    .style(LineStyle::dashed_dense()),
-            );
-            for (i, c) in curves.t_mag.iter().enumerate() {
-                let style = if i < 2 {
-                    active_style
-                } else {
-                    LineStyle::Solid
-                };
-                pu.line(
-                    Line::new(names[i], c.as_slice())
-                        .color(colors[i])
-                        .width(2.0)
-                        .style(style),
-                );
+    let colors = [active(LINEAR), active(TWIN), PASSIVE];
+    let styles = [
+        (1.8, LineStyle::dashed_dense()),
+        (2.4, LineStyle::Solid),
+        (1.6, LineStyle::dotted_dense()),
+    ];
+    let dwell_name = "twin simulated (dwell)";
+    let dwell_c = dwell_color(ui);
+    let t_items = |ui: &mut egui::Ui, id: &str, hidden: &mut BTreeSet<String>| {
+        let mut items: Vec<LegendItem<'_>> = (0..3)
+            .map(|i| LegendItem {
+                name: names[i],
+                color: colors[i],
+                swatch: Swatch::Line(styles[i].0, styles[i].1),
+            })
+            .collect();
+        if show_dwell {
+            items.push(LegendItem {
+                name: dwell_name,
+                color: dwell_c,
+                swatch: Swatch::Marker,
+            });
+        }
+        legend_ui(ui, id, &items, hidden);
+    };
+
+    t_items(ui, "t_mag", hidden);
+    let hid = hidden.clone();
+    freq_plot("t_mag", "|T| [dB]", "dB", h).show(ui, |pu| {
+        pu.hline(
+            egui_plot::HLine::new("|T| = 1", 0.0)
+                .color(Color32::GRAY)
+                .style(LineStyle::dashed_dense()),
+        );
+        for (i, c) in curves.t_mag.iter().enumerate() {
+            if plotkit::hidden(&hid, "t_mag", names[i]) {
+                continue;
             }
+            pu.line(
+                Line::new(names[i], c.as_slice())
+                    .color(colors[i])
+                    .width(styles[i].0)
+                    .style(styles[i].1),
+            );
+        }
+        if show_dwell && !plotkit::hidden(&hid, "t_mag", dwell_name) {
             pu.points(
-                Points::new("twin simulated (dwell)", dwell.mag.as_slice())
-                    .color(TWIN)
-                    .shape(MarkerShape::Circle)
-                    .radius(4.0)
+                Points::new(dwell_name, dwell.mag.as_slice())
+                    .color(dwell_c)
+                    .shape(MarkerShape::Diamond)
+                    .radius(5.0)
                     .filled(true),
             );
-            // |T| = 1 crossings (end of the isolation band): a dotted line and a label.
-            let top = curves.t_mag[0]
-                .iter()
-                .chain(&curves.t_mag[1])
-                .map(|p| p.y)
-                .fold(f64::NEG_INFINITY, f64::max)
-                .max(0.0);
-            for (i, cs) in crossings.iter().enumerate() {
-                for c in cs.iter().filter(|c| c.rising).take(1) {
-                    let x = c.freq_hz.log10();
-                    pu.vline(
-                        VLine::new("", x)
-                            .color(colors[i].gamma_multiply(0.8))
-                            .style(LineStyle::dotted_dense()),
-                    );
-                    pu.text(
-                        egui_plot::Text::new(
-                            "",
-                            PlotPoint::new(x, top),
-                            RichText::new(if i == 0 {
-                                format!(" |T|=1 @ {:.2} Hz", c.freq_hz)
-                            } else {
-                                format!("|T|=1 @ {:.2} Hz ", c.freq_hz)
-                            })
-                            .color(colors[i])
-                            .small(),
-                        )
-                        // Linear to the right of its line, twin to the left.
-                        .anchor(if i == 0 {
-                            egui::Align2::LEFT_TOP
+        }
+        if unstable {
+            // The |T| = 1 crossings of an unstable loop mean nothing.
+            return;
+        }
+        // |T| = 1 crossings (end of the isolation band): a dotted line and a label.
+        let top = curves.t_mag[0]
+            .iter()
+            .chain(&curves.t_mag[1])
+            .map(|p| p.y)
+            .fold(f64::NEG_INFINITY, f64::max)
+            .max(0.0);
+        for (i, cs) in crossings.iter().enumerate() {
+            for c in cs.iter().filter(|c| c.rising).take(1) {
+                let x = c.freq_hz.log10();
+                pu.vline(
+                    VLine::new("", x)
+                        .color(colors[i].gamma_multiply(0.8))
+                        .style(LineStyle::dotted_dense()),
+                );
+                pu.text(
+                    egui_plot::Text::new(
+                        "",
+                        PlotPoint::new(x, top),
+                        RichText::new(if i == 0 {
+                            format!(" |T|=1 @ {:.2} Hz", c.freq_hz)
                         } else {
-                            egui::Align2::RIGHT_TOP
-                        }),
+                            format!("|T|=1 @ {:.2} Hz ", c.freq_hz)
+                        })
+                        .color(colors[i])
+                        .small(),
+                    )
+                    // Linear to the right of its line, twin to the left.
+                    .anchor(if i == 0 {
+                        egui::Align2::LEFT_TOP
+                    } else {
+                        egui::Align2::RIGHT_TOP
+                    }),
+                );
+            }
+        }
+    });
+    t_items(ui, "t_phase", hidden);
+    let hid = hidden.clone();
+    freq_plot("t_phase", "phase T [deg]", "°", h).show(ui, |pu| {
+        for (i, c) in curves.t_phase.iter().enumerate() {
+            if plotkit::hidden(&hid, "t_phase", names[i]) {
+                continue;
+            }
+            for seg in shown_phase(c, unwrapped) {
+                pu.line(
+                    Line::new(names[i], PlotPoints::Owned(seg))
+                        .color(colors[i])
+                        .width(styles[i].0)
+                        .style(styles[i].1),
+                );
+            }
+        }
+        if show_dwell && !plotkit::hidden(&hid, "t_phase", dwell_name) {
+            let pts: Vec<PlotPoint> = shown_phase(&dwell.phase, unwrapped).concat();
+            pu.points(
+                Points::new(dwell_name, PlotPoints::Owned(pts))
+                    .color(dwell_c)
+                    .shape(MarkerShape::Diamond)
+                    .radius(5.0)
+                    .filled(true),
+            );
+        }
+    });
+    let b_names = ["twin (linearised)", "G(s)", BODE_DWELL_NAME];
+    let b_items = |ui: &mut egui::Ui, id: &str, hidden: &mut BTreeSet<String>| {
+        let mut items = vec![
+            LegendItem {
+                name: b_names[0],
+                color: TWIN,
+                swatch: Swatch::Line(2.4, LineStyle::Solid),
+            },
+            LegendItem {
+                name: b_names[1],
+                color: LINEAR,
+                swatch: Swatch::Line(1.8, LineStyle::dashed_dense()),
+            },
+        ];
+        if show_dwell {
+            items.push(LegendItem {
+                name: b_names[2],
+                color: dwell_c,
+                swatch: Swatch::Marker,
+            });
+        }
+        legend_ui(ui, id, &items, hidden);
+    };
+    let bode = |ui: &mut egui::Ui,
+                id: &str,
+                y_label: &str,
+                unit: &'static str,
+                lines: &[Curve; 2],
+                points: &[PlotPoint],
+                phase: bool,
+                hid: &BTreeSet<String>| {
+        freq_plot(id, y_label, unit, h).show(ui, |pu| {
+            let seg = |c: &[PlotPoint]| {
+                if phase {
+                    shown_phase(c, unwrapped)
+                } else {
+                    vec![c.to_vec()]
+                }
+            };
+            if !plotkit::hidden(hid, id, b_names[0]) {
+                for s in seg(&lines[0]) {
+                    pu.line(
+                        Line::new(b_names[0], PlotPoints::Owned(s))
+                            .color(TWIN)
+                            .width(2.4),
                     );
                 }
             }
-        });
-    freq_plot("t_phase", "phase T [deg]")
-        .height(h)
-        .link_axis(egui::Id::unique("freq"), [true, false])
-        .show(ui, |pu| {
-            for (i, c) in curves.t_phase.iter().enumerate() {
-                pu.line(
-                    Line::new(names[i], c.as_slice())
-                        .color(colors[i])
-                        .width(2.0),
+            if !plotkit::hidden(hid, id, b_names[1]) {
+                for s in seg(&lines[1]) {
+                    pu.line(
+                        Line::new(b_names[1], PlotPoints::Owned(s))
+                            .color(LINEAR)
+                            .width(1.8)
+                            .style(LineStyle::dashed_dense()),
+                    );
+                }
+            }
+            if show_dwell && !plotkit::hidden(hid, id, b_names[2]) {
+                pu.points(
+                    Points::new(b_names[2], PlotPoints::Owned(seg(points).concat()))
+                        .color(dwell_c)
+                        .shape(MarkerShape::Diamond)
+                        .radius(5.0)
+                        .filled(true),
                 );
             }
-            pu.points(
-                Points::new("twin simulated (dwell)", dwell.phase.as_slice())
-                    .color(TWIN)
-                    .radius(4.0)
-                    .filled(true),
-            );
         });
-    freq_plot("bode_mag", "|du/dt / V_in| [dB]")
-        .height(h)
-        .link_axis(egui::Id::unique("freq"), [true, false])
-        .show(ui, |pu| {
-            pu.line(
-                Line::new("twin (linearised)", curves.bode_mag[0].as_slice())
-                    .color(TWIN)
-                    .width(2.0),
-            );
-            pu.line(
-                Line::new("G(s)", curves.bode_mag[1].as_slice())
-                    .color(LINEAR)
-                    .width(2.0)
-                    .style(LineStyle::dashed_loose()),
-            );
-            pu.points(
-                Points::new(BODE_DWELL_NAME, dwell.bode_mag.as_slice())
-                    .color(TWIN)
-                    .radius(4.0)
-                    .filled(true),
-            );
-        });
-    freq_plot("bode_phase", "phase [deg]")
-        .height(h)
-        .link_axis(egui::Id::unique("freq"), [true, false])
-        .show(ui, |pu| {
-            pu.line(
-                Line::new("twin (linearised)", curves.bode_phase[0].as_slice())
-                    .color(TWIN)
-                    .width(2.0),
-            );
-            pu.line(
-                Line::new("G(s)", curves.bode_phase[1].as_slice())
-                    .color(LINEAR)
-                    .width(2.0)
-                    .style(LineStyle::dashed_loose()),
-            );
-            pu.points(
-                Points::new(BODE_DWELL_NAME, dwell.bode_phase.as_slice())
-                    .color(TWIN)
-                    .radius(4.0)
-                    .filled(true),
-            );
-        });
+    };
+    b_items(ui, "bode_mag", hidden);
+    let hid = hidden.clone();
+    bode(
+        ui,
+        "bode_mag",
+        "|du/dt / V_in| [dB]",
+        "dB re (mm/s)/V",
+        &curves.bode_mag,
+        &dwell.bode_mag,
+        false,
+        &hid,
+    );
+    b_items(ui, "bode_phase", hidden);
+    let hid = hidden.clone();
+    bode(
+        ui,
+        "bode_phase",
+        "phase [deg]",
+        "°",
+        &curves.bode_phase,
+        &dwell.bode_phase,
+        true,
+        &hid,
+    );
+    action
 }
 
 fn margin_text(m: &LoopMargins) -> String {
-    let gm = if m.gain_margin.is_finite() {
+    let gm = if m.gain_margin.is_finite() && m.gain_margin <= 0.0 {
+        // No gain keeps it stable (positive feedback).
+        "−∞ dB".into()
+    } else if m.gain_margin.is_finite() {
         format!("{:.1} dB", db(m.gain_margin))
     } else {
         "∞".into()
@@ -700,11 +848,54 @@ fn margin_text(m: &LoopMargins) -> String {
     format!("GM {gm}, PM {pm}")
 }
 
-/// The stability line: margins, and a red banner when a loop is unstable.
-pub fn stability_ui(ui: &mut egui::Ui, curves: &Curves) {
+/// What to change to make the loop stable, from the stability condition itself: a positive
+/// Kp is positive feedback at any gain (the margins are those of `V = Kp·u` with
+/// `Kp < 0`); otherwise the smallest gain margin says how far |Kp| must come down.
+pub fn remedy(curves: &Curves) -> String {
+    let Some(p) = curves.params else {
+        return String::new();
+    };
+    let kp = p.controller.kp_v_per_m;
+    if kp > 0.0 {
+        return format!(
+            "Kp = {kp:.1} V/m feeds the stroke back with the wrong sign (positive feedback, \
+             unstable at any gain): use a negative Kp."
+        );
+    }
+    let unstable: Vec<&LoopMargins> = curves
+        .margins
+        .iter()
+        .flatten()
+        .filter(|m| !m.stable())
+        .collect();
+    let gm = unstable
+        .iter()
+        .map(|m| m.gain_margin)
+        .filter(|g| g.is_finite() && *g > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if gm < 1.0 {
+        let limit = kp.abs() * gm;
+        format!(
+            "|Kp| = {:.1} V/m is above the stability limit: keep Kp between −{limit:.1} and 0 V/m \
+             (less |Kp| or a shorter τ).",
+            kp.abs()
+        )
+    } else {
+        "The phase margin is negative: reduce |Kp| or τ.".into()
+    }
+}
+
+/// The stability line: margins, and a red banner with the remedy when a loop is unstable.
+/// Returns the button the user pressed.
+pub fn stability_ui(
+    ui: &mut egui::Ui,
+    curves: &Curves,
+    last_stable: Option<ControllerParams>,
+) -> FreqAction {
+    let mut action = FreqAction::None;
     let [lin, twin] = &curves.margins;
     let (Some(lin), Some(twin)) = (lin, twin) else {
-        return;
+        return action;
     };
     if curves.unstable() {
         egui::Frame::new()
@@ -715,14 +906,26 @@ pub fn stability_ui(ui: &mut egui::Ui, curves: &Curves) {
                 ui.set_width(ui.available_width());
                 ui.label(
                     RichText::new(format!(
-                        "UNSTABLE closed loop — twin: {}; linear: {}. Reduce |Kp| (Kp must be \
-                         negative). The dashed active curves are not a steady state.",
+                        "UNSTABLE closed loop — twin: {}; linear: {}. {} The faint active \
+                         curves are not a steady state.",
                         margin_text(twin),
-                        margin_text(lin)
+                        margin_text(lin),
+                        remedy(curves),
                     ))
                     .color(Color32::WHITE)
                     .strong(),
                 );
+                if let Some(g) = last_stable
+                    && ui
+                        .button("Reset to last stable gains")
+                        .on_hover_text(format!(
+                            "Kp = {:.2} V/m, Ki = {:.2} V·s/m, and the simulation from rest",
+                            g.kp_v_per_m, g.ki_v_s_per_m
+                        ))
+                        .clicked()
+                {
+                    action = FreqAction::ResetToStableGains;
+                }
             });
     } else {
         let edge = |cs: &[Crossing]| {
@@ -739,6 +942,7 @@ pub fn stability_ui(ui: &mut egui::Ui, curves: &Curves) {
             edge(&curves.crossings[0]),
         ));
     }
+    action
 }
 
 #[cfg(test)]

@@ -604,6 +604,23 @@ impl MeasuredData {
                 .height(150.0)
                 .y_axis_label(label.to_owned())
                 .y_axis_min_width(44.0)
+                .label_formatter(|pos| {
+                    let (name, p) = match pos {
+                        egui_plot::HoverPosition::NearDataPoint {
+                            plot_name,
+                            position,
+                            ..
+                        } => (format!("{plot_name}\n"), position),
+                        egui_plot::HoverPosition::Elsewhere { position } => {
+                            (String::new(), position)
+                        }
+                    };
+                    Some(format!(
+                        "{name}t = {:.3} s\n{}",
+                        p.x,
+                        super::format::value_pm(p.y, f64::NAN)
+                    ))
+                })
                 .link_axis(egui::Id::unique("measured_link"), [true, false])
                 .link_cursor(egui::Id::unique("measured_link"), [true, false])
                 .legend(
@@ -827,7 +844,7 @@ impl MeasuredData {
             });
         ui.weak("weighted error: 1.0 = sensor-noise level (see report.md for the metric)");
         for v in &r.calibrated {
-            ui.monospace(format!("{} = {:.6} ± {:.2e}", v.name, v.value, v.std));
+            ui.monospace(super::format::fitted(&v.name, v.value, v.std));
         }
         if r.effects.is_empty() {
             ui.label("effects added: none");
@@ -836,7 +853,10 @@ impl MeasuredData {
             let params: Vec<String> = e
                 .params
                 .iter()
-                .map(|(k, v)| format!("{k} = {v:.4e}"))
+                .map(|(k, v)| {
+                    let std = e.uncertainties.get(k).copied().unwrap_or(f64::NAN);
+                    super::format::fitted(k, *v, std)
+                })
                 .collect();
             ui.label(RichText::new(format!("added: {}", e.effect.name())).strong());
             ui.monospace(params.join(", "));
@@ -861,7 +881,7 @@ impl MeasuredData {
                 });
         });
         for note in &r.notes {
-            ui.weak(glyph_safe(note));
+            ui.weak(glyph_safe(&super::format::note_for_people(note)));
         }
         ui.horizontal(|ui| {
             if ui

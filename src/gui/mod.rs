@@ -13,13 +13,16 @@
 //! * [`measured`] — measured records: replay overlay, residual diagnosis, calibration in
 //!   the background.
 //! * [`scopes`], [`schematic`], [`controls`] — widgets; [`files`] — dialogs and exports
-//!   off the UI thread; [`units`] — display units.
+//!   off the UI thread; [`units`] — display units; [`format`] — numbers for people;
+//!   [`plotkit`] — y axes, clickable legends, wrapped phase.
 
 pub mod app;
 pub mod controls;
 pub mod files;
+pub mod format;
 pub mod frequency;
 pub mod measured;
+pub mod plotkit;
 pub mod schematic;
 pub mod scopes;
 pub mod traces;

@@ -7,17 +7,33 @@ use crate::params::Params;
 use crate::simulation::Sample;
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
 
-/// Colour of a pressure between the return and the supply pressure (blue, white at mid
-/// pressure, red).
-pub fn pressure_color(p_pa: f64, params: &Params) -> Color32 {
-    let (lo, hi) = (
-        params.supply.return_pressure_pa,
-        params.supply.supply_pressure_pa,
-    );
-    // Square-root scale around mid pressure, so the few bar of a ride still show.
+/// Smallest half-width of the colour scale [Pa]: a still rig does not flicker through the
+/// whole scale on a few mbar of noise.
+pub const MIN_HALF_SPAN_PA: f64 = 0.25e5;
+
+/// The pressure range the colours span [Pa]: the range seen in the scopes' window (both
+/// chambers), widened to at least ±[`MIN_HALF_SPAN_PA`] around its middle; the return and
+/// supply pressures before anything was seen.
+pub fn color_range(seen_pa: Option<(f64, f64)>, params: &Params) -> (f64, f64) {
+    match seen_pa {
+        Some((lo, hi)) if lo.is_finite() && hi.is_finite() && hi >= lo => {
+            let mid = 0.5 * (lo + hi);
+            let half = (0.5 * (hi - lo)).max(MIN_HALF_SPAN_PA);
+            (mid - half, mid + half)
+        }
+        _ => (
+            params.supply.return_pressure_pa,
+            params.supply.supply_pressure_pa,
+        ),
+    }
+}
+
+/// Colour of a pressure on the scale `range` [Pa]: blue at its low end, white in the
+/// middle, red at its high end.
+pub fn pressure_color(p_pa: f64, range: (f64, f64)) -> Color32 {
+    let (lo, hi) = range;
     let t = if p_pa.is_finite() && hi > lo {
-        let d = ((p_pa - 0.5 * (lo + hi)) / (0.5 * (hi - lo))).clamp(-1.0, 1.0);
-        (0.5 + 0.5 * d.signum() * d.abs().sqrt()) as f32
+        ((p_pa - lo) / (hi - lo)).clamp(0.0, 1.0) as f32
     } else {
         0.5
     };
@@ -66,7 +82,15 @@ fn spring(f: &Frame, x: f64, y0: f64, y1: f64, stroke: Stroke) -> Shape {
 }
 
 /// Draws the rig for the sample `s` (the twin's) into the available space.
-pub fn schematic_ui(ui: &mut egui::Ui, s: Option<&Sample>, params: &Params, height: f32) {
+/// `seen_pa` is the pressure range seen in the scopes (both chambers), for the colour scale.
+pub fn schematic_ui(
+    ui: &mut egui::Ui,
+    s: Option<&Sample>,
+    params: &Params,
+    height: f32,
+    seen_pa: Option<(f64, f64)>,
+) {
+    let range = color_range(seen_pa, params);
     let width = ui.available_width();
     let (response, painter) = ui.allocate_painter(vec2(width, height), Sense::hover());
     let rect = response.rect;
@@ -146,12 +170,12 @@ pub fn schematic_ui(ui: &mut egui::Ui, s: Option<&Sample>, params: &Params, heig
     painter.rect_filled(
         f.rect(-26.0, cav0, 26.0, pl),
         0.0,
-        pressure_color(s.p2, params),
+        pressure_color(s.p2, range),
     );
     painter.rect_filled(
         f.rect(-26.0, pu, 26.0, cav1),
         0.0,
-        pressure_color(s.p1, params),
+        pressure_color(s.p1, range),
     );
     painter.rect_filled(f.rect(-26.0, pl, 26.0, pu), 0.0, Color32::from_gray(60));
     // Double rod: up to the seat plate, down through the bottom cap.
@@ -171,13 +195,24 @@ pub fn schematic_ui(ui: &mut egui::Ui, s: Option<&Sample>, params: &Params, heig
         (format!("stroke u   {u_mm:+6.1} mm"), ink),
         (
             format!("p1 (upper) {:6.1} bar", s.p1 * BAR_PER_PA),
-            pressure_color(s.p1, params),
+            pressure_color(s.p1, range),
         ),
         (
             format!("p2 (lower) {:6.1} bar", s.p2 * BAR_PER_PA),
-            pressure_color(s.p2, params),
+            pressure_color(s.p2, range),
         ),
     ];
+    painter.text(
+        rect.left_top() + vec2(22.0, 6.0 + 15.0 * 4.0),
+        Align2::LEFT_TOP,
+        format!(
+            "colours: {:.1} … {:.1} bar",
+            range.0 * BAR_PER_PA,
+            range.1 * BAR_PER_PA
+        ),
+        FontId::proportional(10.0),
+        visuals.weak_text_color(),
+    );
     for (i, (text, color)) in lines.into_iter().enumerate() {
         let pos = rect.left_top() + vec2(8.0, 6.0 + 15.0 * i as f32);
         if i >= 2 {
@@ -271,15 +306,17 @@ pub fn schematic_ui(ui: &mut egui::Ui, s: Option<&Sample>, params: &Params, heig
             Color32::from_gray(40),
         );
     }
+    // Two short lines above the valve body, right of the hose risers (which run at
+    // x < vx0): "spool x_v" on one line, the value on the next.
     label(
-        f.p(160.0, v1 + 3.0),
-        format!("spool x_v {:+.3} mm", s.xv * MM_PER_M),
-        Align2::CENTER_BOTTOM,
+        f.p(vx1, v1 + 3.0),
+        format!("spool x_v\n{:+.3} mm", s.xv * MM_PER_M),
+        Align2::RIGHT_BOTTOM,
     );
     label(f.p(140.0, v0 - 3.0), "P".into(), Align2::CENTER_TOP);
     label(f.p(180.0, v0 - 3.0), "T".into(), Align2::CENTER_TOP);
     let hose = |y_port: f64, y_valve: f64, p: f64| {
-        let c = pressure_color(p, params);
+        let c = pressure_color(p, range);
         painter.add(Shape::line(
             vec![
                 f.p(32.0, y_port),
@@ -292,4 +329,37 @@ pub fn schematic_ui(ui: &mut egui::Ui, s: Option<&Sample>, params: &Params, heig
     };
     hose(cav1 - 4.0, v1 - 6.0, s.p1);
     hose(cav0 + 4.0, v0 + 6.0, s.p2);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn distance(a: Color32, b: Color32) -> i32 {
+        (i32::from(a.r()) - i32::from(b.r())).abs()
+            + (i32::from(a.g()) - i32::from(b.g())).abs()
+            + (i32::from(a.b()) - i32::from(b.b())).abs()
+    }
+
+    /// ±1 bar around 55 bar (a gentle ride) spans the whole colour scale once the range seen
+    /// sets it; on the fixed return…supply scale the two were nearly the same white.
+    #[test]
+    fn a_one_bar_swing_is_visible() {
+        let p = Params::paper();
+        let range = color_range(Some((54e5, 56e5)), &p);
+        let (lo, hi) = (pressure_color(54e5, range), pressure_color(56e5, range));
+        assert!(distance(lo, hi) > 250, "{lo:?} vs {hi:?}");
+        let fixed = color_range(None, &p);
+        let (a, b) = (pressure_color(54e5, fixed), pressure_color(56e5, fixed));
+        assert!(distance(a, b) < 60, "the old scale: {a:?} vs {b:?}");
+    }
+
+    /// A still rig (a few mbar of noise) does not sweep the whole scale.
+    #[test]
+    fn noise_stays_near_white() {
+        let p = Params::paper();
+        let range = color_range(Some((55e5 - 50.0, 55e5 + 50.0)), &p);
+        let mid = Color32::from_rgb(235, 235, 235);
+        assert!(distance(pressure_color(55e5 + 50.0, range), mid) < 30);
+    }
 }

@@ -241,6 +241,16 @@ impl Traces {
         &self.contacts
     }
 
+    /// The lowest and highest chamber pressure (both chambers) in the window [Pa].
+    pub fn pressure_range_pa(&self) -> Option<(f64, f64)> {
+        let pts = self.channel(Ch::P1).points().iter();
+        let all = pts.chain(self.channel(Ch::P2).points());
+        let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.y), hi.max(p.y))
+        });
+        (lo <= hi).then_some((lo / BAR_PER_PA, hi / BAR_PER_PA))
+    }
+
     /// Latest display time [s].
     pub fn t_now(&self) -> f64 {
         self.t_now

@@ -2,8 +2,8 @@
 
 use super::classes::{InputClass, PSD_TOLERANCE_OF_PEAK};
 use super::run::{CREST_FACTOR_LIMIT, SeatTestResult};
+use crate::plot::{self, Figure, Panel, Series, SeriesStyle, palette};
 use crate::preset::write_atomic;
-use crate::report::plot::{self, Figure, Panel, Series, SeriesStyle, palette};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

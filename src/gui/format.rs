@@ -1,0 +1,271 @@
+//! Numbers for people: fitted values with symbol, display unit and a sensible number of
+//! digits ("τ = 17.50 ± 0.01 ms", "β = 0.59 GPa"), the active model effects, and the
+//! optimiser's stop reason in words.
+
+use crate::params::Params;
+
+/// Symbol, display scale (display = SI × scale), unit of a fitted parameter by its report
+/// name (`tau_s`, `effective_bulk_modulus_pa`, …). Unknown names pass through unchanged.
+pub fn display_of(name: &str) -> (&str, f64, &'static str) {
+    match name {
+        "cd" => ("Cd", 1.0, ""),
+        "tau_s" => ("τ", 1e3, "ms"),
+        "mass_kg" => ("m", 1.0, "kg"),
+        "coulomb_n" => ("F_c", 1.0, "N"),
+        "viscous_n_s_per_m" => ("b", 1.0, "N·s/m"),
+        "stribeck_n" => ("F_s", 1.0, "N"),
+        "overlap_m" => ("overlap", 1e6, "µm"),
+        "bias_v" => ("V_bias", 1e3, "mV"),
+        "coefficient_m3_per_s_pa" => ("C_leak", 6e9, "(L/min)/bar"),
+        "effective_bulk_modulus_pa" => ("β", 1e-9, "GPa"),
+        "droop_pa_per_m3_s" => ("droop", 1e-5 / 6e4, "bar/(L/min)"),
+        other => (other, 1.0, ""),
+    }
+}
+
+/// Decimals that show a value to about four significant digits (0 ..= 6).
+fn decimals_for(v: f64) -> usize {
+    if !(v.is_finite() && v != 0.0) {
+        return 2;
+    }
+    (3.0 - v.abs().log10().floor()).clamp(0.0, 6.0) as usize
+}
+
+/// Formats `value ± std` (display units) with the decimals of about four significant digits
+/// of the value; the uncertainty is left out when it is unknown (NaN).
+pub fn value_pm(value: f64, std: f64) -> String {
+    let d = decimals_for(value);
+    let v = minus(format!("{value:.d$}"));
+    if std.is_finite() && std > 0.0 {
+        let shown = format!("{std:.d$}");
+        if shown.trim_start_matches(['0', '.']).is_empty() {
+            // Smaller than the last shown digit.
+            let unit = 10f64.powi(-(d as i32));
+            format!("{v} ± <{unit:.d$}")
+        } else {
+            format!("{v} ± {shown}")
+        }
+    } else {
+        v
+    }
+}
+
+/// "τ = 17.50 ± 0.01 ms" for a fitted parameter given in SI by its report name.
+pub fn fitted(name: &str, value_si: f64, std_si: f64) -> String {
+    let (sym, scale, unit) = display_of(name);
+    let s = value_pm(value_si * scale, std_si * scale);
+    if unit.is_empty() {
+        format!("{sym} = {s}")
+    } else {
+        format!("{sym} = {s} {unit}")
+    }
+}
+
+/// A number with at most four significant digits and no trailing zeros ("1", "200",
+/// "0.1506", "−5").
+pub fn compact(v: f64) -> String {
+    let s = format!("{v:.prec$}", prec = decimals_for(v));
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    };
+    minus(s)
+}
+
+/// Rewrites every number in `text` that carries more than six significant digits
+/// ("1.000365001548847e0", "80.871000") with four ("1", "80.87"); other text is kept.
+pub fn shorten_numbers(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let b = text.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        let starts = b[i].is_ascii_digit()
+            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'));
+        if !starts {
+            let c = text[i..].chars().next().unwrap_or(' ');
+            out.push(c);
+            i += c.len_utf8();
+            continue;
+        }
+        let mut j = i;
+        while j < b.len() && (b[j].is_ascii_digit() || b[j] == b'.') {
+            j += 1;
+        }
+        if j < b.len() && (b[j] == b'e' || b[j] == b'E') {
+            let mut k = j + 1;
+            if k < b.len() && (b[k] == b'-' || b[k] == b'+') {
+                k += 1;
+            }
+            if k < b.len() && b[k].is_ascii_digit() {
+                while k < b.len() && b[k].is_ascii_digit() {
+                    k += 1;
+                }
+                j = k;
+            }
+        }
+        let token = &text[i..j];
+        let digits = token
+            .split(['e', 'E'])
+            .next()
+            .unwrap_or("")
+            .chars()
+            .filter(|c| c.is_ascii_digit())
+            .collect::<String>();
+        let significant = digits.trim_start_matches('0').len();
+        match token.parse::<f64>() {
+            // Four significant digits, trailing zeros kept ("1.000" says it is not exactly 1).
+            Ok(v) if significant > 6 => out.push_str(&value_pm(v, f64::NAN)),
+            Ok(v) if token.contains(['e', 'E']) => out.push_str(&compact(v)),
+            _ => out.push_str(token),
+        }
+        i = j;
+    }
+    out
+}
+
+fn minus(s: String) -> String {
+    s.replacen('-', "−", 1)
+}
+
+/// The model effects switched on in `p`, each with its main values, for people
+/// ("friction (F_c = 12.30 N, b = 150.0 N·s/m)"). Empty when none is on.
+pub fn active_effects(p: &Params) -> Vec<String> {
+    let e = &p.effects;
+    let mut out = Vec::new();
+    let f = |name: &str, v: f64| fitted(name, v, f64::NAN);
+    if e.friction.enabled {
+        out.push(format!(
+            "friction ({}, {})",
+            f("coulomb_n", e.friction.coulomb_n),
+            f("viscous_n_s_per_m", e.friction.viscous_n_s_per_m)
+        ));
+    }
+    if e.valve_overlap.enabled {
+        out.push(format!(
+            "valve overlap ({})",
+            f("overlap_m", e.valve_overlap.overlap_m)
+        ));
+    }
+    if e.valve_offset.enabled {
+        out.push(format!(
+            "valve offset ({})",
+            f("bias_v", e.valve_offset.bias_v)
+        ));
+    }
+    if e.leakage.enabled {
+        out.push(format!(
+            "leakage ({})",
+            f("coefficient_m3_per_s_pa", e.leakage.coefficient_m3_per_s_pa)
+        ));
+    }
+    if e.compliance.enabled {
+        out.push(format!(
+            "compliance ({})",
+            f(
+                "effective_bulk_modulus_pa",
+                e.compliance.effective_bulk_modulus_pa
+            )
+        ));
+    }
+    if e.supply_sag.enabled {
+        out.push(format!(
+            "supply sag ({})",
+            f("droop_pa_per_m3_s", e.supply_sag.droop_pa_per_m3_s)
+        ));
+    }
+    out
+}
+
+/// A report note with the optimiser's Debug-formatted stop reason
+/// (`Converged { ftol: false, xtol: true }`, `LostPatience`, …) put in words.
+pub fn note_for_people(note: &str) -> String {
+    let words = [
+        (
+            "Converged { ftol: true, xtol: true }",
+            "converged (error and parameters both settled)",
+        ),
+        (
+            "Converged { ftol: true, xtol: false }",
+            "converged (the error stopped improving)",
+        ),
+        (
+            "Converged { ftol: false, xtol: true }",
+            "converged (the parameters stopped moving)",
+        ),
+        ("Converged { ftol: false, xtol: false }", "converged"),
+        ("LostPatience", "iteration limit reached"),
+        ("ResidualsZero", "exact fit"),
+        (
+            "Orthogonal",
+            "converged (residuals orthogonal to the Jacobian)",
+        ),
+        ("NoParameters", "nothing to fit"),
+        ("NoResiduals", "no data to fit"),
+        ("WrongDimensions", "internal size mismatch"),
+        ("User", "stopped"),
+    ];
+    let mut s = note.to_string();
+    for (debug, people) in words {
+        s = s.replace(debug, people);
+    }
+    // `Numerical("…")` → numerical problem: …
+    if let Some(i) = s.find("Numerical(\"")
+        && let Some(j) = s[i..].find("\")")
+    {
+        let inner = s[i + 11..i + j].to_string();
+        s.replace_range(i..i + j + 2, &format!("numerical problem: {inner}"));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fitted_values_read_as_in_a_paper() {
+        assert_eq!(fitted("tau_s", 0.017497, 7.96e-6), "τ = 17.50 ± 0.01 ms");
+        assert_eq!(fitted("mass_kg", 11.66, 0.1), "m = 11.66 ± 0.10 kg");
+        assert_eq!(
+            fitted("effective_bulk_modulus_pa", 5.9483e8, f64::NAN),
+            "β = 0.5948 GPa"
+        );
+        assert_eq!(fitted("cd", 0.15061, 2e-4), "Cd = 0.1506 ± 0.0002");
+        assert_eq!(
+            fitted("bias_v", -0.0123, 1e-9),
+            "V_bias = −12.30 ± <0.01 mV"
+        );
+    }
+
+    #[test]
+    fn long_numbers_in_messages_are_shortened() {
+        assert_eq!(
+            shorten_numbers(
+                "linear model diverged at t = 80.871000 s: state u [m] = 1.000365001548847e0 (bound ±1e0); p1 2"
+            ),
+            "linear model diverged at t = 80.87 s: state u [m] = 1.000 (bound ±1); p1 2"
+        );
+        assert_eq!(
+            shorten_numbers("max_step_s = 0.5, x2"),
+            "max_step_s = 0.5, x2"
+        );
+        assert_eq!(compact(200.0), "200");
+        assert_eq!(compact(-5.0), "−5");
+        assert_eq!(compact(0.1506), "0.1506");
+    }
+
+    #[test]
+    fn debug_stop_reasons_become_words() {
+        let n = note_for_people(
+            "declared-parameter fit stopped: Converged { ftol: false, xtol: true } after 12 replays",
+        );
+        assert_eq!(
+            n,
+            "declared-parameter fit stopped: converged (the parameters stopped moving) after 12 replays"
+        );
+        assert!(!n.contains('{'));
+        let n = note_for_people("stopped: Numerical(\"NaN in Jacobian\")");
+        assert_eq!(n, "stopped: numerical problem: NaN in Jacobian");
+    }
+}

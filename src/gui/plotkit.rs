@@ -1,0 +1,232 @@
+//! Shared plot furniture: y axes that always carry numbers, a clickable legend drawn above
+//! the plot (off the data) with a swatch per line style, wrapped phase.
+
+use egui::{Color32, Pos2, Sense, Shape, Stroke, pos2, vec2};
+use egui_plot::{AxisHints, GridInput, GridMark, LineStyle};
+use std::collections::BTreeSet;
+
+/// Width reserved for every y axis (tick numbers and the axis title), so that stacked plots
+/// have their data areas on the same x positions.
+pub const Y_AXIS_WIDTH: f32 = 64.0;
+
+/// Fewest pixels between two labelled y ticks (the axis of [`y_axis`] draws every label
+/// at full strength from 16 px apart).
+const MIN_TICK_PX: f64 = 22.0;
+
+/// A y axis whose tick labels are all drawn in full (egui_plot's default fades labels
+/// closer than 30 px and hides them below 20 px, which left a short scope with only "0"),
+/// with [`y_tick`] numbers and the common width [`Y_AXIS_WIDTH`].
+pub fn y_axis<'a>(label: &str) -> AxisHints<'a> {
+    AxisHints::new_y()
+        .label(label.to_owned())
+        .formatter(y_tick)
+        .min_thickness(Y_AXIS_WIDTH)
+        .label_spacing(14.0..=16.0)
+}
+
+/// A "nice" step (1, 2, 2.5 or 5 × 10^k) at least `min_step`.
+pub fn nice_step(min_step: f64) -> f64 {
+    if !(min_step.is_finite() && min_step > 0.0) {
+        return 1.0;
+    }
+    let e = min_step.log10().floor();
+    let base = 10f64.powf(e);
+    for m in [1.0, 2.0, 2.5, 5.0, 10.0] {
+        if m * base >= min_step * (1.0 - 1e-9) {
+            return m * base;
+        }
+    }
+    10.0 * base
+}
+
+/// Y grid marks: one step for the whole axis, chosen so that the marks are at least
+/// [`MIN_TICK_PX`] apart on a plot `height_px` high, and at most about six in view. Every
+/// mark gets the same step size, so all of them are labelled, however small the amplitude
+/// (a ±0.004 m/s² trace reads −0.004, −0.002, 0, 0.002, 0.004).
+pub fn y_marks(input: GridInput, height_px: f32) -> Vec<GridMark> {
+    let (lo, hi) = input.bounds;
+    let span = hi - lo;
+    if !(span.is_finite() && span > 0.0) {
+        return Vec::new();
+    }
+    let by_pixels = span * MIN_TICK_PX / f64::from(height_px.max(1.0));
+    let step = nice_step(by_pixels.max(span / 8.0));
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last.min(first + 100))
+        .map(|k| GridMark {
+            value: k as f64 * step,
+            step_size: step,
+        })
+        .collect()
+}
+
+/// Tick text for a y mark: as many decimals as the step needs, no more (0.002, 12.5, 100).
+pub fn y_tick(mark: GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
+    let step = mark.step_size.abs();
+    let decimals = if step > 0.0 && step.is_finite() {
+        (-step.log10().floor()).clamp(0.0, 8.0) as usize
+    } else {
+        0
+    };
+    let v = if mark.value.abs() < step * 1e-6 {
+        0.0
+    } else {
+        mark.value
+    };
+    let s = format!("{v:.decimals$}");
+    // Typographic minus, as elsewhere in the app.
+    s.replacen('-', "−", 1)
+}
+
+/// Wraps a phase in degrees into (−180°, 180°].
+pub fn wrap_deg(d: f64) -> f64 {
+    let w = (d + 180.0).rem_euclid(360.0) - 180.0;
+    if w == -180.0 { 180.0 } else { w }
+}
+
+/// How an item is drawn, for its legend swatch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Swatch {
+    /// A line of the given width and style.
+    Line(f32, LineStyle),
+    /// Filled markers.
+    Marker,
+    /// A shaded span.
+    Span,
+}
+
+/// One legend entry.
+pub struct LegendItem<'a> {
+    /// Name (also the key for hiding it).
+    pub name: &'a str,
+    /// Colour.
+    pub color: Color32,
+    /// Swatch.
+    pub swatch: Swatch,
+}
+
+/// The hidden-curve key of `name` in plot `plot`.
+pub fn key(plot: &str, name: &str) -> String {
+    format!("{plot}/{name}")
+}
+
+/// Whether `name` in `plot` is hidden.
+pub fn hidden(hidden: &BTreeSet<String>, plot: &str, name: &str) -> bool {
+    hidden.contains(&key(plot, name))
+}
+
+/// A legend row above a plot: each entry a toggle (click hides or shows the curve), with a
+/// swatch of its colour and style. Hidden entries are drawn faint.
+pub fn legend_ui(
+    ui: &mut egui::Ui,
+    plot: &str,
+    items: &[LegendItem<'_>],
+    hidden_set: &mut BTreeSet<String>,
+) {
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 6.0;
+        for it in items {
+            let k = key(plot, it.name);
+            let shown = !hidden_set.contains(&k);
+            let text = egui::RichText::new(it.name).small();
+            let text = if shown {
+                text
+            } else {
+                text.weak().strikethrough()
+            };
+            ui.horizontal(|ui| {
+                ui.spacing_mut().item_spacing.x = 2.0;
+                let (rect, _) = ui.allocate_exact_size(vec2(22.0, 12.0), Sense::hover());
+                let c = if shown {
+                    it.color
+                } else {
+                    it.color.gamma_multiply(0.3)
+                };
+                paint_swatch(ui, rect, c, it.swatch);
+                let r = ui
+                    .add(egui::Button::selectable(shown, text).small())
+                    .on_hover_text("click to hide or show this curve");
+                if r.clicked() {
+                    if shown {
+                        hidden_set.insert(k);
+                    } else {
+                        hidden_set.remove(&k);
+                    }
+                }
+            });
+        }
+    });
+}
+
+fn paint_swatch(ui: &egui::Ui, rect: egui::Rect, c: Color32, s: Swatch) {
+    let p = ui.painter();
+    let (y, x0, x1) = (rect.center().y, rect.left() + 1.0, rect.right() - 1.0);
+    match s {
+        Swatch::Line(w, LineStyle::Solid) => {
+            p.line_segment([pos2(x0, y), pos2(x1, y)], Stroke::new(w, c));
+        }
+        Swatch::Line(w, LineStyle::Dashed { .. }) => {
+            p.extend(Shape::dashed_line(
+                &[pos2(x0, y), pos2(x1, y)],
+                Stroke::new(w, c),
+                5.0,
+                3.0,
+            ));
+        }
+        Swatch::Line(w, LineStyle::Dotted { .. }) => {
+            p.extend(Shape::dotted_line(
+                &[pos2(x0, y), pos2(x1, y)],
+                c,
+                4.0,
+                w * 0.6,
+            ));
+        }
+        Swatch::Marker => {
+            p.circle_filled(Pos2::new(rect.center().x, y), 4.0, c);
+        }
+        Swatch::Span => {
+            p.rect_filled(rect.shrink(1.0), 1.0, c);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_amplitudes_get_several_labelled_ticks() {
+        // ±0.004 on a 110 px scope: several marks, each more than 20 px apart and labelled.
+        let marks = y_marks(
+            GridInput {
+                bounds: (-0.0045, 0.0045),
+                base_step_size: 1e-5,
+            },
+            110.0,
+        );
+        assert!(marks.len() >= 3, "{marks:?}");
+        let px = marks[0].step_size / 0.009 * 110.0;
+        assert!(px >= 16.0, "{px} px between ticks");
+        let labels: Vec<String> = marks.iter().map(|m| y_tick(*m, &(0.0..=1.0))).collect();
+        assert!(labels.contains(&"0.002".to_string()), "{labels:?}");
+        assert!(labels.contains(&"−0.002".to_string()), "{labels:?}");
+    }
+
+    #[test]
+    fn wrapped_phase_stays_within_half_a_turn() {
+        assert_eq!(wrap_deg(-1000.0), 80.0);
+        assert_eq!(wrap_deg(-180.0), 180.0);
+        assert_eq!(wrap_deg(190.0), -170.0);
+        assert_eq!(wrap_deg(45.0), 45.0);
+    }
+
+    #[test]
+    fn nice_steps() {
+        assert_eq!(nice_step(0.0013), 0.002);
+        assert_eq!(nice_step(2.1), 2.5);
+        assert_eq!(nice_step(3.0), 5.0);
+        assert_eq!(nice_step(7.0), 10.0);
+        assert_eq!(nice_step(20.0), 20.0);
+    }
+}
