@@ -989,3 +989,32 @@ fn a_preset_type_error_names_the_key() {
         assert!(err.contains(expected), "{text}: {err}");
     }
 }
+
+/// Before: the plots were written into the target one by one, so when `report.md` could not
+/// be written the new plots were left beside the old report. Now the set is written in a
+/// temporary folder and moved only when every file can be: the target is left as it was.
+#[test]
+fn a_report_that_cannot_be_moved_into_place_leaves_the_old_set_untouched() {
+    let dir = tmp();
+    let out = dir.path().join("rep");
+    std::fs::create_dir_all(out.join("report.md")).unwrap();
+    std::fs::write(out.join("cycloid.png"), "old").unwrap();
+    let o = run(&["report", "--out", s(&out)]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("moving the report into"), "{err}");
+    assert!(
+        err.contains("report.md is a directory; nothing was moved"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("cycloid.png")).unwrap(),
+        "old",
+        "the old plot is untouched"
+    );
+    assert_eq!(entry_count(&out), 2, "nothing new in the target");
+    assert!(
+        entries_starting(dir.path(), ".rep.").is_empty(),
+        "no temporary folder left"
+    );
+}

@@ -1,7 +1,7 @@
 //! Property tests of the CSV record reader and writer (`dataset`). The number of cases of the
 //! reader's properties is raised for the long run by `SEAT_TWIN_FUZZ_CASES` (see `fuzz`).
 
-use crate::fuzz::config;
+use crate::fuzz::{config, config_scaled};
 use proptest::prelude::*;
 use seat_twin::dataset::{
     COLUMNS, RecordKind, column_limit, parse_record, parse_record_bytes, read_record, write_csv,
@@ -208,6 +208,12 @@ proptest! {
         }
     }
 
+}
+
+proptest! {
+    // Each case builds a valid record of up to 200 rows: a tenth of the long run's cases.
+    #![proptest_config(config_scaled(512, 10))]
+
     #[test]
     fn mutated_valid_files_never_panic(
         v in valid(),
@@ -250,7 +256,6 @@ proptest! {
         let unknown = r.warnings.iter().filter(|w| w.contains("unknown column")).count();
         prop_assert_eq!(unknown, usize::from(v.header.contains(&"extra")));
     }
-
 }
 
 proptest! {
@@ -311,12 +316,11 @@ proptest! {
     fn cells_beyond_their_column_bound_are_refused_by_line_and_column(
         col in 1usize..COLUMNS.len(),
         row in 1usize..6,
-        factor in prop_oneof![0.0..=1.0f64, 1.0..1e300f64],
+        factor in prop_oneof![0.0..=1.0f64, 1.0..1e290f64],
         negative in any::<bool>(),
     ) {
         let limit = column_limit(COLUMNS[col]);
         let v = limit * factor * if negative { -1.0 } else { 1.0 };
-        prop_assume!(v.is_finite());
         let (text, name, line) = with_cell(col, row, &format!("{v:e}"));
         match parse_record(&text, path(), RecordKind::Measured) {
             Ok(r) => {

@@ -2,7 +2,8 @@
 //! validation; the CSV reader's are in `dataset_props`. None may panic, on any input.
 //!
 //! `cargo test` runs a few hundred cases per property. The long run sets the number of cases
-//! of every parser property with `SEAT_TWIN_FUZZ_CASES` (see [`cases`]):
+//! of every parser property with `SEAT_TWIN_FUZZ_CASES` (see [`cases`]; the two CSV
+//! properties that build whole valid records get a tenth of it):
 //!
 //! ```text
 //! SEAT_TWIN_FUZZ_CASES=1000000 cargo test --no-default-features --test it -- \
@@ -24,8 +25,18 @@ pub(crate) fn cases(default: u32) -> u32 {
 }
 
 pub(crate) fn config(default: u32) -> ProptestConfig {
+    config_scaled(default, 1)
+}
+
+/// [`config`] for a property whose cases are `div` times as costly (each builds a record of
+/// up to 200 rows): the long run gives it a `div`-th of the cases.
+pub(crate) fn config_scaled(default: u32, div: u32) -> ProptestConfig {
+    let cases = match std::env::var("SEAT_TWIN_FUZZ_CASES").ok() {
+        Some(_) => (cases(default) / div.max(1)).max(1),
+        None => default,
+    };
     ProptestConfig {
-        cases: cases(default),
+        cases,
         // No regression files in the tree: a failure prints its minimal case.
         failure_persistence: None,
         ..ProptestConfig::default()
