@@ -190,14 +190,13 @@ fn key_at(text: &str, offset: usize) -> Option<String> {
     // A table's own span may be just its header, so its entries are searched first.
     fn walk(
         table: &DeTable<'_>,
-        offset: usize,
         contains: &dyn Fn(std::ops::Range<usize>) -> bool,
     ) -> Option<Vec<String>> {
         for (k, v) in table.iter() {
             let key = k.get_ref().to_string();
             match v.get_ref() {
                 DeValue::Table(t) => {
-                    if let Some(mut p) = walk(t, offset, contains) {
+                    if let Some(mut p) = walk(t, contains) {
                         p.insert(0, key);
                         return Some(p);
                     }
@@ -205,7 +204,7 @@ fn key_at(text: &str, offset: usize) -> Option<String> {
                 DeValue::Array(a) => {
                     for (i, item) in a.iter().enumerate() {
                         let inner = match item.get_ref() {
-                            DeValue::Table(t) => walk(t, offset, contains),
+                            DeValue::Table(t) => walk(t, contains),
                             _ => None,
                         };
                         if let Some(mut p) = inner {
@@ -226,7 +225,7 @@ fn key_at(text: &str, offset: usize) -> Option<String> {
         None
     }
     let doc = DeTable::parse(text).ok()?;
-    walk(doc.get_ref(), offset, &contains).map(|p| p.join("."))
+    walk(doc.get_ref(), &contains).map(|p| p.join("."))
 }
 
 impl Preset {
