@@ -67,7 +67,7 @@ fn linearisation(c: &mut Criterion) {
             let lin = fr::linearise_twin(black_box(&params));
             let t: Vec<_> = freqs
                 .iter()
-                .map(|&f| lin.transmissibility(&params.controller, f))
+                .map(|&f| lin.transmissibility(&seat_twin::control::ControlLaw::new(&params), f))
                 .collect();
             black_box(t)
         })

@@ -1684,7 +1684,7 @@ mod tests {
 
     #[test]
     fn demo_campaign_files_parse() {
-        let dir = Path::new("/work/shared/data/demo-campaign");
+        let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/demo-campaign"));
         if !dir.is_dir() {
             println!(
                 "note: {} not found; demo-campaign check skipped",

@@ -9,6 +9,7 @@
 //! A numerical blow-up or a panic inside a step is caught, reported as
 //! [`Event::Error`] and leaves the thread alive, waiting for [`Command::Reset`].
 
+use crate::control::ControlLaw;
 use crate::model::linear::LinearModel;
 use crate::model::passive::PassiveModel;
 use crate::model::twin::Twin;
@@ -101,7 +102,7 @@ impl Default for Excitation {
 impl Excitation {
     /// The platform motion and the drive of the active models, and how long it lasts [s].
     fn build(&self, params: &Params) -> (PlatformMotion, Drive, f64) {
-        let closed = Drive::ClosedLoop(params.controller);
+        let closed = Drive::ClosedLoop(ControlLaw::new(params));
         match self {
             Excitation::Random(r) => (PlatformMotion::Sampled(r.generate()), closed, r.duration_s),
             Excitation::Cycloid { bump, period_s } => {
@@ -301,7 +302,7 @@ where
 {
     fn update_gains(&mut self, params: &Params) {
         if let Drive::ClosedLoop(_) = self.drive() {
-            self.set_drive(Drive::ClosedLoop(params.controller));
+            self.set_drive(Drive::ClosedLoop(ControlLaw::new(params)));
         }
     }
 }

@@ -79,7 +79,7 @@ pub fn run_streaming(
 
 /// Closed loop with the preset's controller (the passive model ignores it).
 pub fn closed_loop(params: &Params) -> Drive {
-    Drive::ClosedLoop(params.controller)
+    Drive::ClosedLoop(crate::control::ControlLaw::new(params))
 }
 
 /// The cycloidal bump of Figs. 13–14 in closed loop.

@@ -2,7 +2,7 @@
 //! ([`Etd4`], the twin's default), plus step statistics.
 //!
 //! Why fixed steps: the twin is not stiff for explicit methods (its fastest modes are the
-//! lightly damped hose L–C modes near 5.8e3 rad/s, MODEL_NOTES 9), a fixed step keeps the pure
+//! lightly damped hose L–C modes near 5.8e3 rad/s, docs/model.md, correction 9), a fixed step keeps the pure
 //! input delay on a uniform grid, and the same step everywhere makes runs reproducible bit for
 //! bit. Why the exponential method by default: those hose modes ring with a damping ratio of
 //! 6e-4, and RK4 needs ≈ 0.1 ms to follow the ringing to 1e-4 m/s² in ÿ, while [`Etd4`] takes
@@ -68,7 +68,7 @@ const MAX_REMAINDER_ROWS: usize = 8;
 /// matrix exponential and φ-functions, and the remainder `R = f − A·(y − y_ref)` explicitly.
 ///
 /// Why: linearised at rest the twin has two hose/chamber L–C modes near 912 Hz with a damping
-/// ratio of 6e-4 (MODEL_NOTES 9). They ring for a quarter of a second after every disturbance,
+/// ratio of 6e-4 (docs/model.md, correction 9). They ring for a quarter of a second after every disturbance,
 /// and resolving that ringing to 1e-4 m/s² in ÿ takes RK4 a step of ≈ 0.1 ms: the step is set
 /// by phase error on a linear mode, not by the nonlinear physics. With `A` the Jacobian at rest
 /// those modes are propagated without phase or amplitude error at any step; what is left

@@ -1,5 +1,8 @@
 //! # seat-twin — digital twin of a hydraulic active seat suspension
 //!
+//! The model — equations as implemented, units, parameters, the corrections to the paper and
+//! the validity range — is documented in `docs/model.md` in the repository.
+//!
 //! The engine of seat-twin, a pure library with no UI, clock, thread or file access in its
 //! core. The main types and how data flows:
 //!
@@ -28,6 +31,7 @@
 pub mod analysis;
 pub mod bench;
 pub mod cli;
+pub mod control;
 pub mod dataset;
 pub mod delay;
 pub mod engine;
@@ -40,7 +44,10 @@ pub mod integrate;
 pub mod lti;
 pub mod model;
 pub mod params;
+pub mod plot;
 pub mod preset;
 pub mod report;
 pub mod scenario;
+pub mod seat_test;
 pub mod simulation;
+pub mod tune;

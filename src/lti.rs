@@ -21,13 +21,15 @@
 //! needs `τ ≥ h` (or no command at all); [`LtiSimulation::new`] returns `None` otherwise and
 //! the caller falls back to RK4.
 
+use crate::control::{Controller, Measurement};
 use crate::delay::{DelayLine, Tap};
 use crate::integrate::StepStats;
 use crate::model::{Inputs, Model};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::PlatformMotion;
 use crate::simulation::{
-    CommandPath, ContactEvent, Drive, RunSummary, Sample, SimError, Trace, track_contact,
+    CommandPath, ContactEvent, Drive, RunSummary, Sample, SimError, Trace, closed_loop_controller,
+    track_contact,
 };
 use nalgebra::{DMatrix, SMatrix};
 
@@ -56,7 +58,8 @@ pub struct LtiSimulation<M, const N: usize> {
     /// Divergence bound of each state (the model's [`Model::state_bound`]).
     bounds: [f64; N],
     steps: u64,
-    xdd_integral: f64,
+    /// The controller with its state, when the drive is closed loop.
+    controller: Option<Controller>,
     history: DelayLine,
     /// The read of `history` at `t − τ` for grid times `t`.
     tap: Tap,
@@ -95,6 +98,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         let tap = history.tap(tau);
         let stride = platform.grid_stride(h);
         let xdd_now = platform.xdd_at_grid(0, h, stride);
+        let controller = closed_loop_controller(&drive, h);
         let mut sim = Self {
             model,
             phi: std::array::from_fn(|i| std::array::from_fn(|j| phi[(i, j)])),
@@ -108,7 +112,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
             y,
             bounds,
             steps: 0,
-            xdd_integral: 0.0,
+            controller,
             history: DelayLine::new(h, 0.0, 0.0),
             tap,
             stride,
@@ -118,7 +122,20 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
             contacts: Vec::new(),
             in_contact: false,
         };
-        history.push(sim.command_now());
+        let u0 = sim.model.relative_position(&sim.y);
+        if let Some(c) = sim.controller.as_mut() {
+            c.start(&Measurement {
+                u: u0,
+                ydd: 0.0,
+                xdd: xdd_now,
+                dxd: 0.0,
+            });
+        }
+        let v0 = sim.command_now();
+        if let Some(c) = sim.controller.as_mut() {
+            c.sent(v0);
+        }
+        history.push(v0);
         sim.history = history;
         sim.reuse_valve = matches!(sim.drive, Drive::ClosedLoop(_)) && sim.tap.is_settled();
         sim.valve_now = sim.valve_command(0, 1.0);
@@ -132,9 +149,10 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
     /// Command as sent at the current time (before the delay) [V].
     #[inline(always)]
     fn command_now(&self) -> f64 {
-        let v = match &self.drive {
-            Drive::ClosedLoop(c) => c.kp_v_per_m * self.y[0] + c.ki_v_s_per_m * self.xdd_integral,
-            Drive::OpenLoop(sig) => sig.at(self.time()),
+        let v = match (&self.drive, &self.controller) {
+            (Drive::ClosedLoop(_), Some(c)) => c.output(self.model.relative_position(&self.y)),
+            (Drive::OpenLoop(sig), _) => sig.at(self.time()),
+            (Drive::ClosedLoop(_), None) => 0.0,
         };
         v.clamp(-self.v_max, self.v_max)
     }
@@ -195,10 +213,33 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         }
         self.steps += 1;
         self.xdd_now = xdd1;
-        // The controller's ∫ẍ with the same hold as the plant's input (trapezoid).
-        self.xdd_integral += 0.5 * self.h * (xdd0 + xdd1);
         self.check_state()?;
+        if let Some(c) = self.controller.as_ref() {
+            // ÿ at the step's end, only for a controller that reads it.
+            let ydd = if c.needs_body_acceleration() {
+                let inputs = Inputs {
+                    v_valve: v1,
+                    xdd: xdd1,
+                };
+                self.model.outputs(&self.y, &inputs).ydd
+            } else {
+                0.0
+            };
+            let m = Measurement {
+                u: self.model.relative_position(&self.y),
+                ydd,
+                xdd: xdd1,
+                // The controller's ∫ẍ with the same hold as the plant's input (trapezoid).
+                dxd: 0.5 * self.h * (xdd0 + xdd1),
+            };
+            if let Some(c) = self.controller.as_mut() {
+                c.advance(&m);
+            }
+        }
         let v = self.command_now();
+        if let Some(c) = self.controller.as_mut() {
+            c.sent(v);
+        }
         self.history.push(v);
         self.track_contact();
         Ok(())
@@ -414,7 +455,7 @@ mod tests {
         let p = Params::paper();
         let (e_ydd, e_u, peak) = compare(
             LinearModel::new(&p),
-            Drive::ClosedLoop(p.controller),
+            crate::experiments::closed_loop(&p),
             ride(),
             0.0,
         );
@@ -435,7 +476,7 @@ mod tests {
         assert!(e_ydd < 5e-3 * peak, "ÿ error {e_ydd} of peak {peak}");
         let (e_ydd, e_u, peak) = compare(
             PassiveModel::new(&p),
-            Drive::ClosedLoop(p.controller),
+            crate::experiments::closed_loop(&p),
             ride(),
             0.0,
         );
@@ -450,7 +491,7 @@ mod tests {
         let sim = LtiSimulation::new(
             LinearModel::new(&p),
             1e-3,
-            Drive::ClosedLoop(p.controller),
+            crate::experiments::closed_loop(&p),
             PlatformMotion::Still,
         );
         assert!(sim.is_none());

@@ -241,7 +241,7 @@ pub struct PlatformSine {
 }
 
 /// Quintic smooth step `w(t)` on `[0, T]` and its first two derivatives (w, w', w'' = 0 at 0).
-fn smoothstep(t: f64, t_fade: f64) -> (f64, f64, f64) {
+pub(crate) fn smoothstep(t: f64, t_fade: f64) -> (f64, f64, f64) {
     if t_fade <= 0.0 || t >= t_fade {
         return (1.0, 0.0, 0.0);
     }

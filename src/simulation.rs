@@ -8,17 +8,18 @@
 //!       (or an open-loop V_in(t))
 //! ```
 
+use crate::control::{ControlLaw, Controller, Measurement};
 use crate::delay::{DelayLine, Tap};
 use crate::integrate::{Etd4, StepStats, rk4_step};
 use crate::model::{Inputs, Model, ModelKind, Outputs};
-use crate::params::{ControllerParams, MAX_DELAY_S};
+use crate::params::MAX_DELAY_S;
 use crate::scenario::{CommandSignal, PlatformMotion, PlatformSample};
 
 /// Where the valve command comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Drive {
-    /// The paper's controller, Eq. (16), in closed loop.
-    ClosedLoop(ControllerParams),
+    /// A controller ([`crate::control`]) in closed loop.
+    ClosedLoop(ControlLaw),
     /// An open-loop command (sine tests, replay).
     OpenLoop(CommandSignal),
 }
@@ -217,8 +218,8 @@ pub struct Simulation<M: Model<N>, const N: usize> {
     v_max: f64,
     drive: Drive,
     platform: PlatformMotion,
-    /// Controller integral `∫ẍ dt` [m/s].
-    xdd_integral: f64,
+    /// The controller with its state, when the drive is closed loop.
+    controller: Option<Controller>,
     history: DelayLine,
     /// Reads of `history` at `t − τ`, `t + h/2 − τ`, `t + h − τ` for grid times `t`, when
     /// τ ≥ h (then the three are stored before the step).
@@ -290,9 +291,9 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             h,
             tau,
             v_max,
+            controller: closed_loop_controller(&drive, h),
             drive,
             platform,
-            xdd_integral: 0.0,
             history: DelayLine::new(h, 0.0, 0.0),
             taps,
             stride,
@@ -302,9 +303,27 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             in_contact: false,
             exponential: None,
         };
-        history.push(sim.command_now());
+        sim.start_controller();
+        let v0 = sim.command_now();
+        if let Some(c) = sim.controller.as_mut() {
+            c.sent(v0);
+        }
+        history.push(v0);
         sim.history = history;
         sim
+    }
+
+    /// Gives the controller its first measurement (t = 0).
+    fn start_controller(&mut self) {
+        let m = Measurement {
+            u: self.model.relative_position(&self.y),
+            ydd: 0.0,
+            xdd: self.xdd_now,
+            dxd: 0.0,
+        };
+        if let Some(c) = self.controller.as_mut() {
+            c.start(&m);
+        }
     }
 
     /// Current time [s].
@@ -381,8 +400,18 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         &self.drive
     }
 
-    /// Replaces the drive (e.g. new gains) keeping the state and time.
+    /// Replaces the drive (e.g. new gains) keeping the state and time; a controller keeps its
+    /// signal states ([`Controller::retune`]).
     pub fn set_drive(&mut self, drive: Drive) {
+        match (&drive, self.controller.as_mut()) {
+            (Drive::ClosedLoop(law), Some(c)) => c.retune(law),
+            _ => {
+                self.controller = closed_loop_controller(&drive, self.h);
+                self.drive = drive;
+                self.start_controller();
+                return;
+            }
+        }
         self.drive = drive;
     }
 
@@ -394,16 +423,18 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     /// Command as sent at the current time (before the delay) [V].
     #[inline]
     pub fn command_now(&self) -> f64 {
-        self.command_for(self.t, &self.y, self.xdd_integral)
+        self.command_for(self.t, &self.y, 0.0)
     }
 
+    /// Command at time `t` for state `y`, `dxd` [m/s] of `∫ẍ` beyond the last grid time.
     #[inline(always)]
-    fn command_for(&self, t: f64, y: &[f64; N], integral: f64) -> f64 {
-        match &self.drive {
-            Drive::ClosedLoop(c) => self.saturate(
-                c.kp_v_per_m * self.model.relative_position(y) + c.ki_v_s_per_m * integral,
-            ),
-            Drive::OpenLoop(sig) => self.saturate(sig.at(t)),
+    fn command_for(&self, t: f64, y: &[f64; N], dxd: f64) -> f64 {
+        match (&self.drive, &self.controller) {
+            (Drive::ClosedLoop(_), Some(c)) => {
+                self.saturate(c.output_with(self.model.relative_position(y), dxd))
+            }
+            (Drive::OpenLoop(sig), _) => self.saturate(sig.at(t)),
+            (Drive::ClosedLoop(_), None) => 0.0,
         }
     }
 
@@ -426,8 +457,8 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
                 } else {
                     // τ shorter than the stage offset: blend the newest stored command with
                     // the command of the stage state itself (exact for τ = 0).
-                    let z = self.xdd_integral + 0.5 * (ts - self.t) * (xdd0 + xdds);
-                    let v_now = self.command_for(ts, ys, z);
+                    let dz = 0.5 * (ts - self.t) * (xdd0 + xdds);
+                    let v_now = self.command_for(ts, ys, dz);
                     let span = ts - t_last;
                     let w = if span > 0.0 {
                         (tq - t_last) / span
@@ -483,12 +514,38 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         self.t = self.steps as f64 * h;
         self.y = y;
         self.xdd_now = xdd1;
-        self.xdd_integral += h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1);
         self.check_state()?;
+        // The controller's ∫ẍ by Simpson's rule, as the RK stages see ẍ.
+        self.advance_controller(h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1));
         let v = self.command_now();
+        if let Some(c) = self.controller.as_mut() {
+            c.sent(v);
+        }
         self.history.push(v);
         self.track_contact();
         Ok(())
+    }
+
+    /// Steps the controller to the current grid time; `dxd` is `∫ẍ dt` over the step.
+    #[inline(always)]
+    fn advance_controller(&mut self, dxd: f64) {
+        let Some(c) = self.controller.as_ref() else {
+            return;
+        };
+        let ydd = if c.needs_body_acceleration() {
+            self.outputs().ydd
+        } else {
+            0.0
+        };
+        let m = Measurement {
+            u: self.model.relative_position(&self.y),
+            ydd,
+            xdd: self.xdd_now,
+            dxd,
+        };
+        if let Some(c) = self.controller.as_mut() {
+            c.advance(&m);
+        }
     }
 
     fn check_state(&self) -> Result<(), SimError> {
@@ -637,6 +694,14 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             }
         }
         Ok(())
+    }
+}
+
+/// The controller a drive runs, if it is closed loop.
+pub(crate) fn closed_loop_controller(drive: &Drive, h: f64) -> Option<Controller> {
+    match drive {
+        Drive::ClosedLoop(law) => Some(Controller::new(law, h)),
+        Drive::OpenLoop(_) => None,
     }
 }
 

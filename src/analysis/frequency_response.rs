@@ -6,12 +6,13 @@
 //! * the valve/actuator Bode `u̇/V_in` (G(s) for the linear model), open loop, platform still;
 //! * the transmissibility `T = ÿ/ẍ` with the controller `V = Kp·u + (Ki/s)·ẍ` in the loop.
 
+use crate::control::ControlLaw;
 use crate::experiments;
 use crate::model::linear::{LinearModel, g_of};
 use crate::model::passive::PassiveModel;
 use crate::model::twin::Twin;
 use crate::model::{Inputs, Model, ModelKind};
-use crate::params::{ControllerParams, Params};
+use crate::params::Params;
 use crate::scenario::{CommandSignal, PlatformMotion, PlatformSine};
 use crate::simulation::{Drive, SimError, step_for_rate};
 use nalgebra::{DMatrix, DVector};
@@ -95,25 +96,6 @@ pub fn log_space(f_lo: f64, f_hi: f64, n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Closed-loop transmissibility from the open-loop plant responses at one frequency.
-///
-/// The plant maps `[V_valve, ẍ]` to `[u, ÿ]`; `V_valve = e^(−jωτ)·V` and
-/// `V = Kp·u + Ki·ẍ/(jω)`. Eliminating V gives `T = ÿ/ẍ`.
-fn close_loop(
-    omega: f64,
-    tau: f64,
-    c: &ControllerParams,
-    u_v: Complex64,
-    u_x: Complex64,
-    y_v: Complex64,
-    y_x: Complex64,
-) -> Complex64 {
-    let jw = Complex64::new(0.0, omega);
-    let e = (-jw * tau).exp();
-    let v_per_x = (c.kp_v_per_m * u_x + c.ki_v_s_per_m / jw) / (1.0 - c.kp_v_per_m * u_v * e);
-    y_v * e * v_per_x + y_x
-}
-
 /// Transmissibility of the linear model with the controller, exact [-].
 pub fn linear_transmissibility(params: &Params, freq_hz: f64) -> Complex64 {
     let w = 2.0 * PI * freq_hz;
@@ -123,10 +105,9 @@ pub fn linear_transmissibility(params: &Params, freq_hz: f64) -> Complex64 {
     let tau = l.tau_s;
     l.tau_s = 0.0;
     let g = g_of(&l, w);
-    close_loop(
+    ControlLaw::new(params).transmissibility(
         w,
         tau,
-        &params.controller,
         g / jw,
         Complex64::new(0.0, 0.0),
         g * jw,
@@ -201,14 +182,24 @@ impl OpenLoop {
         self.du_v * Complex64::new(0.0, -self.omega * tau_s).exp()
     }
 
+    /// `ÿ/V_valve` [m/(s²·V)] (ÿ = ü + ẍ and ü = jω·u̇).
+    pub fn ydd_v(&self) -> Complex64 {
+        Complex64::new(0.0, self.omega) * self.du_v
+    }
+
+    /// The loop gain at the valve command with the controller and the delay `tau_s`
+    /// ([`ControlLaw::loop_gain`]).
+    pub fn loop_gain(&self, law: &ControlLaw, tau_s: f64) -> Complex64 {
+        law.loop_gain(self.omega, self.u_v, self.ydd_v(), tau_s)
+    }
+
     /// Closed-loop transmissibility `ÿ/ẍ` with the controller and the delay `tau_s` [-].
-    pub fn transmissibility(&self, c: &ControllerParams, tau_s: f64) -> Complex64 {
+    pub fn transmissibility(&self, law: &ControlLaw, tau_s: f64) -> Complex64 {
         let jw = Complex64::new(0.0, self.omega);
         // ÿ = ü + ẍ and ü = jω·u̇.
-        close_loop(
+        law.transmissibility(
             self.omega,
             tau_s,
-            c,
             self.u_v,
             self.u_x,
             jw * self.du_v,
@@ -419,8 +410,8 @@ impl LinearisedModel {
     }
 
     /// Closed-loop transmissibility `ÿ/ẍ` with the controller [-].
-    pub fn transmissibility(&self, c: &ControllerParams, freq_hz: f64) -> Complex64 {
-        self.open_loop(freq_hz).transmissibility(c, self.tau_s)
+    pub fn transmissibility(&self, law: &ControlLaw, freq_hz: f64) -> Complex64 {
+        self.open_loop(freq_hz).transmissibility(law, self.tau_s)
     }
 
     /// Eigenvalues of A [1/s] (computed from the Hessenberg form, which has the same).
@@ -612,6 +603,16 @@ pub struct LoopMargins {
 }
 
 impl LoopMargins {
+    /// Positive feedback around an integrating plant: unstable at any gain.
+    pub fn positive_feedback() -> Self {
+        Self {
+            gain_margin: 0.0,
+            gain_margin_freq_hz: 0.0,
+            phase_margin_deg: f64::NEG_INFINITY,
+            crossover_hz: f64::NAN,
+        }
+    }
+
     /// Stable if both margins are positive.
     pub fn stable(&self) -> bool {
         self.gain_margin > 1.0 && self.phase_margin_deg > 0.0
@@ -623,8 +624,8 @@ pub fn margin_frequencies() -> Vec<f64> {
     log_space(0.01, 200.0, 2000)
 }
 
-/// Margins of the position loop for a `u/V_valve` response function (without the delay),
-/// evaluated on [`margin_frequencies`].
+/// Margins of the paper's position loop (`V = Kp·u`) for a `u/V_valve` response function
+/// (without the delay), evaluated on [`margin_frequencies`].
 pub fn loop_margins(
     u_per_v: impl Fn(f64) -> Complex64,
     tau_s: f64,
@@ -635,8 +636,8 @@ pub fn loop_margins(
     loop_margins_on(&freqs, values, tau_s, kp_v_per_m)
 }
 
-/// Margins of the position loop from `u/V_valve` (without the delay) already evaluated at
-/// `freqs_hz` (ascending; `u_per_v` pairs with them in order, and is not read when Kp > 0).
+/// Margins of the paper's position loop from `u/V_valve` (without the delay) already evaluated
+/// at `freqs_hz` (ascending; `u_per_v` pairs with them in order, and is not read when Kp > 0).
 pub fn loop_margins_on(
     freqs_hz: &[f64],
     u_per_v: impl IntoIterator<Item = Complex64>,
@@ -644,17 +645,10 @@ pub fn loop_margins_on(
     kp_v_per_m: f64,
 ) -> LoopMargins {
     if kp_v_per_m > 0.0 {
-        // Positive feedback around an integrating plant: unstable at any gain.
-        return LoopMargins {
-            gain_margin: 0.0,
-            gain_margin_freq_hz: 0.0,
-            phase_margin_deg: f64::NEG_INFINITY,
-            crossover_hz: f64::NAN,
-        };
+        return LoopMargins::positive_feedback();
     }
-    let freqs = freqs_hz;
     // Pairs up to the shorter of the two.
-    let loop_gain: Vec<Complex64> = freqs
+    let loop_gain: Vec<Complex64> = freqs_hz
         .iter()
         .zip(u_per_v)
         .map(|(&f, p)| {
@@ -663,6 +657,29 @@ pub fn loop_margins_on(
             -kp_v_per_m * p * Complex64::new(0.0, -w * tau_s).exp()
         })
         .collect();
+    margins_of_loop(freqs_hz, &loop_gain)
+}
+
+/// Margins of any controller's loop ([`ControlLaw::loop_gain`]) from the plant's open-loop
+/// responses at `freqs_hz` (ascending, delay excluded) and the command delay `tau_s`.
+pub fn law_margins_on(
+    freqs_hz: &[f64],
+    plant: impl IntoIterator<Item = OpenLoop>,
+    law: &ControlLaw,
+    tau_s: f64,
+) -> LoopMargins {
+    if law.positive_position_feedback() {
+        return LoopMargins::positive_feedback();
+    }
+    let loop_gain: Vec<Complex64> = plant.into_iter().map(|p| p.loop_gain(law, tau_s)).collect();
+    margins_of_loop(freqs_hz, &loop_gain)
+}
+
+/// Gain and phase margins read from a loop gain `L` (negative-feedback form, `1 + L` in the
+/// closed loop's denominator) at ascending frequencies: the first unity-gain and the first
+/// −180° crossings.
+pub fn margins_of_loop(freqs_hz: &[f64], loop_gain: &[Complex64]) -> LoopMargins {
+    let freqs = freqs_hz;
     let mags: Vec<f64> = loop_gain.iter().map(|l| l.norm()).collect();
     let phases = unwrap_phase(&loop_gain.iter().map(|l| l.arg()).collect::<Vec<_>>());
     let mut m = LoopMargins {
@@ -685,24 +702,32 @@ pub fn loop_margins_on(
     m
 }
 
-/// Position-loop margins of the linear model.
+/// Loop margins of the linear model G(s) with the parameters' controller.
 pub fn linear_margins(params: &Params) -> LoopMargins {
     let mut l = params.linear;
     let tau = l.tau_s;
     l.tau_s = 0.0;
-    loop_margins(
-        |f| {
-            let w = 2.0 * PI * f;
-            g_of(&l, w) / Complex64::new(0.0, w)
-        },
-        tau,
-        params.controller.kp_v_per_m,
-    )
+    let freqs = margin_frequencies();
+    let plant = freqs.iter().map(|&f| {
+        let w = 2.0 * PI * f;
+        let jw = Complex64::new(0.0, w);
+        let g = g_of(&l, w);
+        OpenLoop {
+            omega: w,
+            u_v: g / jw,
+            u_x: Complex64::new(0.0, 0.0),
+            du_v: g,
+            du_x: Complex64::new(0.0, 0.0),
+        }
+    });
+    law_margins_on(&freqs, plant, &ControlLaw::new(params), tau)
 }
 
-/// Position-loop margins of the twin linearised at rest.
-pub fn twin_margins(lin: &LinearisedModel, kp_v_per_m: f64) -> LoopMargins {
-    loop_margins(|f| lin.open_loop(f).u_v, lin.tau_s, kp_v_per_m)
+/// Loop margins of the twin linearised at rest with a controller.
+pub fn twin_margins(lin: &LinearisedModel, law: &ControlLaw) -> LoopMargins {
+    let freqs = margin_frequencies();
+    let plant = freqs.iter().map(|&f| lin.open_loop(f));
+    law_margins_on(&freqs, plant, law, lin.tau_s)
 }
 
 /// A valve chirp on the twin (platform still): useful for a quick Bode by FFT.

@@ -3,7 +3,7 @@
 //! by a worker thread. Results come back over channels, polled each frame.
 
 use crate::dataset::{self, RecordKind};
-use crate::report::plot::{Figure, save_figure};
+use crate::plot::{Figure, save_figure};
 use crate::scenario::SampledMotion;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, channel};

@@ -10,6 +10,7 @@ use super::units::{db, deg};
 use crate::analysis::frequency_response::{
     self as fr, Crossing, DwellOptions, LoopMargins, OpenLoop,
 };
+use crate::control::ControlLaw;
 use crate::model::ModelKind;
 use crate::params::{ControllerParams, Params};
 use egui::{Color32, RichText};
@@ -59,10 +60,7 @@ pub const PLATFORM: Color32 = Color32::from_rgb(127, 127, 127);
 /// act outside the linearised plant, so dragging Kp, Ki or τ reuses it.
 fn plant_key(p: &Params) -> Params {
     let mut k = *p;
-    k.controller = ControllerParams {
-        kp_v_per_m: 0.0,
-        ki_v_s_per_m: 0.0,
-    };
+    k.controller = ControllerParams::paper(0.0, 0.0);
     k.valve.tau_s = 0.0;
     k.linear.tau_s = 0.0;
     k
@@ -74,7 +72,7 @@ pub struct PlantCache {
     /// On the plot frequencies (delay excluded).
     pub points: Vec<OpenLoop>,
     margin_freqs: Vec<f64>,
-    margin_u_v: Vec<Complex64>,
+    margin_points: Vec<OpenLoop>,
 }
 
 impl PlantCache {
@@ -84,25 +82,22 @@ impl PlantCache {
         let lin0 = fr::linearise_twin(&key);
         let points = freqs.iter().map(|&f| lin0.open_loop(f)).collect();
         let margin_freqs = fr::margin_frequencies();
-        let margin_u_v = margin_freqs
-            .iter()
-            .map(|&f| lin0.open_loop(f).u_v)
-            .collect();
+        let margin_points = margin_freqs.iter().map(|&f| lin0.open_loop(f)).collect();
         Self {
             key,
             points,
             margin_freqs,
-            margin_u_v,
+            margin_points,
         }
     }
 
-    /// Position-loop margins of the twin for a gain and delay (as [`fr::twin_margins`]).
-    pub fn margins(&self, kp_v_per_m: f64, tau_s: f64) -> LoopMargins {
-        fr::loop_margins_on(
+    /// Loop margins of the twin for a controller and delay (as [`fr::twin_margins`]).
+    pub fn margins(&self, law: &ControlLaw, tau_s: f64) -> LoopMargins {
+        fr::law_margins_on(
             &self.margin_freqs,
-            self.margin_u_v.iter().copied(),
+            self.margin_points.iter().copied(),
+            law,
             tau_s,
-            kp_v_per_m,
         )
     }
 }
@@ -178,7 +173,7 @@ impl Analytic {
         let t_twin: Vec<Complex64> = plant
             .points
             .iter()
-            .map(|p| p.transmissibility(&params.controller, tau))
+            .map(|p| p.transmissibility(&ControlLaw::new(params), tau))
             .collect();
         let t_pas: Vec<Complex64> = f
             .iter()
@@ -214,7 +209,7 @@ impl Analytic {
             ],
             margins: [
                 Some(fr::linear_margins(params)),
-                Some(plant.margins(params.controller.kp_v_per_m, tau)),
+                Some(plant.margins(&ControlLaw::new(params), tau)),
             ],
             compute_ms: 0.0,
         };
@@ -763,8 +758,8 @@ mod tests {
         let lin = fr::linearise_twin(&p);
         for (pt, &f) in cache.points.iter().zip(&freqs) {
             let (a, b) = (
-                pt.transmissibility(&p.controller, 0.021),
-                lin.transmissibility(&p.controller, f),
+                pt.transmissibility(&ControlLaw::new(&p), 0.021),
+                lin.transmissibility(&ControlLaw::new(&p), f),
             );
             assert!(
                 (a - b).norm() <= 1e-6 * b.norm().max(1e-3),
@@ -776,7 +771,8 @@ mod tests {
                 "bode at {f} Hz: {a} vs {b}"
             );
         }
-        let (a, b) = (cache.margins(-37.0, 0.021), fr::twin_margins(&lin, -37.0));
+        let law = ControlLaw::new(&p);
+        let (a, b) = (cache.margins(&law, 0.021), fr::twin_margins(&lin, &law));
         assert!(
             (a.gain_margin - b.gain_margin).abs() <= 1e-6 * b.gain_margin.abs(),
             "{a:?} {b:?}"

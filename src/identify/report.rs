@@ -4,8 +4,8 @@
 //! the plots; `report.json` stays SI. Every file is written atomically.
 
 use super::{CalibrationReport, ErrorSummary, Verdict};
+use crate::plot::{Figure, Panel, PlotError, Scale, Series, palette, save_figure};
 use crate::preset::{Preset, PresetError, PresetMeta, write_atomic};
-use crate::report::plot::{Figure, Panel, PlotError, Scale, Series, palette, save_figure};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -9,7 +9,7 @@
 //! (2)  I1·Q̇1 = p1 − p1v − R1·Q1
 //! (3)  I2·Q̇2 = p2v − p2 − R2·Q2
 //! (4)  C1c·ṗ1 = u̇·A1 − Q1 − Q_leak
-//! (5)  C2c·ṗ2 = Q2 − u̇·A2 + Q_leak        (sign corrected, MODEL_NOTES 1)
+//! (5)  C2c·ṗ2 = Q2 − u̇·A2 + Q_leak        (sign corrected: docs/model.md, correction 1)
 //! (6)  C1·ṗ1v = Q1 − Q1v
 //! (7)  C2·ṗ2v = Q2v − Q2
 //! (12) Q1v = Cd·ka·xv·√(2/ρ·(p1v − p0)) for xv > 0, √(2/ρ·(pA − p1v)) otherwise
@@ -424,7 +424,7 @@ mod tests {
 
     #[test]
     fn full_opening_flow_matches_eq12_hand_value() {
-        // Cd = 0.1074 at full opening and Δp = 100 bar gives the valve's 20 L/min (MODEL_NOTES 4).
+        // Cd = 0.1074 at full opening and Δp = 100 bar gives the valve's 20 L/min (docs/model.md, correction 4).
         let mut p = Params::paper();
         p.valve.cd = 0.1074;
         p.supply.return_pressure_pa = 0.0;

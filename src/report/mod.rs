@@ -2,18 +2,17 @@
 //! PNG + SVG plots (Table 1 Bode, Fig. 12 transmissibility, Figs. 13–14 cycloid,
 //! Figs. 15–16 random ride) — with an honest *paper value | this twin | note* table.
 
-pub mod plot;
-
 use crate::analysis::frequency_response::{self as fr, FrequencyPoint};
 use crate::analysis::metrics;
+use crate::control::ControlLaw;
 use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::Params;
+use crate::plot::{self, Figure, Panel, Scale, Series, SeriesStyle};
 use crate::preset::write_atomic;
 use crate::scenario::{Cycloid, PlatformMotion, RandomRide};
 use crate::simulation::{SimError, Trace};
 use num_complex::Complex64;
-use plot::{Figure, Panel, Scale, Series, SeriesStyle};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -155,7 +154,7 @@ fn crossing_sets(params: &Params, freqs: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<Com
     let lin = fr::linearise_twin(params);
     let twin: Vec<Complex64> = freqs
         .iter()
-        .map(|&f| lin.transmissibility(&params.controller, f))
+        .map(|&f| lin.transmissibility(&ControlLaw::new(params), f))
         .collect();
     (passive, linear, twin)
 }
@@ -404,7 +403,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
                 "{:.4} at 70 bar, {:.4} at 100 bar",
                 n.cd_from_eq12[0], n.cd_from_eq12[1]
             ),
-            "The paper's 0.1074 follows from Δp = 100 bar (pA), not 70 bar (MODEL_NOTES 4).".into(),
+            "The paper's 0.1074 follows from Δp = 100 bar (pA), not 70 bar (docs/model.md, correction 4).".into(),
         ],
         [
             "Gain of u̇/V_in at low frequency".into(),
@@ -424,7 +423,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
                 n.linear_phase_delay_s * 1e3
             ),
             "Does not reproduce by design: the paper puts the measured *total* 17.5 ms into the \
-             spool equation, whose own lag adds ≈ 2ζs/ωn = 3.2 ms (MODEL_NOTES 6). The \
+             spool equation, whose own lag adds ≈ 2ζs/ωn = 3.2 ms (docs/model.md, correction 6). The \
              `consistent-delay` preset (τ = 14.3 ms) restores 17.5 ms."
                 .into(),
         ],
@@ -432,7 +431,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
             "Passive |T| = 1 crossing".into(),
             "≈ 4 Hz".into(),
             format!("{} Hz", fmt_opt(n.passive_crossing_hz, 2)),
-            "√2·fn with k = 3680 N/m in total (MODEL_NOTES 3).".into(),
+            "√2·fn with k = 3680 N/m in total (docs/model.md, correction 3).".into(),
         ],
         [
             "Active |T| = 1 crossing (end of isolation)".into(),
@@ -468,7 +467,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
             "0.16 m/s²".into(),
             format!("{} m/s²", spread_cell(&n.ride_rms_ydd_twin, 1.0, 3)),
             "Above the paper's value: the longer total delay leaves more residual \
-             acceleration (MODEL_NOTES 6)."
+             acceleration (docs/model.md, correction 6)."
                 .into(),
         ],
         [
@@ -485,7 +484,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
                 n.ride_pressure_mean_pa / 1e5,
                 n.ride_pressure_symmetry_pa / 1e5
             ),
-            "Exact symmetry of the corrected model (MODEL_NOTES 11).".into(),
+            "Exact symmetry of the corrected model (docs/model.md, correction 11).".into(),
         ],
         [
             "Flows Q1 = Q2 within the valve's 20 L/min".into(),
@@ -501,7 +500,7 @@ pub fn comparison_rows(n: &ReportNumbers) -> Vec<[String; 4]> {
                 n.ride_twin_contact_seeds
             ),
             "The platform RMS displacement is ≈ 9 mm; some realisations exceed ±35 mm \
-             (MODEL_NOTES 8). Contacts are flagged, not hidden."
+             (docs/model.md, correction 8). Contacts are flagged, not hidden."
                 .into(),
         ],
         [
@@ -525,7 +524,7 @@ fn markdown(n: &ReportNumbers, params: &Params) -> String {
     let _ = writeln!(
         s,
         "Reproduction of sections 4–6 of *Development of a Digital Twin for a Hydraulic, Active \
-         Seat Suspension System* with the corrections of `MODEL_NOTES.md` (Eq. 5 sign, μ/β names, \
+         Seat Suspension System* with the corrections of seat-twin's `docs/model.md` (Eq. 5 sign, μ/β names, \
          k in total). Parameters: Cd = {}, τ = {:.1} ms, Kp = {} V/m, Ki = {} V·s/m. Random-ride \
          statistics are over {} seeds of {:.0} s (the first 2 s fade-in excluded); they are \
          mean ± standard deviation (min–max).\n",

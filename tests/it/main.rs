@@ -4,6 +4,7 @@
 
 mod cli;
 mod cli_hardening;
+mod control;
 mod dataset_props;
 mod engine;
 mod fuzz;
@@ -13,3 +14,5 @@ mod integrator;
 mod paper;
 mod physics;
 mod presets;
+mod seat_test;
+mod tune;

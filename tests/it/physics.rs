@@ -3,6 +3,7 @@
 //! against G(s) at small amplitude.
 
 use seat_twin::analysis::frequency_response as fr;
+use seat_twin::control::ControlLaw;
 use seat_twin::experiments;
 use seat_twin::model::ModelKind;
 use seat_twin::params::{Params, derived};
@@ -20,7 +21,7 @@ fn ride(seconds: f64, seed: u64) -> PlatformMotion {
     )
 }
 
-/// MODEL_NOTES 11: with equal areas and a symmetric valve, p1 + p2 = pA + p0 and Q1 = Q2 hold
+/// docs/model.md, correction 11: with equal areas and a symmetric valve, p1 + p2 = pA + p0 and Q1 = Q2 hold
 /// to round-off. A wrong sign in Eq. (5) breaks both (and blows the model up).
 #[test]
 fn chamber_pressures_stay_symmetric_and_flows_equal() {
@@ -53,7 +54,7 @@ fn chamber_pressures_stay_symmetric_and_flows_equal() {
     );
 }
 
-/// MODEL_NOTES 9: the body on the oil column rings near 480 rad/s, almost undamped; the hose
+/// docs/model.md, correction 9: the body on the oil column rings near 480 rad/s, almost undamped; the hose
 /// L–C modes sit near 5.8e3 rad/s. Hand derivation: per side the chamber and hose capacitances
 /// act in parallel at low frequency, k_oil = 2·A²/(Cc + C), ω = √((k_oil + k)/m).
 #[test]
@@ -108,7 +109,7 @@ fn twin_static_gain_matches_g_and_delay_is_counted_twice() {
     );
     // Adjusted Cd reproduces Kg = 133.25 mm/(s·V) within 1 %.
     assert!((low / p.linear.kg_m_per_s_v - 1.0).abs() < 0.01);
-    // MODEL_NOTES 6: total phase-slope delay ≈ τ + 2ζs/ωn ≈ 20.7 ms.
+    // docs/model.md, correction 6: total phase-slope delay ≈ τ + 2ζs/ωn ≈ 20.7 ms.
     let freqs: Vec<f64> = (1..=20).map(|i| i as f64).collect();
     let phases: Vec<f64> = freqs.iter().map(|&f| lin.bode(f).arg()).collect();
     let tau = fr::delay_from_phase_slope(&freqs, &phases);
@@ -174,7 +175,7 @@ fn twin_transmissibility_linearised_vs_simulated() {
     let opt = fr::DwellOptions::default();
     for f in [1.0, 4.0, 8.0, 12.0] {
         let sim = fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt).unwrap();
-        let l = lin.transmissibility(&p.controller, f);
+        let l = lin.transmissibility(&ControlLaw::new(&p), f);
         assert!(
             (sim - l).norm() < 0.03 * l.norm().max(0.1),
             "{f} Hz: {sim} vs {l}"
@@ -183,7 +184,7 @@ fn twin_transmissibility_linearised_vs_simulated() {
 }
 
 /// Crossing frequencies: passive √2·fn ≈ 3.99 Hz; linear active ≈ 9 Hz (paper, Fig. 12);
-/// twin as written ≈ 8 Hz because its delay is counted twice (MODEL_NOTES 6).
+/// twin as written ≈ 8 Hz because its delay is counted twice (docs/model.md, correction 6).
 #[test]
 fn unity_crossings_match_the_paper_and_notes() {
     let p = Params::paper();
@@ -196,7 +197,7 @@ fn unity_crossings_match_the_paper_and_notes() {
     let lc = fr::isolation_upper_edge(&freqs, &linear).unwrap();
     assert!((lc - 9.0).abs() < 0.6, "linear active {lc}");
     let lin = fr::linearise_twin(&p);
-    let twin = mag(&|f| lin.transmissibility(&p.controller, f).norm());
+    let twin = mag(&|f| lin.transmissibility(&ControlLaw::new(&p), f).norm());
     let tc = fr::isolation_upper_edge(&freqs, &twin).unwrap();
     assert!((tc - 8.0).abs() < 0.6, "twin {tc}");
     assert!(

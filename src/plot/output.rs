@@ -1,0 +1,166 @@
+//! The two outputs of a figure: a PNG rendered at twice the size and averaged down (so lines
+//! are anti-aliased), and an SVG whose text is set by the viewer. Each file is written to a
+//! temporary file beside its destination and renamed.
+
+use super::canvas::Ctx;
+use super::render::{Drawn, render};
+use super::text::font;
+use super::{Figure, PlotError};
+use plotters::prelude::*;
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+
+/// Smallest figure side that is drawn (px); smaller requested sizes are enlarged to this.
+const MIN_SIDE: u32 = 64;
+/// Largest figure side that is drawn (px); larger requested sizes are reduced to this.
+const MAX_SIDE: u32 = 8_192;
+
+/// Draws `fig` into `<path_without_extension>.png` and `<path_without_extension>.svg` and
+/// returns the two paths. The extensions are appended (`out/fig.v2` → `out/fig.v2.png`); the
+/// directory must exist. Each file is written to a temporary file beside it and renamed.
+pub fn save_figure(
+    fig: &Figure,
+    path_without_extension: &Path,
+) -> Result<(PathBuf, PathBuf), PlotError> {
+    let png = with_suffix(path_without_extension, ".png");
+    let svg = with_suffix(path_without_extension, ".svg");
+    let (w, h) = size(fig);
+
+    let (rgb, _) = render_rgb(fig)?;
+    write_atomic(&png, |tmp| {
+        let mut enc = BitMapBackend::new(tmp, (w, h));
+        enc.blit_bitmap((0, 0), (w, h), &rgb)
+            .map_err(|e| PlotError::Backend(e.to_string()))?;
+        enc.present()
+            .map_err(|e| PlotError::Backend(format!("{}: {e}", png.display())))
+    })?;
+
+    let (text, _) = render_svg(fig)?;
+    write_atomic(&svg, |tmp| {
+        std::fs::write(tmp, text.as_bytes()).map_err(|source| PlotError::Io {
+            path: tmp.to_path_buf(),
+            source,
+        })
+    })?;
+    Ok((png, svg))
+}
+
+/// The drawn size of `fig` (px).
+fn size(fig: &Figure) -> (u32, u32) {
+    (
+        fig.width.clamp(MIN_SIDE, MAX_SIDE),
+        fig.height.clamp(MIN_SIDE, MAX_SIDE),
+    )
+}
+
+/// The figure as 8-bit RGB rows of [`size`], rendered at 2× (up to 8 Mpx) and averaged down;
+/// where the panels went.
+pub(super) fn render_rgb(fig: &Figure) -> Result<(Vec<u8>, Vec<Drawn>), PlotError> {
+    let m = font()?;
+    let (w, h) = size(fig);
+    let ss: u32 = if u64::from(w) * u64::from(h) <= 8_000_000 {
+        2
+    } else {
+        1
+    };
+    let (bw, bh) = (w * ss, h * ss);
+    let mut big = vec![255u8; bw as usize * bh as usize * 3];
+    let drawn = {
+        let root = BitMapBackend::with_buffer(&mut big, (bw, bh)).into_drawing_area();
+        let ctx = Ctx {
+            s: f64::from(ss),
+            bitmap: true,
+            m,
+        };
+        let drawn = render(&root, fig, &ctx)?;
+        root.present().map_err(super::canvas::backend)?;
+        drawn
+    };
+    Ok((downsample(&big, bw, bh, ss), drawn))
+}
+
+/// The figure as SVG text; where the panels went.
+pub(super) fn render_svg(fig: &Figure) -> Result<(String, Vec<Drawn>), PlotError> {
+    let m = font()?;
+    let mut text = String::new();
+    let drawn = {
+        let root = SVGBackend::with_string(&mut text, size(fig)).into_drawing_area();
+        let ctx = Ctx {
+            s: 1.0,
+            bitmap: false,
+            m,
+        };
+        let drawn = render(&root, fig, &ctx)?;
+        root.present().map_err(super::canvas::backend)?;
+        drawn
+    };
+    Ok((text, drawn))
+}
+
+fn with_suffix(p: &Path, suffix: &str) -> PathBuf {
+    let mut s: OsString = p.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
+}
+
+/// Creates a temporary file beside `dest` (with the same extension, which the PNG encoder
+/// needs), lets `fill` write it by path, syncs it and renames it onto `dest`.
+fn write_atomic(
+    dest: &Path,
+    fill: impl FnOnce(&Path) -> Result<(), PlotError>,
+) -> Result<(), PlotError> {
+    let dir = match dest.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let ext = dest
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".plot-").suffix(&ext);
+    // Like a file created normally (0666 less the umask), not tempfile's private 0600.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let tmp = builder
+        .tempfile_in(&dir)
+        .map_err(|source| PlotError::Io { path: dir, source })?;
+    fill(tmp.path())?;
+    let io = |source| PlotError::Io {
+        path: dest.to_path_buf(),
+        source,
+    };
+    tmp.as_file().sync_all().map_err(io)?;
+    tmp.persist(dest).map_err(|e| io(e.error))?;
+    Ok(())
+}
+
+/// `f`×`f` box filter of an RGB buffer.
+fn downsample(src: &[u8], w: u32, h: u32, f: u32) -> Vec<u8> {
+    if f == 1 {
+        return src.to_vec();
+    }
+    let (w, h, f) = (w as usize, h as usize, f as usize);
+    let (ow, oh) = (w / f, h / f);
+    let mut out = vec![0u8; ow * oh * 3];
+    let n = (f * f) as u32;
+    for oy in 0..oh {
+        for ox in 0..ow {
+            let mut acc = [0u32; 3];
+            for dy in 0..f {
+                let row = (oy * f + dy) * w;
+                for dx in 0..f {
+                    let i = (row + ox * f + dx) * 3;
+                    acc[0] += u32::from(src[i]);
+                    acc[1] += u32::from(src[i + 1]);
+                    acc[2] += u32::from(src[i + 2]);
+                }
+            }
+            let o = (oy * ow + ox) * 3;
+            for c in 0..3 {
+                out[o + c] = ((acc[c] + n / 2) / n) as u8;
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,643 @@
+//! Auto-tuning of a controller's gains on the **nonlinear twin** (not on G(s)).
+//!
+//! The problem: minimise an ISO 2631-1 objective of the body's acceleration (Wk-weighted
+//! `a_w`, VDV, or the SEAT ratio) averaged over a few random rides, subject to
+//! * no end-stop contact and `max |u| ≤ 30 mm` on every tuning ride;
+//! * gain margin ≥ 6 dB and phase margin ≥ 45° of the twin's loop linearised at rest.
+//!
+//! Constraints enter as a penalty that grows with the violation, so the search (Nelder–Mead,
+//! from the `argmin` crate) is pulled back into the feasible set rather than walled off. Each
+//! evaluation runs the tuning rides in parallel (rayon). With `robust`, the objective is the
+//! worst case over the parameter spread (Cd ±10 %, τ ±3 ms, mass ±20 %, corners and nominal)
+//! and the constraints must hold at every corner.
+//!
+//! What comes out ([`TuneResult`]): the tuned gains; the objective of the starting gains and
+//! of the tuned ones on the tuning rides and on held-out rides (other seeds); the margins and
+//! stroke use of the tuned loop; a robustness table over the spread; and the Pareto front of
+//! objective against stroke use among every feasible evaluation.
+
+pub mod report;
+
+use crate::analysis::frequency_response::{self as fr, LinearisedModel, LoopMargins};
+use crate::analysis::metrics;
+use crate::control::ControlLaw;
+use crate::experiments;
+use crate::model::ModelKind;
+use crate::params::{ControllerKind, ControllerParams, Params};
+use crate::scenario::{PlatformMotion, RandomRide};
+use argmin::core::{CostFunction, Executor, State};
+use argmin::solver::neldermead::NelderMead;
+use rayon::prelude::*;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Largest stroke use allowed on a tuning ride [m].
+pub const MAX_ABS_U_M: f64 = 0.030;
+/// Smallest gain margin allowed [dB].
+pub const MIN_GAIN_MARGIN_DB: f64 = 6.0;
+/// Smallest phase margin allowed [deg].
+pub const MIN_PHASE_MARGIN_DEG: f64 = 45.0;
+/// Start of the ride left out of the metrics (the rides fade in over 2 s) [s].
+pub const SETTLE_S: f64 = 2.0;
+/// Recording rate of the tuning runs [Hz].
+const RATE_HZ: f64 = 500.0;
+
+/// What the tuner minimises (of the body's acceleration, ISO 2631-1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Objective {
+    /// Wk-weighted RMS `a_w` [m/s²].
+    Aw,
+    /// Vibration dose value of the Wk-weighted acceleration [m/s^1.75].
+    Vdv,
+    /// SEAT: `a_w` of the body over `a_w` of the platform [%].
+    Seat,
+}
+
+impl Objective {
+    /// Name as on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Objective::Aw => "aw",
+            Objective::Vdv => "vdv",
+            Objective::Seat => "seat",
+        }
+    }
+
+    /// Unit of the objective's value.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Objective::Aw => "m/s²",
+            Objective::Vdv => "m/s^1.75",
+            Objective::Seat => "%",
+        }
+    }
+}
+
+impl std::str::FromStr for Objective {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "aw" => Ok(Objective::Aw),
+            "vdv" => Ok(Objective::Vdv),
+            "seat" => Ok(Objective::Seat),
+            _ => Err(format!("unknown objective `{s}` (one of: aw, vdv, seat)")),
+        }
+    }
+}
+
+/// How to tune.
+#[derive(Debug, Clone)]
+pub struct TuneOptions {
+    /// Structure to tune; the preset's gains of that structure are the start.
+    pub kind: ControllerKind,
+    /// What to minimise.
+    pub objective: Objective,
+    /// Seeds of the tuning rides.
+    pub tune_seeds: Vec<u64>,
+    /// Seeds of the held-out rides (confirmation only).
+    pub heldout_seeds: Vec<u64>,
+    /// Duration of each ride [s], ≥ 5.
+    pub duration_s: f64,
+    /// Optimise the worst case over the parameter spread.
+    pub robust: bool,
+    /// Budget of objective evaluations (each runs every tuning ride), ≥ 10.
+    pub max_evaluations: usize,
+}
+
+impl Default for TuneOptions {
+    fn default() -> Self {
+        Self {
+            kind: ControllerKind::Paper,
+            objective: Objective::Aw,
+            tune_seeds: vec![1, 2, 3],
+            heldout_seeds: vec![101, 102, 103],
+            duration_s: 60.0,
+            robust: false,
+            max_evaluations: 120,
+        }
+    }
+}
+
+/// Why tuning could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TuneError {
+    /// An option outside its range.
+    #[error("tune option `{name}` = {value} is outside [{min}, {max}]")]
+    Option {
+        /// Option name.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// Smallest allowed.
+        min: f64,
+        /// Largest allowed.
+        max: f64,
+    },
+    /// No seeds to tune on.
+    #[error("tune needs at least one tuning seed")]
+    NoSeeds,
+    /// The optimiser failed.
+    #[error("optimiser: {0}")]
+    Optimiser(String),
+    /// Cancelled by the caller.
+    #[error("tuning was cancelled")]
+    Cancelled,
+}
+
+/// One evaluation of a set of gains.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Evaluation {
+    /// The controller evaluated.
+    #[serde(skip)]
+    pub controller: ControllerParams,
+    /// The tuned keys and their values.
+    pub gains: Vec<(String, f64)>,
+    /// Mean objective over the rides (worst case over the spread when robust); NaN if a ride
+    /// diverged.
+    pub objective: f64,
+    /// Largest |u| over the rides [m].
+    pub max_abs_u_m: f64,
+    /// End-stop contacts over the rides.
+    pub contacts: usize,
+    /// Gain margin of the linearised loop [dB] (worst over the spread when robust).
+    pub gain_margin_db: f64,
+    /// Phase margin of the linearised loop [deg] (worst over the spread when robust).
+    pub phase_margin_deg: f64,
+    /// Every constraint met.
+    pub feasible: bool,
+}
+
+/// One row of the robustness table.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RobustnessRow {
+    /// Discharge coefficient [-].
+    pub cd: f64,
+    /// Valve delay [s].
+    pub tau_s: f64,
+    /// Body mass [kg].
+    pub mass_kg: f64,
+    /// Mean objective over the tuning rides.
+    pub objective: f64,
+    /// End-stop contacts over the tuning rides.
+    pub contacts: usize,
+    /// Largest |u| [m].
+    pub max_abs_u_m: f64,
+}
+
+/// What tuning found.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TuneResult {
+    /// Structure tuned.
+    pub kind: ControllerKind,
+    /// Objective minimised.
+    pub objective: Objective,
+    /// The starting controller (the preset's gains) on the tuning rides.
+    pub baseline: Evaluation,
+    /// The tuned controller on the tuning rides.
+    pub tuned: Evaluation,
+    /// The starting controller on the held-out rides.
+    pub baseline_heldout: Evaluation,
+    /// The tuned controller on the held-out rides.
+    pub tuned_heldout: Evaluation,
+    /// The tuned controller over the parameter spread (on the tuning rides).
+    pub robustness: Vec<RobustnessRow>,
+    /// Feasible evaluations that no other feasible one beats on both objective and stroke.
+    pub pareto: Vec<Evaluation>,
+    /// Objective evaluations made by the search.
+    pub evaluations: usize,
+    /// Seeds and duration used.
+    pub tune_seeds: Vec<u64>,
+    /// Held-out seeds.
+    pub heldout_seeds: Vec<u64>,
+    /// Ride duration [s].
+    pub duration_s: f64,
+    /// Whether the worst case over the spread was optimised.
+    pub robust: bool,
+    /// Why the search stopped.
+    pub stop_reason: String,
+}
+
+/// The gains a structure tunes, with the scale of one search unit. Corner frequencies stay as
+/// the preset sets them (they are design choices, not gains).
+pub fn tuned_keys(kind: ControllerKind) -> &'static [(&'static str, f64)] {
+    match kind {
+        ControllerKind::Paper | ControllerKind::Smith => {
+            &[("kp_v_per_m", 40.0), ("ki_v_s_per_m", 2.0)]
+        }
+        ControllerKind::Predictive => &[
+            ("kp_v_per_m", 40.0),
+            ("ki_v_s_per_m", 2.0),
+            ("lead_s", 0.01),
+        ],
+        ControllerKind::Skyhook => &[
+            ("kp_v_per_m", 40.0),
+            ("ki_v_s_per_m", 2.0),
+            ("sky_v_s_per_m", 2.0),
+        ],
+    }
+}
+
+/// The parameter spread of the robustness table: Cd ±10 %, τ ±3 ms, mass ±20 % (3 levels
+/// each, nominal included).
+pub fn spread(params: &Params) -> Vec<Params> {
+    let mut out = Vec::with_capacity(27);
+    for dc in [-0.1, 0.0, 0.1] {
+        for dt in [-0.003, 0.0, 0.003] {
+            for dm in [-0.2, 0.0, 0.2] {
+                let mut p = *params;
+                p.valve.cd *= 1.0 + dc;
+                p.valve.tau_s = (p.valve.tau_s + dt).max(0.0);
+                p.body.mass_kg *= 1.0 + dm;
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+/// The corners of the spread and the nominal point (what `robust` optimises over).
+fn spread_corners(params: &Params) -> Vec<Params> {
+    spread(params)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| {
+            let (a, b, c) = (i / 9, (i / 3) % 3, i % 3);
+            (a != 1 && b != 1 && c != 1) || (a == 1 && b == 1 && c == 1)
+        })
+        .map(|(_, p)| p)
+        .collect()
+}
+
+/// The random ride of the paper (section 6) with a seed and duration.
+pub fn ride(seed: u64, duration_s: f64) -> PlatformMotion {
+    PlatformMotion::Sampled(
+        RandomRide {
+            seed,
+            duration_s,
+            ..Default::default()
+        }
+        .generate(),
+    )
+}
+
+/// Objective, max |u| and contacts of the twin on one ride; `None` if it diverged.
+fn ride_score(
+    params: &Params,
+    ride: &PlatformMotion,
+    duration_s: f64,
+    objective: Objective,
+) -> Option<(f64, f64, usize)> {
+    let trace = experiments::run(
+        params,
+        ModelKind::Twin,
+        experiments::closed_loop(params),
+        ride.clone(),
+        duration_s,
+        RATE_HZ,
+    )
+    .ok()?;
+    let ydd = trace.channel(|s| s.ydd);
+    let body = metrics::vibration_metrics(&ydd, RATE_HZ, SETTLE_S).ok()?;
+    let value = match objective {
+        Objective::Aw => body.aw,
+        Objective::Vdv => body.vdv,
+        Objective::Seat => {
+            let xdd = trace.channel(|s| s.xdd);
+            let floor = metrics::vibration_metrics(&xdd, RATE_HZ, SETTLE_S).ok()?;
+            metrics::seat_percent(body.aw, floor.aw)
+        }
+    };
+    let max_u = trace.samples.iter().map(|s| s.u.abs()).fold(0.0, f64::max);
+    value
+        .is_finite()
+        .then_some((value, max_u, trace.contacts.len()))
+}
+
+fn margins_db_deg(m: &LoopMargins) -> (f64, f64) {
+    (20.0 * m.gain_margin.log10(), m.phase_margin_deg)
+}
+
+/// Mean objective, max |u| and contacts over rides (in parallel); objective NaN if any ride
+/// diverged.
+fn score_rides(
+    params: &Params,
+    rides: &[PlatformMotion],
+    duration_s: f64,
+    objective: Objective,
+) -> (f64, f64, usize) {
+    let scores: Vec<Option<(f64, f64, usize)>> = rides
+        .par_iter()
+        .map(|r| ride_score(params, r, duration_s, objective))
+        .collect();
+    if scores.iter().any(Option::is_none) {
+        return (f64::NAN, f64::NAN, 0);
+    }
+    let scores: Vec<(f64, f64, usize)> = scores.into_iter().flatten().collect();
+    let mean = scores.iter().map(|s| s.0).sum::<f64>() / scores.len() as f64;
+    let max_u = scores.iter().map(|s| s.1).fold(0.0, f64::max);
+    let contacts = scores.iter().map(|s| s.2).sum();
+    (mean, max_u, contacts)
+}
+
+/// The evaluation problem: a plant (or its spread), rides and an objective.
+struct Problem {
+    /// Plants evaluated: the nominal alone, or the spread's corners and nominal when robust.
+    plants: Vec<(Params, LinearisedModel)>,
+    rides: Vec<PlatformMotion>,
+    duration_s: f64,
+    objective: Objective,
+    kind: ControllerKind,
+    start: ControllerParams,
+    /// Objective of the start, the penalty's scale.
+    scale: Mutex<Option<f64>>,
+    log: Mutex<Vec<Evaluation>>,
+    count: AtomicUsize,
+    cancel: Option<std::sync::Arc<AtomicBool>>,
+}
+
+impl Problem {
+    fn controller_at(&self, x: &[f64]) -> ControllerParams {
+        let mut c = self.start;
+        c.kind = self.kind;
+        for ((key, scale), xi) in tuned_keys(self.kind).iter().zip(x) {
+            let (min, max, _) = ControllerParams::range(key).unwrap_or((-1e4, 1e4, ""));
+            c.set(key, (xi * scale).clamp(min, max));
+        }
+        c
+    }
+
+    fn evaluate(&self, c: ControllerParams) -> Evaluation {
+        let law = |p: &Params| {
+            let mut q = *p;
+            q.controller = c;
+            ControlLaw::new(&q)
+        };
+        // Margins first: a loop without them is not simulated.
+        let (mut gm, mut pm) = (f64::INFINITY, f64::INFINITY);
+        for (p, lin) in &self.plants {
+            let (g, ph) = margins_db_deg(&fr::twin_margins(lin, &law(p)));
+            gm = gm.min(g);
+            pm = pm.min(ph);
+        }
+        let gains = tuned_keys(self.kind)
+            .iter()
+            .map(|(k, _)| (k.to_string(), c.get(k).unwrap_or(f64::NAN)))
+            .collect();
+        let margins_ok = gm >= MIN_GAIN_MARGIN_DB && pm >= MIN_PHASE_MARGIN_DEG;
+        let (mut objective, mut max_u, mut contacts) = (f64::NAN, f64::NAN, 0);
+        if margins_ok || gm > 0.0 {
+            objective = f64::NEG_INFINITY;
+            max_u = 0.0;
+            for (p, _) in &self.plants {
+                let mut q = *p;
+                q.controller = c;
+                let (o, u, n) = score_rides(&q, &self.rides, self.duration_s, self.objective);
+                objective = objective.max(o);
+                max_u = f64::max(max_u, u);
+                contacts += n;
+                if !o.is_finite() {
+                    objective = f64::NAN;
+                    break;
+                }
+            }
+        }
+        let feasible = margins_ok && objective.is_finite() && contacts == 0 && max_u <= MAX_ABS_U_M;
+        Evaluation {
+            controller: c,
+            gains,
+            objective,
+            max_abs_u_m: max_u,
+            contacts,
+            gain_margin_db: gm,
+            phase_margin_deg: pm,
+            feasible,
+        }
+    }
+
+    /// The penalised cost of an evaluation.
+    fn cost(&self, e: &Evaluation) -> f64 {
+        let scale = self.scale.lock().map(|s| s.unwrap_or(1.0)).unwrap_or(1.0);
+        let mut violation = 0.0;
+        violation += (MIN_GAIN_MARGIN_DB - e.gain_margin_db).max(0.0) / MIN_GAIN_MARGIN_DB;
+        violation += (MIN_PHASE_MARGIN_DEG - e.phase_margin_deg).max(0.0) / MIN_PHASE_MARGIN_DEG;
+        if e.max_abs_u_m.is_finite() {
+            violation += (e.max_abs_u_m / MAX_ABS_U_M - 1.0).max(0.0);
+        }
+        violation += e.contacts as f64;
+        if e.objective.is_finite() {
+            e.objective + scale * 10.0 * violation
+        } else {
+            // Not simulated (no margin) or diverged: worse than any simulated point.
+            scale * (20.0 + 10.0 * violation)
+        }
+    }
+}
+
+impl CostFunction for &Problem {
+    type Param = Vec<f64>;
+    type Output = f64;
+    fn cost(&self, x: &Self::Param) -> Result<f64, argmin::core::Error> {
+        if self
+            .cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+        {
+            return Err(argmin::core::Error::msg("cancelled"));
+        }
+        let e = self.evaluate(self.controller_at(x));
+        self.count.fetch_add(1, Ordering::Relaxed);
+        let cost = Problem::cost(self, &e);
+        if let Ok(mut log) = self.log.lock() {
+            log.push(e);
+        }
+        Ok(cost)
+    }
+}
+
+/// Feasible evaluations not dominated on (objective, max |u|), sorted by stroke use.
+pub fn pareto_front(evals: &[Evaluation]) -> Vec<Evaluation> {
+    let feasible: Vec<&Evaluation> = evals.iter().filter(|e| e.feasible).collect();
+    let mut front: Vec<Evaluation> = feasible
+        .iter()
+        .filter(|e| {
+            !feasible.iter().any(|o| {
+                o.objective <= e.objective
+                    && o.max_abs_u_m <= e.max_abs_u_m
+                    && (o.objective < e.objective || o.max_abs_u_m < e.max_abs_u_m)
+            })
+        })
+        .map(|e| (*e).clone())
+        .collect();
+    front.sort_by(|a, b| a.max_abs_u_m.total_cmp(&b.max_abs_u_m));
+    front.dedup_by(|a, b| a.gains == b.gains);
+    front
+}
+
+/// Tunes the preset's controller of `opts.kind` on the twin; `progress(done, budget)` is
+/// called after each evaluation; setting `cancel` stops at the next evaluation.
+pub fn tune(
+    params: &Params,
+    opts: &TuneOptions,
+    cancel: Option<std::sync::Arc<AtomicBool>>,
+) -> Result<TuneResult, TuneError> {
+    check_options(opts)?;
+    let nominal = {
+        let mut p = *params;
+        p.controller.kind = opts.kind;
+        p
+    };
+    let plants_of = |ps: Vec<Params>| {
+        ps.into_iter()
+            .map(|p| (p, fr::linearise_twin(&p)))
+            .collect::<Vec<_>>()
+    };
+    let plants = if opts.robust {
+        plants_of(spread_corners(&nominal))
+    } else {
+        plants_of(vec![nominal])
+    };
+    let rides: Vec<PlatformMotion> = opts
+        .tune_seeds
+        .iter()
+        .map(|&s| ride(s, opts.duration_s))
+        .collect();
+    let problem = Problem {
+        plants,
+        rides,
+        duration_s: opts.duration_s,
+        objective: opts.objective,
+        kind: opts.kind,
+        start: nominal.controller,
+        scale: Mutex::new(None),
+        log: Mutex::new(Vec::new()),
+        count: AtomicUsize::new(0),
+        cancel,
+    };
+    let baseline = problem.evaluate(nominal.controller);
+    let scale = if baseline.objective.is_finite() {
+        baseline.objective
+    } else {
+        1.0
+    };
+    if let Ok(mut s) = problem.scale.lock() {
+        *s = Some(scale);
+    }
+    // Start simplex: the preset's gains and one step of half a search unit along each axis.
+    let keys = tuned_keys(opts.kind);
+    let x0: Vec<f64> = keys
+        .iter()
+        .map(|(k, s)| nominal.controller.get(k).unwrap_or(0.0) / s)
+        .collect();
+    let mut simplex = vec![x0.clone()];
+    for i in 0..x0.len() {
+        let mut v = x0.clone();
+        v[i] += if v[i] > 0.0 { -0.5 } else { 0.5 } * v[i].abs().max(1.0);
+        simplex.push(v);
+    }
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(1e-4)
+        .map_err(|e| TuneError::Optimiser(e.to_string()))?;
+    let max_iters = (opts.max_evaluations / 2).max(5) as u64;
+    let res = Executor::new(&problem, solver)
+        .configure(|state| state.max_iters(max_iters))
+        .run();
+    let stop_reason = match &res {
+        Ok(r) => r.state().get_termination_reason().map_or_else(
+            || "budget of iterations used".to_string(),
+            |t| t.text().to_string(),
+        ),
+        Err(e) if e.to_string().contains("cancelled") => return Err(TuneError::Cancelled),
+        Err(e) => return Err(TuneError::Optimiser(e.to_string())),
+    };
+    let log = problem.log.lock().map(|l| l.clone()).unwrap_or_default();
+    // The best feasible evaluation; the start if none beat it.
+    let tuned = log
+        .iter()
+        .filter(|e| e.feasible)
+        .min_by(|a, b| a.objective.total_cmp(&b.objective))
+        .filter(|e| !baseline.feasible || e.objective < baseline.objective)
+        .cloned()
+        .unwrap_or_else(|| baseline.clone());
+    let heldout: Vec<PlatformMotion> = opts
+        .heldout_seeds
+        .iter()
+        .map(|&s| ride(s, opts.duration_s))
+        .collect();
+    let nominal_problem = Problem {
+        plants: plants_of(vec![nominal]),
+        rides: heldout,
+        ..problem
+    };
+    let baseline_heldout = nominal_problem.evaluate(nominal.controller);
+    let tuned_heldout = nominal_problem.evaluate(tuned.controller);
+    let robustness = robustness_table(&nominal, tuned.controller, opts);
+    Ok(TuneResult {
+        kind: opts.kind,
+        objective: opts.objective,
+        pareto: pareto_front(&log),
+        evaluations: nominal_problem.count.load(Ordering::Relaxed),
+        baseline,
+        tuned,
+        baseline_heldout,
+        tuned_heldout,
+        robustness,
+        tune_seeds: opts.tune_seeds.clone(),
+        heldout_seeds: opts.heldout_seeds.clone(),
+        duration_s: opts.duration_s,
+        robust: opts.robust,
+        stop_reason,
+    })
+}
+
+/// The tuned controller over the whole spread (3 levels of Cd, τ and mass) on the tuning rides.
+fn robustness_table(
+    nominal: &Params,
+    c: ControllerParams,
+    opts: &TuneOptions,
+) -> Vec<RobustnessRow> {
+    let rides: Vec<PlatformMotion> = opts
+        .tune_seeds
+        .iter()
+        .map(|&s| ride(s, opts.duration_s))
+        .collect();
+    spread(nominal)
+        .into_iter()
+        .map(|mut p| {
+            p.controller = c;
+            let (objective, max_u, contacts) =
+                score_rides(&p, &rides, opts.duration_s, opts.objective);
+            RobustnessRow {
+                cd: p.valve.cd,
+                tau_s: p.valve.tau_s,
+                mass_kg: p.body.mass_kg,
+                objective,
+                contacts,
+                max_abs_u_m: max_u,
+            }
+        })
+        .collect()
+}
+
+fn check_options(o: &TuneOptions) -> Result<(), TuneError> {
+    if o.tune_seeds.is_empty() {
+        return Err(TuneError::NoSeeds);
+    }
+    if !(o.duration_s.is_finite() && (5.0..=600.0).contains(&o.duration_s)) {
+        return Err(TuneError::Option {
+            name: "duration_s",
+            value: o.duration_s,
+            min: 5.0,
+            max: 600.0,
+        });
+    }
+    if !(10..=10_000).contains(&o.max_evaluations) {
+        return Err(TuneError::Option {
+            name: "max_evaluations",
+            value: o.max_evaluations as f64,
+            min: 10.0,
+            max: 10_000.0,
+        });
+    }
+    Ok(())
+}

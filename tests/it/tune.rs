@@ -1,0 +1,129 @@
+//! `tune` on short runs: it lowers the objective without breaking a constraint, its claims
+//! re-computed independently (the tuned gains re-simulated from `tuned.toml`, the margins from
+//! the linearised loop), and its outputs have the documented shape.
+
+use seat_twin::analysis::frequency_response as fr;
+use seat_twin::analysis::metrics;
+use seat_twin::control::ControlLaw;
+use seat_twin::experiments;
+use seat_twin::model::ModelKind;
+use seat_twin::params::{ControllerKind, Params};
+use seat_twin::preset::Preset;
+use seat_twin::tune::{self, Objective, TuneOptions};
+
+fn short(kind: ControllerKind) -> TuneOptions {
+    TuneOptions {
+        kind,
+        objective: Objective::Aw,
+        tune_seeds: vec![1],
+        heldout_seeds: vec![101],
+        duration_s: 12.0,
+        robust: false,
+        max_evaluations: 24,
+    }
+}
+
+#[test]
+fn tune_improves_the_paper_gains_within_every_constraint() {
+    let p = Params::paper();
+    let r = tune::tune(&p, &short(ControllerKind::Paper), None).unwrap();
+    assert!(r.tuned.feasible, "{:?}", r.tuned);
+    assert!(
+        r.tuned.objective < 0.95 * r.baseline.objective,
+        "tuned {} vs start {}",
+        r.tuned.objective,
+        r.baseline.objective
+    );
+    assert!(r.evaluations <= 2 * 24 + 4, "{} evaluations", r.evaluations);
+    // The constraints, recomputed here: margins of the linearised twin with the tuned law.
+    let mut q = p;
+    q.controller = r.tuned.controller;
+    let m = fr::twin_margins(&fr::linearise_twin(&q), &ControlLaw::new(&q));
+    assert!(
+        20.0 * m.gain_margin.log10() >= tune::MIN_GAIN_MARGIN_DB,
+        "{m:?}"
+    );
+    assert!(m.phase_margin_deg >= tune::MIN_PHASE_MARGIN_DEG, "{m:?}");
+    // The objective and stroke, recomputed by an independent run of the tuned gains.
+    let trace = experiments::run(
+        &q,
+        ModelKind::Twin,
+        experiments::closed_loop(&q),
+        tune::ride(1, 12.0),
+        12.0,
+        1000.0,
+    )
+    .unwrap();
+    let ydd = trace.channel(|s| s.ydd);
+    let aw = metrics::vibration_metrics(&ydd, 1000.0, tune::SETTLE_S)
+        .unwrap()
+        .aw;
+    assert!(
+        (aw - r.tuned.objective).abs() < 0.02 * aw,
+        "re-simulated a_w {aw} vs reported {}",
+        r.tuned.objective
+    );
+    assert!(trace.contacts.is_empty());
+    let max_u = trace.samples.iter().map(|s| s.u.abs()).fold(0.0, f64::max);
+    assert!(max_u <= tune::MAX_ABS_U_M, "{max_u}");
+    // The Pareto front is feasible and non-dominated.
+    assert!(!r.pareto.is_empty());
+    for a in &r.pareto {
+        assert!(a.feasible);
+        for b in &r.pareto {
+            assert!(
+                !(b.objective < a.objective && b.max_abs_u_m < a.max_abs_u_m),
+                "{a:?} dominated by {b:?}"
+            );
+        }
+    }
+    // 27 rows over Cd ±10 %, τ ±3 ms, mass ±20 %.
+    assert_eq!(r.robustness.len(), 27);
+    let cds: Vec<f64> = r.robustness.iter().map(|row| row.cd).collect();
+    assert!((cds.iter().cloned().fold(f64::INFINITY, f64::min) - 0.9 * p.valve.cd).abs() < 1e-12);
+}
+
+#[test]
+fn tune_outputs_load_and_carry_the_interface_keys() {
+    let p = Params::paper();
+    let mut o = short(ControllerKind::Skyhook);
+    o.max_evaluations = 12;
+    o.duration_s = 8.0;
+    let r = tune::tune(&p, &o, None).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut start = p;
+    start.controller.kind = ControllerKind::Skyhook;
+    tune::report::write_outputs(&r, &start, dir.path(), 1.0).unwrap();
+    let preset = Preset::load(&dir.path().join("tuned.toml")).unwrap();
+    assert_eq!(preset.params.controller, r.tuned.controller);
+    assert_eq!(preset.params.controller.kind, ControllerKind::Skyhook);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["controller"]["kind"], "skyhook");
+    assert!(json["controller"]["gains"]["sky_v_s_per_m"].is_number());
+    for key in ["baseline", "tuned", "baseline_heldout", "tuned_heldout"] {
+        assert!(json["objective"][key].is_number(), "objective.{key}");
+    }
+    for key in [
+        "gain_margin_db",
+        "phase_margin_deg",
+        "max_abs_u_mm",
+        "contacts",
+    ] {
+        assert!(json["constraints"][key].is_number(), "constraints.{key}");
+    }
+    assert_eq!(json["robustness"].as_array().unwrap().len(), 27);
+    assert!(json["evaluations"].as_u64().unwrap() >= 1);
+    assert!(json["wall_s"].is_number());
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(!md.contains("NaN"), "{md}");
+    for f in [
+        "pareto.png",
+        "pareto.svg",
+        "transmissibility.png",
+        "transmissibility.svg",
+    ] {
+        assert!(dir.path().join(f).metadata().unwrap().len() > 1000, "{f}");
+    }
+}
