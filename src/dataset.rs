@@ -14,7 +14,10 @@
 //!   ([`Record::warnings`]); their cells are not read. A column name given twice is an
 //!   error. Names and cells may be padded with spaces or tabs.
 //! * Every row has as many fields as the header; every cell of a known column is a finite
-//!   number (`NaN`, `inf` and empty cells are errors).
+//!   number (`NaN`, `inf` and empty cells are errors) within a bound far beyond any rig
+//!   ([`column_limit`]: `t` ±1e9 s, `v_in` ±1e6 V, `u` and `x` ±1000 m, `xdd` and `ydd`
+//!   ±1e6 m/s², `p1` and `p2` ±1e10 Pa), so that no later computation overflows.
+//! * A NUL byte anywhere is an error: the file is not text.
 //!
 //! ```text
 //! # experiment: sine 5 Hz 0.72 V
@@ -30,6 +33,9 @@
 //!
 //! Every problem is a [`DatasetError`] whose message names the file, the 1-based line in the
 //! file (comment and blank lines counted) and, for a cell, the column; reading never panics.
+//! Values that are allowed but far outside what the rig can produce give a warning
+//! ([`Record::warnings`]): a stroke `u` beyond ±35 mm (a record in millimetres instead of
+//! metres?) and a command `v_in` beyond the valve's ±10 V.
 //! [`write_csv_atomic`] writes the same format through a temporary file in the target
 //! directory, so a crash never leaves half a file.
 
@@ -65,6 +71,41 @@ const RATE_SLACK: f64 = 1e-6;
 const MAX_UNKNOWN_WARNINGS: usize = 10;
 /// Longest cell or row text quoted in a message, in characters.
 const QUOTE_CHARS: usize = 60;
+/// Bytes [`read_record`] reads and checks for text before it reads the rest, so that a device
+/// or a binary file fails at once.
+const PROBE_BYTES: u64 = 64 * 1024;
+
+/// Half the rig's stroke \[m\]: a measured `u` beyond it gives a warning.
+pub const RIG_HALF_STROKE_M: f64 = 0.035;
+/// The valve's command range \[V\]: a `v_in` beyond ±this gives a warning.
+pub const RIG_V_IN_MAX_V: f64 = 10.0;
+
+/// Largest magnitude a cell of the known column `name` may have (SI): `t` 1e9 s, `v_in`
+/// 1e6 V, `u` and `x` 1000 m, `xdd` and `ydd` 1e6 m/s², `p1` and `p2` 1e10 Pa; infinity for
+/// any other name. Far beyond any rig: a value past it is a broken file or a unit mix-up, and
+/// would overflow the replay's derivatives and sums.
+pub fn column_limit(name: &str) -> f64 {
+    match name {
+        "t" => 1e9,
+        "v_in" => 1e6,
+        "u" | "x" => 1e3,
+        "xdd" | "ydd" => 1e6,
+        "p1" | "p2" => 1e10,
+        _ => f64::INFINITY,
+    }
+}
+
+/// Unit of a known column, for messages.
+fn column_unit(name: &str) -> &'static str {
+    match name {
+        "t" => "s",
+        "v_in" => "V",
+        "u" | "x" => "m",
+        "xdd" | "ydd" => "m/s²",
+        "p1" | "p2" => "Pa",
+        _ => "",
+    }
+}
 
 /// What a record is for; decides the required columns and the allowed sample rate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -200,12 +241,12 @@ impl Record {
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
     /// The file could not be opened or read.
-    #[error("{file}: cannot read: {source}")]
+    #[error("{file}: cannot read: {error}")]
     Io {
         /// The file.
         file: PathBuf,
-        /// The I/O error.
-        source: io::Error,
+        /// The I/O error (in the message, not a separate source, so it is printed once).
+        error: io::Error,
     },
     /// The file is not UTF-8 text.
     #[error("{file}: line {line}: not UTF-8 text: {detail}")]
@@ -255,20 +296,39 @@ pub enum DatasetError {
         /// 1-based field number of its second occurrence.
         second: usize,
     },
-    /// A cell is not a finite number, or a row has the wrong number of fields.
+    /// A cell is not a finite number, or beyond its column's [`column_limit`].
     #[error("{file}: line {line}, column \"{column}\": {value:?} {reason}")]
     Parse {
         /// The file.
         file: PathBuf,
         /// 1-based line in the file.
         line: usize,
-        /// The column's name, or `-` for a row with the wrong number of fields.
+        /// The column's name.
         column: String,
-        /// The offending cell (or row), shortened to 60 characters.
+        /// The offending cell, shortened to 60 characters.
         value: String,
         /// What is wrong, e.g. `is not a number`, `is not a finite number`,
-        /// `has 5 fields, the header (line 8) has 6`.
+        /// `is beyond ±1000 m`.
         reason: String,
+    },
+    /// A row with more or fewer fields than the header.
+    #[error("{}", field_count_message(.file, *.line, .column, *.found, *.expected, *.header_line, .row))]
+    FieldCount {
+        /// The file.
+        file: PathBuf,
+        /// 1-based line of the row.
+        line: usize,
+        /// The header's name of the first missing field (too few fields) or of the last
+        /// field (too many).
+        column: String,
+        /// Fields in the row.
+        found: usize,
+        /// Fields in the header.
+        expected: usize,
+        /// 1-based line of the header.
+        header_line: usize,
+        /// The row, shortened to 60 characters.
+        row: String,
     },
     /// Times not strictly increasing, not uniformly sampled, or too few samples.
     #[error("{file}: line {line}: {reason}")]
@@ -314,6 +374,32 @@ pub enum DatasetError {
         /// The limit \[rows\].
         limit: usize,
     },
+}
+
+fn field_count_message(
+    file: &Path,
+    line: usize,
+    column: &str,
+    found: usize,
+    expected: usize,
+    header_line: usize,
+    row: &str,
+) -> String {
+    let fields = |n: usize| format!("{n} field{}", if n == 1 { "" } else { "s" });
+    let what = if found < expected {
+        format!("column {} is missing", quote(column))
+    } else {
+        format!(
+            "fields past the last column {} are not expected",
+            quote(column)
+        )
+    };
+    format!(
+        "{}: line {line}: {what}: the row {row:?} has {}, the header (line {header_line}) has \
+         {expected}",
+        file.display(),
+        fields(found),
+    )
 }
 
 /// "a measured record" / "an excitation record".
@@ -397,14 +483,22 @@ fn write_num<W: fmt::Write>(w: &mut W, x: f64) -> fmt::Result {
 
 /// Reads a record from a CSV file (see the [module docs](self) for the format).
 ///
-/// Files over [`MAX_FILE_BYTES`] are refused before reading.
+/// Files over [`MAX_FILE_BYTES`] are refused before reading; a file that is not text (a
+/// binary file, `/dev/zero`, `/dev/urandom`) is refused after its first 64 KiB.
 pub fn read_record(path: &Path, kind: RecordKind) -> Result<Record, DatasetError> {
-    let io_err = |source| DatasetError::Io {
+    let io_err = |error| DatasetError::Io {
         file: path.to_path_buf(),
-        source,
+        error,
     };
     let file = File::open(path).map_err(io_err)?;
-    let bytes = file.metadata().map_err(io_err)?.len();
+    let meta = file.metadata().map_err(io_err)?;
+    if meta.is_dir() {
+        return Err(io_err(io::Error::new(
+            io::ErrorKind::IsADirectory,
+            "is a directory, not a CSV file",
+        )));
+    }
+    let bytes = meta.len();
     if bytes > MAX_FILE_BYTES {
         return Err(DatasetError::TooLarge {
             file: path.to_path_buf(),
@@ -413,10 +507,14 @@ pub fn read_record(path: &Path, kind: RecordKind) -> Result<Record, DatasetError
         });
     }
     let mut data = Vec::with_capacity(usize::try_from(bytes).unwrap_or(0));
-    // `take` guards against a file that grows while it is read.
-    file.take(MAX_FILE_BYTES + 1)
+    // `take` guards against a file that grows while it is read, and against devices.
+    let mut reader = file.take(MAX_FILE_BYTES + 1);
+    (&mut reader)
+        .take(PROBE_BYTES)
         .read_to_end(&mut data)
         .map_err(io_err)?;
+    check_text(&data, path, true)?;
+    reader.read_to_end(&mut data).map_err(io_err)?;
     parse_record_bytes(&data, path, kind)
 }
 
@@ -434,6 +532,21 @@ pub fn parse_record_bytes(
             limit: MAX_FILE_BYTES,
         });
     }
+    check_text(bytes, path, false)?;
+    match std::str::from_utf8(bytes) {
+        Ok(text) => parse_record(text, path, kind),
+        // Not reached: `check_text` has found any invalid byte.
+        Err(_) => Err(DatasetError::Encoding {
+            file: path.to_path_buf(),
+            line: 1,
+            detail: "invalid UTF-8".into(),
+        }),
+    }
+}
+
+/// Checks that `bytes` are UTF-8 text without NUL bytes or a UTF-16 byte-order mark. With
+/// `partial`, `bytes` are the start of a file and may end inside a character.
+fn check_text(bytes: &[u8], path: &Path, partial: bool) -> Result<(), DatasetError> {
     if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
         return Err(DatasetError::Encoding {
             file: path.to_path_buf(),
@@ -441,26 +554,45 @@ pub fn parse_record_bytes(
             detail: "the file starts with a UTF-16 byte-order mark; save it as UTF-8".into(),
         });
     }
-    match std::str::from_utf8(bytes) {
-        Ok(text) => parse_record(text, path, kind),
-        Err(e) => {
-            let at = e.valid_up_to();
-            let before = &bytes[..at];
-            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-            let line_start = before
-                .iter()
-                .rposition(|&b| b == b'\n')
-                .map_or(0, |i| i + 1);
+    let locate = |at: usize| {
+        let before = &bytes[..at];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        (line, at - line_start + 1)
+    };
+    let invalid = match std::str::from_utf8(bytes) {
+        Ok(_) => None,
+        Err(e) if partial && e.error_len().is_none() => None,
+        Err(e) => Some(e.valid_up_to()),
+    };
+    let nul = bytes.iter().position(|&b| b == 0);
+    match (invalid, nul) {
+        (Some(at), nul) if nul.is_none_or(|n| at < n) => {
+            let (line, col) = locate(at);
             Err(DatasetError::Encoding {
                 file: path.to_path_buf(),
                 line,
                 detail: format!(
-                    "invalid byte 0x{:02x} at byte {} of the line (byte offset {at} in the file)",
-                    bytes[at],
-                    at - line_start + 1
+                    "invalid byte 0x{:02x} at byte {col} of the line (byte offset {at} in the file)",
+                    bytes[at]
                 ),
             })
         }
+        (_, Some(at)) => {
+            let (line, col) = locate(at);
+            Err(DatasetError::Encoding {
+                file: path.to_path_buf(),
+                line,
+                detail: format!(
+                    "a NUL byte (0x00) at byte {col} of the line (byte offset {at} in the file): \
+                     this is not a text file"
+                ),
+            })
+        }
+        _ => Ok(()),
     }
 }
 
@@ -620,6 +752,7 @@ fn parse_with_row_limit(
             cols[s] = Some(Vec::with_capacity(capacity));
         }
     }
+    let limits: [f64; COLUMNS.len()] = COLUMNS.map(column_limit);
     let mut map = LineMap { jumps: Vec::new() };
     let mut rows = 0usize;
     let mut late_comments = 0usize;
@@ -654,12 +787,20 @@ fn parse_with_row_limit(
                 continue;
             };
             let cell = cell.trim_matches([' ', '\t']);
-            let value = parse_cell(cell).map_err(|reason| DatasetError::Parse {
+            let value = parse_cell(cell, limits[slot]).map_err(|reason| DatasetError::Parse {
                 file: file(),
                 line: n,
                 column: COLUMNS[slot].to_string(),
                 value: shorten(cell),
-                reason: reason.to_string(),
+                reason: match reason {
+                    CellError::Beyond => format!(
+                        "is beyond ±{} {}, the bound of column \"{}\" (SI units)",
+                        crate::params::fmt_value(limits[slot]),
+                        column_unit(COLUMNS[slot]),
+                        COLUMNS[slot]
+                    ),
+                    CellError::Other(r) => r.to_string(),
+                },
             })?;
             if slot == T {
                 if value <= prev_t {
@@ -682,20 +823,19 @@ fn parse_with_row_limit(
             }
         }
         if found != n_fields {
-            let found_text = if found > n_fields {
-                line.split(',').count()
+            let (found, column) = if found > n_fields {
+                (line.split(',').count(), &header[n_fields - 1])
             } else {
-                found
+                (found, &header[found])
             };
-            return Err(DatasetError::Parse {
+            return Err(DatasetError::FieldCount {
                 file: file(),
                 line: n,
-                column: "-".into(),
-                value: shorten(line),
-                reason: format!(
-                    "has {found_text} field{}, the header (line {header_line}) has {n_fields}",
-                    if found_text == 1 { "" } else { "s" }
-                ),
+                column: column.clone(),
+                found,
+                expected: n_fields,
+                header_line,
+                row: shorten(line),
             });
         }
         map.push(rows, n);
@@ -760,6 +900,37 @@ fn parse_with_row_limit(
     }
 
     // Plausibility warnings.
+    let peak = |c: &Option<Vec<f64>>| {
+        c.as_ref().and_then(|c| {
+            // The first of equal peaks.
+            c.iter()
+                .enumerate()
+                .rev()
+                .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+                .map(|(i, v)| (map.line_of(i), *v))
+        })
+    };
+    if let Some((line, v)) = peak(&u).filter(|(_, v)| v.abs() > RIG_HALF_STROKE_M) {
+        let hint = if v.abs() > 1.0 {
+            ": is it in millimetres instead of metres? (the format is SI)"
+        } else {
+            ""
+        };
+        warnings.push(format!(
+            "column \"u\" reaches {} m at line {line}, far beyond the rig's stroke of \
+             ±{} mm{hint}",
+            sig(v),
+            fmt_num(RIG_HALF_STROKE_M * 1e3)
+        ));
+    }
+    if let Some((line, v)) = peak(&v_in).filter(|(_, v)| v.abs() > RIG_V_IN_MAX_V) {
+        warnings.push(format!(
+            "column \"v_in\" reaches {} V at line {line}, beyond the valve's ±{} V \
+             (the twin saturates the command there)",
+            sig(v),
+            fmt_num(RIG_V_IN_MAX_V)
+        ));
+    }
     if let Some((_, v)) = metadata.iter().find(|(k, _)| k == "sample_rate_hz") {
         match v.parse::<f64>() {
             Ok(declared) if ((declared - rate_hz) / rate_hz).abs() <= DT_REL_TOLERANCE => {}
@@ -793,18 +964,32 @@ fn unquote(s: &str) -> &str {
         .unwrap_or(s)
 }
 
-/// Parses a trimmed cell as a finite number, or says why not.
+/// Why a cell was refused.
+enum CellError {
+    /// Beyond the column's limit.
+    Beyond,
+    /// Not a finite number (the reason).
+    Other(&'static str),
+}
+
+/// Parses a trimmed cell as a finite number within `±limit`, or says why not.
 #[inline]
-fn parse_cell(cell: &str) -> Result<f64, &'static str> {
-    match cell.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err("is not a finite number"),
-        Err(_) if cell.is_empty() => Err("is empty; a number is expected"),
-        Err(_) => match unquote(cell).parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => Err("is not a finite number"),
-            Err(_) => Err("is not a number"),
-        },
+fn parse_cell(cell: &str, limit: f64) -> Result<f64, CellError> {
+    let v = match cell.parse::<f64>() {
+        Ok(v) => v,
+        Err(_) if cell.is_empty() => {
+            return Err(CellError::Other("is empty; a number is expected"));
+        }
+        Err(_) => unquote(cell)
+            .parse::<f64>()
+            .map_err(|_| CellError::Other("is not a number"))?,
+    };
+    if !v.is_finite() {
+        Err(CellError::Other("is not a finite number"))
+    } else if v.abs() > limit {
+        Err(CellError::Beyond)
+    } else {
+        Ok(v)
     }
 }
 
@@ -813,88 +998,129 @@ fn parse_cell(cell: &str) -> Result<f64, &'static str> {
 ///
 /// Refuses (with [`io::ErrorKind::InvalidInput`]) what could not be read back the same: an
 /// empty or repeated header name, a name or key with a comma, colon, `#` start or line
-/// break, a row of the wrong length, a non-finite number.
+/// break, a row of the wrong length, a non-finite number, a number beyond the
+/// [`column_limit`] of a known column.
 pub fn write_csv<W: Write>(
     mut w: W,
     header: &[&str],
     comments: &[(String, String)],
     rows: impl Iterator<Item = Vec<f64>>,
 ) -> io::Result<()> {
-    let invalid = |msg: String| io::Error::new(io::ErrorKind::InvalidInput, msg);
-    let breaks = |s: &str| s.contains(['\n', '\r']);
-    if header.is_empty() {
-        return Err(invalid("the header has no columns".into()));
-    }
-    for (i, h) in header.iter().enumerate() {
-        let bad = h.is_empty()
-            || h.trim_matches([' ', '\t']) != *h
-            || h.contains([',', '"'])
-            || h.starts_with('#')
-            || breaks(h);
-        if bad {
-            return Err(invalid(format!("bad column name {h:?}")));
-        }
-        if header[..i].contains(h) {
-            return Err(invalid(format!("column {h:?} appears twice")));
-        }
-    }
-    for (k, v) in comments {
-        if k.trim().is_empty() || k.trim() != k || k.contains(':') || breaks(k) || breaks(v) {
-            return Err(invalid(format!("bad metadata entry {k:?}: {v:?}")));
-        }
-        writeln!(w, "# {k}: {}", v.trim())?;
-    }
-    writeln!(w, "{}", header.join(","))?;
-    let mut line = String::with_capacity(32 * header.len());
-    for (r, row) in rows.enumerate() {
-        if row.len() != header.len() {
-            return Err(invalid(format!(
-                "row {} has {} values, the header has {} columns",
-                r + 1,
-                row.len(),
-                header.len()
-            )));
-        }
-        line.clear();
-        for (i, &v) in row.iter().enumerate() {
-            if !v.is_finite() {
-                return Err(invalid(format!(
-                    "row {}, column {:?}: {v} is not a finite number",
-                    r + 1,
-                    header[i]
-                )));
-            }
-            if i > 0 {
-                line.push(',');
-            }
-            let _ = write_num(&mut line, v);
-        }
-        line.push('\n');
-        w.write_all(line.as_bytes())?;
+    let mut out = CsvWriter::start(&mut w, header, comments)?;
+    for row in rows {
+        out.row(&mut w, &row)?;
     }
     Ok(())
 }
 
-/// Writes a record like [`write_csv`] to `path`, atomically: into a temporary file in the
-/// same directory, flushed to disk, then renamed over `path`. On any error (including a
-/// refused row) `path` is left as it was and the temporary file is removed.
+/// A CSV record written row by row (what [`write_csv`] does in one call), for output that is
+/// produced as it is written, such as a long simulation: memory does not grow with the rows.
+#[derive(Debug)]
+pub struct CsvWriter {
+    header: Vec<String>,
+    limits: Vec<f64>,
+    line: String,
+    rows: usize,
+}
+
+impl CsvWriter {
+    /// Checks the header and comments (as [`write_csv`] does) and writes them.
+    pub fn start<W: Write + ?Sized>(
+        w: &mut W,
+        header: &[&str],
+        comments: &[(String, String)],
+    ) -> io::Result<Self> {
+        let breaks = |s: &str| s.contains(['\n', '\r']);
+        if header.is_empty() {
+            return Err(invalid("the header has no columns".into()));
+        }
+        for (i, h) in header.iter().enumerate() {
+            let bad = h.is_empty()
+                || h.trim_matches([' ', '\t']) != *h
+                || h.contains([',', '"'])
+                || h.starts_with('#')
+                || breaks(h);
+            if bad {
+                return Err(invalid(format!("bad column name {h:?}")));
+            }
+            if header[..i].contains(h) {
+                return Err(invalid(format!("column {h:?} appears twice")));
+            }
+        }
+        for (k, v) in comments {
+            if k.trim().is_empty() || k.trim() != k || k.contains(':') || breaks(k) || breaks(v) {
+                return Err(invalid(format!("bad metadata entry {k:?}: {v:?}")));
+            }
+            writeln!(w, "# {k}: {}", v.trim())?;
+        }
+        writeln!(w, "{}", header.join(","))?;
+        Ok(Self {
+            header: header.iter().map(|h| h.to_string()).collect(),
+            limits: header.iter().map(|h| column_limit(h)).collect(),
+            line: String::with_capacity(32 * header.len()),
+            rows: 0,
+        })
+    }
+
+    /// Writes one row; refuses (nothing written) a row of the wrong length, a non-finite
+    /// number or one beyond its column's [`column_limit`].
+    pub fn row<W: Write + ?Sized>(&mut self, w: &mut W, row: &[f64]) -> io::Result<()> {
+        let r = self.rows + 1;
+        if row.len() != self.header.len() {
+            return Err(invalid(format!(
+                "row {r} has {} values, the header has {} columns",
+                row.len(),
+                self.header.len()
+            )));
+        }
+        self.line.clear();
+        for (i, &v) in row.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(invalid(format!(
+                    "row {r}, column {:?}: {v} is not a finite number",
+                    self.header[i]
+                )));
+            }
+            if v.abs() > self.limits[i] {
+                return Err(invalid(format!(
+                    "row {r}, column {:?}: {} is beyond the column's bound ±{}",
+                    self.header[i],
+                    fmt_num(v),
+                    crate::params::fmt_value(self.limits[i])
+                )));
+            }
+            if i > 0 {
+                self.line.push(',');
+            }
+            let _ = write_num(&mut self.line, v);
+        }
+        self.line.push('\n');
+        w.write_all(self.line.as_bytes())?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+}
+
+fn invalid(msg: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, msg)
+}
+
+/// Writes a record like [`write_csv`] to `path`, atomically
+/// ([`crate::fsutil::write_atomic`]): into a temporary file in the same directory, flushed to
+/// disk, then renamed over `path`. On any error (including a refused row) `path` is left as it
+/// was and the temporary file is removed.
 pub fn write_csv_atomic(
     path: &Path,
     header: &[&str],
     comments: &[(String, String)],
     rows: impl Iterator<Item = Vec<f64>>,
 ) -> io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let tmp = tempfile::NamedTempFile::new_in(dir)?;
-    let mut w = io::BufWriter::with_capacity(1 << 16, tmp);
-    write_csv(&mut w, header, comments, rows)?;
-    let tmp = w.into_inner().map_err(io::IntoInnerError::into_error)?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+    crate::fsutil::write_atomic(path, |w| write_csv(w, header, comments, rows))
 }
 
 #[cfg(test)]
@@ -915,9 +1141,9 @@ mod tests {
     const GOOD: &str = "# experiment: sine 5 Hz 0.72 V\n# sample_rate_hz: 1000\n\
         t,v_in,u,x,xdd,ydd\n\
         0.000,0.72,0,1.83747616e-05,-0.097796809,0.197458573\n\
-        0.001,0.72,0.1,1e-5,0.01,0.2\n\
-        0.002,0.72,0.2,2e-5,0.02,0.3\n\
-        0.003,0.72,0.3,3e-5,0.03,0.4\n";
+        0.001,0.72,0.01,1e-5,0.01,0.2\n\
+        0.002,0.72,0.02,2e-5,0.02,0.3\n\
+        0.003,0.72,0.03,3e-5,0.03,0.4\n";
 
     #[test]
     fn parses_the_example() {
@@ -933,7 +1159,7 @@ mod tests {
         assert_eq!(r.ydd.as_ref().unwrap()[3], 0.4);
         assert!(r.p1.is_none() && r.p2.is_none());
         assert!(r.warnings.is_empty(), "{:?}", r.warnings);
-        assert_eq!(r.column("u"), Some(&[0.0, 0.1, 0.2, 0.3][..]));
+        assert_eq!(r.column("u"), Some(&[0.0, 0.01, 0.02, 0.03][..]));
         let e = parse_record(GOOD, p(), RecordKind::Excitation).unwrap();
         assert_eq!(e.len(), 4);
     }
@@ -1065,21 +1291,41 @@ mod tests {
                 "line 3, column \"t\": \"NaN\" is not a finite number",
             ),
             (
-                "t,x\n0,1\n0.1,1,2\n",
-                "line 3, column \"-\": \"0.1,1,2\" has 3 fields, the header (line 1) has 2",
+                "t,x\n0,1\n0.1,2e3\n",
+                "line 3, column \"x\": \"2e3\" is beyond ±1000 m, the bound of column \"x\" \
+                 (SI units)",
             ),
             (
-                "t,x\n0,1\n0.1\n",
-                "line 3, column \"-\": \"0.1\" has 1 field, the header (line 1) has 2",
-            ),
-            (
-                "t,x\n0,1\n0.1,2,3,4,5\n",
-                "line 3, column \"-\": \"0.1,2,3,4,5\" has 5 fields, the header (line 1) has 2",
+                "t,x\n0,1\n-1e10,2\n",
+                "line 3, column \"t\": \"-1e10\" is beyond ±1e9 s, the bound of column \"t\" \
+                 (SI units)",
             ),
         ];
         for (text, msg) in cases {
             let e = err(text, RecordKind::Excitation);
             assert!(matches!(e, DatasetError::Parse { .. }), "{e}");
+            assert_eq!(e.to_string(), format!("ride.csv: {msg}"));
+        }
+        let field_counts = [
+            (
+                "t,x\n0,1\n0.1,1,2\n",
+                "line 3: fields past the last column \"x\" are not expected: the row \"0.1,1,2\" \
+                 has 3 fields, the header (line 1) has 2",
+            ),
+            (
+                "t,x\n0,1\n0.1\n",
+                "line 3: column \"x\" is missing: the row \"0.1\" has 1 field, the header \
+                 (line 1) has 2",
+            ),
+            (
+                "t,x,note\n0,1,a\n0.1,2,b,4,5\n",
+                "line 3: fields past the last column \"note\" are not expected: the row \
+                 \"0.1,2,b,4,5\" has 5 fields, the header (line 1) has 3",
+            ),
+        ];
+        for (text, msg) in field_counts {
+            let e = err(text, RecordKind::Excitation);
+            assert!(matches!(e, DatasetError::FieldCount { .. }), "{e}");
             assert_eq!(e.to_string(), format!("ride.csv: {msg}"));
         }
         // Long cells are shortened in the message.
@@ -1236,6 +1482,12 @@ mod tests {
         );
         let e = parse_record_bytes(b"\xff\xfet\x00", p(), RecordKind::Excitation).unwrap_err();
         assert!(e.to_string().contains("UTF-16"), "{e}");
+        let e = parse_record_bytes(b"t,x\n0,\x001\n", p(), RecordKind::Excitation).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "ride.csv: line 2: not UTF-8 text: a NUL byte (0x00) at byte 3 of the line \
+             (byte offset 6 in the file): this is not a text file"
+        );
         // Through a real file.
         let dir = tempfile::tempdir().unwrap();
         let f = dir.path().join("bad.csv");
@@ -1258,6 +1510,43 @@ mod tests {
                 "huge.csv: 536870913 bytes is over the limit of 536870912 bytes (512 MiB)"
             ),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn plausibility_warnings() {
+        let text = "t,v_in,u\n0,0,0\n0.001,-12.5,0.02\n0.002,3,-30\n0.003,0,0\n";
+        let r = parse_record(text, p(), RecordKind::Measured).unwrap();
+        assert_eq!(
+            r.warnings,
+            vec![
+                "column \"u\" reaches -30 m at line 4, far beyond the rig's stroke of ±35 mm: \
+                 is it in millimetres instead of metres? (the format is SI)"
+                    .to_string(),
+                "column \"v_in\" reaches -12.5 V at line 3, beyond the valve's ±10 V (the twin \
+                 saturates the command there)"
+                    .to_string(),
+            ]
+        );
+        let text = "t,v_in,u\n0,10,0.035\n0.001,-10,-0.035\n";
+        let r = parse_record(text, p(), RecordKind::Measured).unwrap();
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    }
+
+    #[test]
+    fn devices_and_binary_files_fail_after_a_short_read() {
+        let e = read_record(Path::new("/dev/zero"), RecordKind::Measured).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("/dev/zero: line 1: not UTF-8 text: a NUL byte"),
+            "{e}"
+        );
+        let e = read_record(Path::new("/dev/urandom"), RecordKind::Measured).unwrap_err();
+        assert!(matches!(e, DatasetError::Encoding { .. }), "{e}");
+        let e = read_record(Path::new("/"), RecordKind::Measured).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "/: cannot read: is a directory, not a CSV file"
         );
     }
 
@@ -1327,7 +1616,7 @@ mod tests {
                     1e-7 * i as f64,
                     -3.3e-20,
                     1.0 / 3.0,
-                    1e300,
+                    1e6,
                     2.0e5 + t,
                     -0.0,
                 ]
@@ -1372,6 +1661,11 @@ mod tests {
                 vec!["t", "x"],
                 vec![],
                 vec![vec![0.0, 1.0], vec![0.1, f64::NAN]],
+            ),
+            (
+                vec!["t", "x"],
+                vec![],
+                vec![vec![0.0, 1.0], vec![0.1, 1e300]],
             ),
         ];
         for (h, c, rows) in bad {

@@ -7,7 +7,9 @@ use crate::model::linear::LinearModel;
 use crate::model::passive::PassiveModel;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, Cycloid, PlatformMotion};
-use crate::simulation::{Drive, SimError, Simulation, Trace, step_for_rate};
+use crate::simulation::{
+    Drive, RunSummary, Sample, SimError, Simulation, Trace, sample_count, step_for_rate,
+};
 
 /// Largest step of the exact (first-order-hold) runs of the linear and passive models [s].
 /// Their inputs are smooth at this scale (ride ≤ 5 Hz, loop resonance 80 Hz): the hold error
@@ -23,10 +25,30 @@ pub fn run(
     duration_s: f64,
     rate_hz: f64,
 ) -> Result<Trace, SimError> {
+    let n = sample_count(duration_s, rate_hz, step_for_rate(LTI_MAX_STEP_S, rate_hz));
+    let mut samples = Vec::with_capacity(usize::try_from(n).unwrap_or(0).min(1 << 24));
+    let summary = run_streaming(params, kind, drive, platform, duration_s, rate_hz, |s| {
+        samples.push(s);
+        true
+    })?;
+    Ok(summary.into_trace(samples))
+}
+
+/// [`run`] passing each sample to `record` as it is made instead of keeping it (memory does
+/// not grow with the duration); `record` returns `false` to stop the run early.
+pub fn run_streaming(
+    params: &Params,
+    kind: ModelKind,
+    drive: Drive,
+    platform: PlatformMotion,
+    duration_s: f64,
+    rate_hz: f64,
+    record: impl FnMut(Sample) -> bool,
+) -> Result<RunSummary, SimError> {
     let h = step_for_rate(params.numerics.max_step_s, rate_hz);
     match kind {
         ModelKind::Twin => {
-            Simulation::twin(params, h, drive, platform).run_trace(duration_s, rate_hz)
+            Simulation::twin(params, h, drive, platform).run_streaming(duration_s, rate_hz, record)
         }
         // The linear models are stepped exactly (crate::lti) at up to 1 ms, unless the delay
         // is shorter than that step; then RK4 at the twin's step, like the twin.
@@ -34,8 +56,9 @@ pub fn run(
             let model = LinearModel::new(params);
             let h_lti = step_for_rate(LTI_MAX_STEP_S, rate_hz);
             match LtiSimulation::new(model.clone(), h_lti, drive.clone(), platform.clone()) {
-                Some(sim) => sim.run_trace(duration_s, rate_hz),
-                None => Simulation::new(model, h, drive, platform).run_trace(duration_s, rate_hz),
+                Some(sim) => sim.run_streaming(duration_s, rate_hz, record),
+                None => Simulation::new(model, h, drive, platform)
+                    .run_streaming(duration_s, rate_hz, record),
             }
         }
         ModelKind::Passive => {
@@ -46,9 +69,9 @@ pub fn run(
                 drive.clone(),
                 platform.clone(),
             ) {
-                Some(sim) => sim.run_trace(duration_s, rate_hz),
+                Some(sim) => sim.run_streaming(duration_s, rate_hz, record),
                 None => Simulation::new(PassiveModel::new(params), h, drive, platform)
-                    .run_trace(duration_s, rate_hz),
+                    .run_streaming(duration_s, rate_hz, record),
             }
         }
     }

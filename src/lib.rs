@@ -30,11 +30,13 @@
 
 pub mod analysis;
 pub mod bench;
+pub mod cli;
 pub mod control;
 pub mod dataset;
 pub mod delay;
 pub mod engine;
 pub mod experiments;
+pub mod fsutil;
 #[cfg(feature = "gui")]
 pub mod gui;
 pub mod identify;

@@ -28,7 +28,7 @@ use crate::model::{Inputs, Model};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::PlatformMotion;
 use crate::simulation::{
-    CommandPath, ContactEvent, Drive, Sample, SimError, Trace, closed_loop_controller,
+    CommandPath, ContactEvent, Drive, RunSummary, Sample, SimError, Trace, closed_loop_controller,
     track_contact,
 };
 use nalgebra::{DMatrix, SMatrix};
@@ -298,29 +298,48 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
 
     /// Runs from rest to `t_end` [s] and returns the trace recorded at `rate_hz` (a whole
     /// number of steps per sample, as in [`crate::simulation::Simulation::run_trace`]).
-    pub fn run_trace(mut self, t_end: f64, rate_hz: f64) -> Result<Trace, SimError> {
-        let every = ((1.0 / rate_hz) / self.h).round().max(1.0) as u64;
+    pub fn run_trace(self, t_end: f64, rate_hz: f64) -> Result<Trace, SimError> {
+        let n = crate::simulation::sample_count(t_end, rate_hz, self.h);
+        let mut samples = Vec::with_capacity(usize::try_from(n).unwrap_or(0).min(1 << 24));
+        let summary = self.run_streaming(t_end, rate_hz, |s| {
+            samples.push(s);
+            true
+        })?;
+        Ok(summary.into_trace(samples))
+    }
+
+    /// [`Self::run_trace`] passing each sample to `record` as it is made instead of keeping
+    /// it; `record` returns `false` to stop early.
+    pub fn run_streaming(
+        mut self,
+        t_end: f64,
+        rate_hz: f64,
+        mut record: impl FnMut(Sample) -> bool,
+    ) -> Result<RunSummary, SimError> {
+        let every = crate::simulation::record_every(self.h, rate_hz);
         let n_end = (t_end / self.h - 1e-9).ceil() as u64;
-        let mut samples = Vec::with_capacity((n_end / every) as usize + 2);
-        samples.push(self.sample());
+        let mut samples = 1u64;
+        let mut stopped = !record(self.sample());
         // A countdown rather than `steps % every`: a division per step is a fair share of a
         // step this cheap.
         let mut to_record = every;
-        while self.steps < n_end {
+        while !stopped && self.steps < n_end {
             to_record -= 1;
             if to_record == 0 {
                 to_record = every;
                 // A recorded step: read the platform's whole motion once, for both.
                 let p = self.platform.at_grid(self.steps + 1, self.h, self.stride);
                 self.advance(p.xdd)?;
-                samples.push(self.sample_with(p));
+                samples += 1;
+                stopped = !record(self.sample_with(p));
             } else {
                 self.step()?;
             }
         }
-        Ok(Trace {
+        Ok(RunSummary {
             model: M::KIND,
             samples,
+            stopped,
             contacts: self.contacts,
             stats: StepStats {
                 steps: self.steps,

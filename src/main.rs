@@ -2,247 +2,24 @@
 //! run the same engine headless.
 
 use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::Parser;
 use seat_twin::analysis::frequency_response as fr;
+use seat_twin::cli::{
+    self, Cli, Command, MAX_DURATION_S, MethodArg, ScenarioArg, SeatTestArgs, check_range,
+};
 use seat_twin::dataset::{self, RecordKind};
 use seat_twin::experiments;
+use seat_twin::fsutil::{self, OutputDir};
 use seat_twin::identify;
 use seat_twin::model::ModelKind;
 use seat_twin::params::Params;
+use seat_twin::params::fmt_value;
 use seat_twin::preset;
 use seat_twin::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, SampledMotion};
-use seat_twin::simulation::{Drive, Trace};
-use std::path::{Path, PathBuf};
-
-#[derive(Parser)]
-#[command(
-    name = "seat-twin",
-    version,
-    about = "Digital twin and gain-tuning tool for a hydraulic active seat suspension",
-    long_about = "Without a subcommand, opens the desktop app (when built with the `gui` feature).\n\
-                  The subcommands run the same engine headless; all files are SI unless a column \
-                  name says otherwise."
-)]
-struct Cli {
-    #[command(subcommand)]
-    command: Option<Command>,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum ModelArg {
-    Twin,
-    Linear,
-    Passive,
-}
-
-impl From<ModelArg> for ModelKind {
-    fn from(m: ModelArg) -> Self {
-        match m {
-            ModelArg::Twin => ModelKind::Twin,
-            ModelArg::Linear => ModelKind::Linear,
-            ModelArg::Passive => ModelKind::Passive,
-        }
-    }
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum ScenarioArg {
-    /// Cycloidal platform rise (30 mm in 0.5 s by default), closed loop.
-    Cycloid,
-    /// Band-limited random platform acceleration (0.5–5 Hz, S0 = 0.05), closed loop.
-    Random,
-    /// Valve sine test, platform still, open loop: V_in = A·cos(2πft).
-    Sine,
-    /// Valve linear chirp from --f0 to --f1, platform still, open loop.
-    Chirp,
-    /// A seat-test input spectral class (--class NAME: EM1–EM9, IT1–IT4, AG1–AG3), closed loop.
-    Class,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum MethodArg {
-    /// Closed form (linear and passive models).
-    Exact,
-    /// Sine dwell by simulation, first harmonic.
-    Simulated,
-    /// Numerical linearisation at rest, evaluated on jω (twin).
-    Linearised,
-}
-
-#[derive(Subcommand)]
-enum Command {
-    /// Reproduce the paper's sections 4–6: report.md, numbers.json and PNG+SVG plots.
-    Report {
-        /// Preset file or shipped preset name.
-        #[arg(long, default_value = "paper")]
-        preset: String,
-        /// Output directory.
-        #[arg(long, default_value = "out/report")]
-        out: PathBuf,
-    },
-    /// Simulate one model on one scenario and write a CSV trace (SI columns).
-    Simulate {
-        #[arg(long, value_enum)]
-        model: ModelArg,
-        #[arg(long, default_value = "paper")]
-        preset: String,
-        #[arg(long, value_enum, conflicts_with = "excitation")]
-        scenario: Option<ScenarioArg>,
-        /// Seed of the random ride.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Duration [s] (default: cycloid 5, random 60, sine max(3 s, 6 periods), chirp 10).
-        #[arg(long)]
-        duration: Option<f64>,
-        /// Sine frequency [Hz].
-        #[arg(long, default_value_t = 5.0)]
-        freq: f64,
-        /// Sine/chirp amplitude [V].
-        #[arg(long, default_value_t = 2.1)]
-        amp: f64,
-        /// Chirp start frequency [Hz].
-        #[arg(long, default_value_t = 0.5)]
-        f0: f64,
-        /// Chirp end frequency [Hz].
-        #[arg(long, default_value_t = 20.0)]
-        f1: f64,
-        /// A platform record (CSV: `t` and `x` and/or `xdd`, SI); runs closed loop on it.
-        #[arg(long)]
-        excitation: Option<PathBuf>,
-        /// Input spectral class of `--scenario class` (EM1–EM9, IT1–IT4, AG1–AG3).
-        #[arg(long)]
-        class: Option<String>,
-        /// Output sample rate [Hz].
-        #[arg(long, default_value_t = 1000.0)]
-        rate: f64,
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// Bode of u̇/V_in: columns freq_hz, mag_mm_per_s_v, phase_deg.
-    Bode {
-        #[arg(long, value_enum)]
-        model: ModelArg,
-        #[arg(long, default_value = "paper")]
-        preset: String,
-        /// Command amplitude of the sine dwell [V] (twin).
-        #[arg(long, default_value_t = 0.72)]
-        amp: f64,
-        /// Comma-separated frequencies [Hz].
-        #[arg(long, value_delimiter = ',', required = true)]
-        freqs: Vec<f64>,
-        /// Default: simulated for the twin, exact for the linear model.
-        #[arg(long, value_enum)]
-        method: Option<MethodArg>,
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// Transmissibility ÿ/ẍ with the controller: columns freq_hz, mag, phase_deg.
-    Transmissibility {
-        #[arg(long, value_enum)]
-        model: ModelArg,
-        #[arg(long, default_value = "paper")]
-        preset: String,
-        /// Comma-separated frequencies [Hz].
-        #[arg(long, value_delimiter = ',', required = true)]
-        freqs: Vec<f64>,
-        /// Default: simulated for the twin, exact for linear and passive.
-        #[arg(long, value_enum)]
-        method: Option<MethodArg>,
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// Replay a measured record through the twin (its v_in and platform motion, open loop):
-    /// columns t,u,ydd,p1,p2,xv,q1,q2 on the record's time grid (SI).
-    Replay {
-        /// Measured record (CSV: t, v_in, u; optional x, xdd, ydd, p1, p2).
-        #[arg(long)]
-        data: PathBuf,
-        /// Preset file or shipped preset name.
-        #[arg(long, default_value = "paper")]
-        preset: String,
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// Calibrate the twin on measured records: Cd, τ (and the mass), then trace the residual
-    /// to a missing effect; writes report.md, report.json, calibrated.toml and plots to DIR.
-    Calibrate {
-        /// Measured records (one or more CSV files).
-        #[arg(long, num_args = 1.., required = true)]
-        data: Vec<PathBuf>,
-        /// Preset file or shipped preset name to start from.
-        #[arg(long, default_value = "paper")]
-        preset: String,
-        /// Output directory.
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// A standard laboratory seat test: a seat-test input class on the platform, closed loop;
-    /// writes report.md, numbers.json and PNG+SVG plots to DIR.
-    SeatTest(SeatTestArgs),
-    /// Real-time factors, accuracy against a 10× finer step, and the Table 1 sweep time.
-    Bench {
-        /// Preset file or shipped preset name.
-        #[arg(long, default_value = "paper")]
-        preset: String,
-    },
-    /// Tune a controller's gains on the nonlinear twin (ISO 2631-1 objective of the body,
-    /// no end-stop contact, max |u| ≤ 30 mm, GM ≥ 6 dB, PM ≥ 45°); writes tuned.toml,
-    /// report.md, report.json and plots to DIR.
-    Tune {
-        /// Preset file or shipped preset name (its plant, and its gains as the start).
-        #[arg(long, default_value = "paper")]
-        preset: String,
-        /// Controller structure: paper, predictive, skyhook or smith (default: the preset's).
-        #[arg(long)]
-        controller: Option<String>,
-        /// Objective: aw (Wk-weighted RMS), vdv or seat.
-        #[arg(long, default_value = "aw")]
-        objective: String,
-        /// Tuning input: `ride` (the paper's random ride).
-        #[arg(long, default_value = "ride")]
-        excitation: String,
-        /// Number of tuning rides (seeds 1..=N); as many held-out rides use seeds 101...
-        #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
-        seeds: i64,
-        /// Duration of each ride [s], 5..=600.
-        #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
-        duration: f64,
-        /// Optimise the worst case over Cd ±10 %, τ ±3 ms, mass ±20 %.
-        #[arg(long)]
-        robust: bool,
-        /// Budget of objective evaluations, 10..=10000.
-        #[arg(long, default_value_t = 120, allow_negative_numbers = true)]
-        evaluations: i64,
-        /// Output directory.
-        #[arg(long)]
-        out: PathBuf,
-    },
-}
-
-/// Arguments of `seat-twin seat-test`.
-#[derive(clap::Args)]
-struct SeatTestArgs {
-    /// Input spectral class: EM1–EM9 (ISO 7096), IT1–IT4 (EN 13490), AG1–AG3 (ISO 5007).
-    #[arg(long)]
-    class: String,
-    /// Preset file or shipped preset name.
-    #[arg(long, default_value = "paper")]
-    preset: String,
-    #[arg(long, value_enum, default_value = "twin")]
-    model: ModelArg,
-    /// Suspended mass [kg] (default: the preset's; the paper's rig carries 11.7 kg).
-    #[arg(long)]
-    mass: Option<f64>,
-    /// Record length including 2 s fades at both ends [s].
-    #[arg(long, default_value_t = seat_twin::seat_test::run::DEFAULT_DURATION_S)]
-    duration: f64,
-    /// Seed of the class motion's phases.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    out: PathBuf,
-}
+use seat_twin::simulation::{
+    ContactEvent, Drive, RunSummary, SimError, sample_count, step_for_rate,
+};
+use std::path::Path;
 
 fn find_class(name: &str) -> Result<&'static seat_twin::seat_test::InputClass> {
     seat_twin::seat_test::find(name).with_context(|| {
@@ -309,11 +86,98 @@ fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         None => open_app(),
-        Some(cmd) => run(cmd),
+        Some(cmd) => {
+            clean_up_on_signals();
+            run(cmd)
+        }
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", error_text(&e));
         std::process::exit(1);
+    }
+}
+
+/// The error and its chain of causes, each message once: a cause whose text an outer message
+/// already includes (`file: cause` over `cause`) is not repeated.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let msg = cause.to_string();
+        let msg = msg.trim();
+        if msg.is_empty() || text.contains(msg) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(msg);
+    }
+    text
+}
+
+/// On SIGINT, SIGTERM or SIGHUP: removes the temporary files and folders of the output being
+/// written ([`fsutil::remove_pending`]), says so, and exits with 128 + the signal's number.
+#[cfg(unix)]
+fn clean_up_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            let removed = fsutil::remove_pending();
+            let name = match sig {
+                SIGINT => "SIGINT",
+                SIGTERM => "SIGTERM",
+                _ => "SIGHUP",
+            };
+            eprintln!(
+                "\ninterrupted ({name}): stopped{}",
+                if removed > 0 {
+                    "; the unfinished output was removed"
+                } else {
+                    ""
+                }
+            );
+            std::process::exit(128 + sig);
+        }
+    });
+}
+
+#[cfg(not(unix))]
+fn clean_up_on_signals() {}
+
+/// Prints "still running" with the elapsed time on stderr every `every` until dropped.
+struct Heartbeat {
+    stop: Option<std::sync::mpsc::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Heartbeat {
+    fn start(what: String, every: std::time::Duration) -> Self {
+        let (stop, rx) = std::sync::mpsc::channel::<()>();
+        let started = std::time::Instant::now();
+        let thread = std::thread::spawn(move || {
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) = rx.recv_timeout(every) {
+                eprintln!(
+                    "[{:6.0} s] {what}: still running (Ctrl-C stops it and leaves nothing behind)",
+                    started.elapsed().as_secs_f64()
+                );
+            }
+        });
+        Self {
+            stop: Some(stop),
+            thread: Some(thread),
+        }
+    }
+}
+
+impl Drop for Heartbeat {
+    fn drop(&mut self) {
+        drop(self.stop.take());
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
     }
 }
 
@@ -335,10 +199,31 @@ fn load_params(name: &str) -> Result<Params> {
 }
 
 fn run(cmd: Command) -> Result<()> {
+    cli::validate(&cmd)?;
     match cmd {
         Command::Report { preset, out } => {
             let params = load_params(&preset)?;
-            let summary = seat_twin::report::write_report(&params, &preset, &out)?;
+            // The whole set goes into a temporary folder beside --out and is moved into place
+            // at the end: a failure or Ctrl-C leaves --out as it was.
+            let dir = OutputDir::create(&out)
+                .with_context(|| format!("cannot write the report into {}", out.display()))?;
+            let default_step = seat_twin::params::NumericsParams::default().max_step_s;
+            let factor = default_step / params.numerics.max_step_s;
+            if factor > 4.0 {
+                eprintln!(
+                    "note: numerics.max_step_s = {} s is {}× finer than the default {} s: the \
+                     twin's runs take about {}× as long as usual (minutes, not seconds)",
+                    fmt_value(params.numerics.max_step_s),
+                    fmt_value(factor.round()),
+                    fmt_value(default_step),
+                    fmt_value(factor.round())
+                );
+            }
+            let heartbeat = Heartbeat::start("report".into(), std::time::Duration::from_secs(10));
+            let summary = seat_twin::report::write_report(&params, &preset, dir.path())?;
+            drop(heartbeat);
+            dir.commit()
+                .with_context(|| format!("moving the report into {}", out.display()))?;
             println!("{summary}");
             println!("report written to {}", out.join("report.md").display());
             Ok(())
@@ -358,14 +243,19 @@ fn run(cmd: Command) -> Result<()> {
             rate,
             out,
         } => {
+            // Every numeric option has been checked by cli::validate.
             let params = load_params(&preset)?;
-            if !(rate.is_finite() && (1.0..=100_000.0).contains(&rate)) {
-                bail!("--rate {rate} is outside the allowed range [1, 100000] Hz");
-            }
             let kind: ModelKind = model.into();
+            let mut warnings: Vec<String> = Vec::new();
+            let mut peak_input: Option<String> = None;
             let (drive, platform, default_duration, label) = match (scenario, &excitation) {
                 (_, Some(path)) => {
                     let rec = dataset::read_record(path, RecordKind::Excitation)?;
+                    for w in &rec.warnings {
+                        eprintln!("warning: {}: {w}", path.display());
+                        warnings.push(w.clone());
+                    }
+                    peak_input = record_peak(&rec);
                     let dt = rec.dt;
                     let motion = match (rec.xdd.clone(), rec.x.clone()) {
                         (Some(xdd), Some(x)) => {
@@ -407,28 +297,27 @@ fn run(cmd: Command) -> Result<()> {
                         format!("random ride seed {seed}"),
                     )
                 }
-                (Some(ScenarioArg::Sine), None) => {
-                    check_range("--freq", freq, 0.01, 1000.0, "Hz")?;
-                    check_range("--amp", amp, 0.0, 100.0, "V")?;
-                    (
-                        Drive::OpenLoop(CommandSignal::Sine {
-                            amplitude_v: amp,
-                            freq_hz: freq,
-                        }),
-                        PlatformMotion::Still,
-                        (6.0 / freq).max(3.0),
-                        format!("valve sine {freq} Hz {amp} V"),
-                    )
-                }
+                (Some(ScenarioArg::Sine), None) => (
+                    Drive::OpenLoop(CommandSignal::Sine {
+                        amplitude_v: amp,
+                        freq_hz: freq,
+                    }),
+                    PlatformMotion::Still,
+                    (6.0 / freq).max(3.0),
+                    format!("valve sine {} Hz {} V", fmt_value(freq), fmt_value(amp)),
+                ),
                 (Some(ScenarioArg::Chirp), None) => {
-                    check_range("--f0", f0, 0.01, 1000.0, "Hz")?;
-                    check_range("--f1", f1, 0.01, 1000.0, "Hz")?;
                     let d = duration.unwrap_or(10.0);
                     (
                         fr::chirp_drive(amp, f0, f1, d),
                         PlatformMotion::Still,
                         d,
-                        format!("valve chirp {f0}–{f1} Hz {amp} V"),
+                        format!(
+                            "valve chirp {}–{} Hz {} V",
+                            fmt_value(f0),
+                            fmt_value(f1),
+                            fmt_value(amp)
+                        ),
                     )
                 }
                 (Some(ScenarioArg::Class), None) => {
@@ -461,14 +350,75 @@ fn run(cmd: Command) -> Result<()> {
                     )
                 }
             };
-            let duration = duration.unwrap_or(default_duration);
-            check_range("--duration", duration, 1e-3, 36_000.0, "s")?;
-            let trace = experiments::run(&params, kind, drive, platform, duration, rate)?;
-            write_trace(&out, &trace, &preset, &label)?;
-            report_contacts(&trace);
+            let duration = match duration {
+                Some(d) => d,
+                None => {
+                    check_range(
+                        "the scenario's duration (set --duration)",
+                        default_duration,
+                        1e-3,
+                        MAX_DURATION_S,
+                        "s",
+                    )?;
+                    default_duration
+                }
+            };
+            let h = step_for_rate(params.numerics.max_step_s, rate);
+            let samples = sample_count(duration, rate, h);
+            cli::check_sample_count(samples, duration, rate)?;
+            let mut comments = vec![
+                ("model".to_string(), kind.name().to_string()),
+                ("preset".to_string(), preset.clone()),
+                ("scenario".to_string(), label.clone()),
+                (
+                    "units".to_string(),
+                    "t s, x m, xdd m/s^2, u m, ydd m/s^2, v_in V, xv m, p1 Pa, p2 Pa, q1 m^3/s, q2 m^3/s"
+                        .to_string(),
+                ),
+            ];
+            comments.extend(warnings.into_iter().map(|w| ("warning".to_string(), w)));
+            let run = || {
+                simulate_to_csv(
+                    &params, kind, drive, platform, duration, rate, &out, &comments,
+                )
+            };
+            let heartbeat = (samples > 2_000_000).then(|| {
+                Heartbeat::start(
+                    format!("simulating {samples} samples"),
+                    std::time::Duration::from_secs(10),
+                )
+            });
+            let summary = match run() {
+                Ok(s) => s,
+                Err(StreamError::Sim(e)) => {
+                    return Err(
+                        anyhow::Error::new(e).context(match (&excitation, peak_input) {
+                            (Some(path), Some(peak)) => format!(
+                                "the run on the excitation record {} diverged; {peak}: is the \
+                             record in SI units (m, m/s²)?",
+                                path.display()
+                            ),
+                            (Some(path), None) => format!(
+                                "the run on the excitation record {} diverged",
+                                path.display()
+                            ),
+                            (None, _) => format!(
+                                "the {label} run diverged (preset {preset}, --rate {})",
+                                fmt_value(rate)
+                            ),
+                        }),
+                    );
+                }
+                Err(StreamError::Io(e)) => {
+                    return Err(anyhow::Error::new(e))
+                        .with_context(|| format!("writing {}", out.display()));
+                }
+            };
+            drop(heartbeat);
+            report_contacts(kind, &summary.contacts);
             println!(
                 "{} samples of the {} model written to {}",
-                trace.samples.len(),
+                summary.samples,
                 kind.name(),
                 out.display()
             );
@@ -483,7 +433,6 @@ fn run(cmd: Command) -> Result<()> {
             out,
         } => {
             let params = load_params(&preset)?;
-            check_freqs(&freqs)?;
             let kind: ModelKind = model.into();
             let method = method.unwrap_or(match kind {
                 ModelKind::Twin => MethodArg::Simulated,
@@ -508,6 +457,7 @@ fn run(cmd: Command) -> Result<()> {
                 }
                 (k, _) => bail!("method not available for the {} model", k.name()),
             };
+            check_response(&freqs, &values, &format!("--amp {} V", fmt_value(amp)))?;
             let rows = freqs
                 .iter()
                 .zip(&values)
@@ -518,7 +468,7 @@ fn run(cmd: Command) -> Result<()> {
                 &[
                     ("model".into(), kind.name().into()),
                     ("preset".into(), preset.clone()),
-                    ("amplitude_v".into(), amp.to_string()),
+                    ("amplitude_v".into(), fmt_value(amp)),
                 ],
                 rows,
             )
@@ -534,7 +484,6 @@ fn run(cmd: Command) -> Result<()> {
             out,
         } => {
             let params = load_params(&preset)?;
-            check_freqs(&freqs)?;
             let kind: ModelKind = model.into();
             let method = method.unwrap_or(match kind {
                 ModelKind::Twin => MethodArg::Simulated,
@@ -568,6 +517,7 @@ fn run(cmd: Command) -> Result<()> {
                 }
                 (k, _) => bail!("method not available for the {} model", k.name()),
             };
+            check_response(&freqs, &values, &format!("preset {preset}"))?;
             let rows = freqs
                 .iter()
                 .zip(&values)
@@ -638,6 +588,11 @@ fn run(cmd: Command) -> Result<()> {
                     eprintln!("warning: {}: {w}", r.path.display());
                 }
             }
+            // Issue 12: the output set is written whole into a temporary folder beside --out and
+            // moved into place at the end; creating it now checks --out is writable before the
+            // long calibration starts.
+            let out_dir = OutputDir::create(&out)
+                .with_context(|| format!("cannot write the results into {}", out.display()))?;
             let started = std::time::Instant::now();
             let last = std::sync::Mutex::new(String::new());
             let report = identify::calibrate(
@@ -655,7 +610,10 @@ fn run(cmd: Command) -> Result<()> {
                 },
             )?;
             let elapsed = started.elapsed().as_secs_f64();
-            identify::report::write_all(&report, &out, Some(elapsed))?;
+            identify::report::write_all(&report, out_dir.path(), Some(elapsed))?;
+            out_dir
+                .commit()
+                .with_context(|| format!("moving the results into {}", out.display()))?;
             println!("verdict: {}", report.verdict.name());
             for e in &report.effects {
                 println!("effect {}: {:?}", e.effect.name(), e.params);
@@ -783,28 +741,70 @@ fn run_tune(
     Ok(())
 }
 
-fn check_range(name: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<()> {
-    if v.is_finite() && v >= min && v <= max {
-        Ok(())
-    } else {
-        bail!("{name} {v} is outside the allowed range [{min}, {max}] {unit}")
-    }
-}
-
-fn check_freqs(freqs: &[f64]) -> Result<()> {
-    if freqs.is_empty() {
-        bail!("--freqs needs at least one frequency");
-    }
-    for &f in freqs {
-        check_range("--freqs value", f, 0.01, 1000.0, "Hz")?;
+/// Refuses a frequency response with a non-finite point, naming the frequency and the input
+/// it was computed from (not the output file it would have gone to).
+fn check_response(freqs: &[f64], values: &[num_complex::Complex64], input: &str) -> Result<()> {
+    if let Some((f, v)) = freqs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
+        bail!(
+            "the response at {} Hz is not a finite number ({v}); nothing was written. \
+             Check {input}",
+            fmt_value(*f)
+        );
     }
     Ok(())
 }
 
-/// Writes a trace with the columns its model has.
-fn write_trace(out: &Path, trace: &Trace, preset: &str, label: &str) -> Result<()> {
-    let hyd = trace.model.has_hydraulics();
-    let cmd = trace.model.has_command();
+/// "column "xdd" peaks at 9e5 m/s² at t = 1.2 s (sample 1201)": the largest driving value of
+/// an excitation record, to name when a run on it diverges.
+fn record_peak(rec: &dataset::Record) -> Option<String> {
+    let (name, unit, col) = match (&rec.xdd, &rec.x) {
+        (Some(xdd), _) => ("xdd", "m/s²", xdd),
+        (None, Some(x)) => ("x", "m", x),
+        (None, None) => return None,
+    };
+    // The first of equal peaks.
+    let (i, v) = col
+        .iter()
+        .enumerate()
+        .rev()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
+    Some(format!(
+        "its column \"{name}\" peaks at {} {unit} at t = {} s (data row {})",
+        fmt_value(*v),
+        fmt_value(rec.t[i]),
+        i + 1
+    ))
+}
+
+/// Why a streamed simulation stopped.
+enum StreamError {
+    /// The model diverged.
+    Sim(SimError),
+    /// The output could not be written.
+    Io(std::io::Error),
+}
+
+impl From<std::io::Error> for StreamError {
+    fn from(e: std::io::Error) -> Self {
+        StreamError::Io(e)
+    }
+}
+
+/// Runs the simulation and writes its samples to `out` as they are made (atomically, with the
+/// columns the model has): memory does not grow with the duration.
+#[allow(clippy::too_many_arguments)]
+fn simulate_to_csv(
+    params: &Params,
+    kind: ModelKind,
+    drive: Drive,
+    platform: PlatformMotion,
+    duration: f64,
+    rate: f64,
+    out: &Path,
+    comments: &[(String, String)],
+) -> Result<RunSummary, StreamError> {
+    let hyd = kind.has_hydraulics();
+    let cmd = kind.has_command();
     let mut header = vec!["t", "x", "xdd", "u", "ydd"];
     if cmd {
         header.push("v_in");
@@ -812,46 +812,50 @@ fn write_trace(out: &Path, trace: &Trace, preset: &str, label: &str) -> Result<(
     if hyd {
         header.extend(["xv", "p1", "p2", "q1", "q2"]);
     }
-    let rows = trace.samples.iter().map(|s| {
-        let mut r = vec![s.t, s.x, s.xdd, s.u, s.ydd];
-        if cmd {
-            r.push(s.v_in);
+    let mut summary = None;
+    fsutil::write_atomic(out, |w| -> Result<(), StreamError> {
+        let mut csv = dataset::CsvWriter::start(w, &header, comments)?;
+        let mut failed = None;
+        let mut row = Vec::with_capacity(header.len());
+        let s = experiments::run_streaming(params, kind, drive, platform, duration, rate, |s| {
+            row.clear();
+            row.extend([s.t, s.x, s.xdd, s.u, s.ydd]);
+            if cmd {
+                row.push(s.v_in);
+            }
+            if hyd {
+                row.extend([s.xv, s.p1, s.p2, s.q1, s.q2]);
+            }
+            match csv.row(&mut *w, &row) {
+                Ok(()) => true,
+                Err(e) => {
+                    failed = Some(e);
+                    false
+                }
+            }
+        })
+        .map_err(StreamError::Sim)?;
+        if let Some(e) = failed {
+            return Err(StreamError::Io(e));
         }
-        if hyd {
-            r.extend([s.xv, s.p1, s.p2, s.q1, s.q2]);
-        }
-        r
-    });
-    let comments = vec![
-        ("model".to_string(), trace.model.name().to_string()),
-        ("preset".to_string(), preset.to_string()),
-        ("scenario".to_string(), label.to_string()),
-        (
-            "end_stop_contacts".to_string(),
-            trace.contacts.len().to_string(),
-        ),
-        (
-            "units".to_string(),
-            "t s, x m, xdd m/s^2, u m, ydd m/s^2, v_in V, xv m, p1 Pa, p2 Pa, q1 m^3/s, q2 m^3/s"
-                .to_string(),
-        ),
-    ];
-    dataset::write_csv_atomic(out, &header, &comments, rows)
-        .with_context(|| format!("writing {}", out.display()))
+        summary = Some(s);
+        Ok(())
+    })?;
+    summary.ok_or_else(|| StreamError::Io(std::io::Error::other("the run recorded nothing")))
 }
 
-fn report_contacts(trace: &Trace) {
-    if trace.contacts.is_empty() {
+fn report_contacts(kind: ModelKind, contacts: &[ContactEvent]) {
+    let Some(first) = contacts.first() else {
         return;
-    }
-    let what = if trace.model.has_hydraulics() {
+    };
+    let what = if kind.has_hydraulics() {
         "end-stop contact"
     } else {
         "stroke overrun (this model has no end stops)"
     };
     eprintln!(
         "warning: {} {what} event(s); first at t = {:.3} s",
-        trace.contacts.len(),
-        trace.contacts[0].t_start
+        contacts.len(),
+        first.t_start
     );
 }

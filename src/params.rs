@@ -11,7 +11,12 @@ use std::f64::consts::PI;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ParamError {
     /// A value outside `[min, max]` (or not finite).
-    #[error("parameter `{name}` = {value} is outside the allowed range [{min}, {max}] {unit}")]
+    #[error(
+        "parameter `{name}` = {} is outside the allowed range [{}, {}] {unit}",
+        fmt_value(*.value),
+        fmt_value(*.min),
+        fmt_value(*.max)
+    )]
     OutOfRange {
         /// Dotted name as in the preset file, e.g. `valve.cd`.
         name: String,
@@ -27,6 +32,23 @@ pub enum ParamError {
     /// Two parameters that are individually valid but not together.
     #[error("parameters are inconsistent: {0}")]
     Inconsistent(String),
+}
+
+/// A number for people: at most 6 significant digits, plain for 1e-4 ≤ |x| < 1e7 (`0.0005`,
+/// `11.7`, `3680`), scientific otherwise (`1e-6`, `1.5e300`); never hundreds of digits.
+pub fn fmt_value(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let r: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    let a = r.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if (1e-4..1e7).contains(&a) {
+        format!("{r}")
+    } else {
+        format!("{r:e}")
+    }
 }
 
 /// Checks `min <= value <= max` and finiteness.
@@ -1066,5 +1088,36 @@ mod tests {
         p.cylinder.end_stop_stiffness_n_per_m = 1e8;
         let e = p.validate().unwrap_err();
         assert!(e.to_string().contains("end-stop"), "{e}");
+    }
+
+    #[test]
+    fn numbers_in_messages_are_short() {
+        for (x, text) in [
+            (0.0, "0"),
+            (-0.0, "0"),
+            (11.7, "11.7"),
+            (3680.0, "3680"),
+            (5e-4, "0.0005"),
+            (1e-4, "0.0001"),
+            (1e-6, "1e-6"),
+            (1e7, "1e7"),
+            (999_999.0, "999999"),
+            (9_999_999.0, "1e7"),
+            (1e300, "1e300"),
+            (-2.5e-300, "-2.5e-300"),
+            (0.1 + 0.2, "0.3"),
+            (123.456789, "123.457"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+        ] {
+            assert_eq!(fmt_value(x), text, "{x:e}");
+        }
+        let mut p = Params::paper();
+        p.body.mass_kg = 1e300;
+        let e = p.validate().unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "parameter `body.mass_kg` = 1e300 is outside the allowed range [1, 500] kg"
+        );
     }
 }

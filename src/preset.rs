@@ -11,7 +11,6 @@ use crate::params::{
     LinearParams, NumericsParams, ParamError, Params, PassiveParams, SupplyParams, ValveParams,
 };
 use serde::{Deserialize, Serialize};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Current preset format version.
@@ -107,18 +106,35 @@ impl From<PresetFile> for Preset {
     }
 }
 
-/// Why a preset could not be read or written.
+/// Largest preset file [`Preset::load`] reads: 1 MiB (the shipped presets are a few KiB).
+pub const MAX_PRESET_BYTES: u64 = 1024 * 1024;
+
+/// Why a preset could not be read or written. Every message starts with the file and says
+/// everything once: the errors carry their cause in the message, not as a separate
+/// [`source`](std::error::Error::source).
 #[derive(Debug, thiserror::Error)]
 pub enum PresetError {
     /// The file could not be read or written.
-    #[error("{file}: {source}")]
+    #[error("{file}: {error}")]
     Io {
         /// The file.
         file: PathBuf,
         /// The I/O error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
-    /// Not valid TOML, an unknown key, or a value of the wrong type.
+    /// The file is larger than [`MAX_PRESET_BYTES`] (or is a device that never ends); refused
+    /// before it is read whole.
+    #[error("{file}: {what} the limit of {limit} bytes (1 MiB) for a preset; is it a preset file?")]
+    TooLarge {
+        /// The file.
+        file: PathBuf,
+        /// "N bytes is over" or "reads past", depending on whether the size is known.
+        what: String,
+        /// The limit \[bytes\].
+        limit: u64,
+    },
+    /// Not UTF-8 text, not valid TOML, an unknown key, or a value of the wrong type (then the
+    /// message names the key, e.g. `` `body.mass_kg`: invalid type: map, expected f64 ``).
     #[error("{file}: line {line}, column {column}: {message}")]
     Parse {
         /// The file.
@@ -131,12 +147,12 @@ pub enum PresetError {
         message: String,
     },
     /// A value outside its range.
-    #[error("{file}: {source}")]
+    #[error("{file}: {error}")]
     Invalid {
         /// The file.
         file: PathBuf,
         /// The range error.
-        source: ParamError,
+        error: ParamError,
     },
     /// A newer or unknown format version.
     #[error(
@@ -151,10 +167,65 @@ pub enum PresetError {
 }
 
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
     let line = before.matches('\n').count() + 1;
-    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    let column = before[before.rfind('\n').map_or(0, |i| i + 1)..]
+        .chars()
+        .count()
+        + 1;
     (line, column)
+}
+
+/// The dotted key (`body.mass_kg`) whose value spans `offset` in `text`, if any: the deepest
+/// one, so that an error at a value names its key.
+fn key_at(text: &str, offset: usize) -> Option<String> {
+    use toml::de::{DeTable, DeValue};
+    let contains = |span: std::ops::Range<usize>| {
+        span.start <= offset && offset < span.end.max(span.start + 1)
+    };
+    // A table's own span may be just its header, so its entries are searched first.
+    fn walk(
+        table: &DeTable<'_>,
+        contains: &dyn Fn(std::ops::Range<usize>) -> bool,
+    ) -> Option<Vec<String>> {
+        for (k, v) in table.iter() {
+            let key = k.get_ref().to_string();
+            match v.get_ref() {
+                DeValue::Table(t) => {
+                    if let Some(mut p) = walk(t, contains) {
+                        p.insert(0, key);
+                        return Some(p);
+                    }
+                }
+                DeValue::Array(a) => {
+                    for (i, item) in a.iter().enumerate() {
+                        let inner = match item.get_ref() {
+                            DeValue::Table(t) => walk(t, contains),
+                            _ => None,
+                        };
+                        if let Some(mut p) = inner {
+                            p.insert(0, format!("{key}[{i}]"));
+                            return Some(p);
+                        }
+                        if contains(item.span()) {
+                            return Some(vec![format!("{key}[{i}]")]);
+                        }
+                    }
+                }
+                _ => {}
+            }
+            if contains(v.span()) {
+                return Some(vec![key]);
+            }
+        }
+        None
+    }
+    let doc = DeTable::parse(text).ok()?;
+    walk(doc.get_ref(), &contains).map(|p| p.join("."))
 }
 
 impl Preset {
@@ -173,15 +244,21 @@ impl Preset {
     /// Parses preset text; `file` is used in messages only.
     pub fn from_toml(text: &str, file: &Path) -> Result<Self, PresetError> {
         let parsed: PresetFile = toml::from_str(text).map_err(|e| {
-            let (line, column) = e
-                .span()
-                .map(|s| line_column(text, s.start))
-                .unwrap_or((1, 1));
+            let start = e.span().map(|s| s.start);
+            let (line, column) = start.map(|s| line_column(text, s)).unwrap_or((1, 1));
+            let message = e.message().trim().to_string();
+            // Type and range errors of serde point at a value without naming its key.
+            let message = match start.and_then(|s| key_at(text, s)) {
+                Some(key) if !message.contains(&format!("`{key}`")) => {
+                    format!("`{key}`: {message}")
+                }
+                _ => message,
+            };
             PresetError::Parse {
                 file: file.to_path_buf(),
                 line,
                 column,
-                message: e.message().trim().to_string(),
+                message,
             }
         })?;
         if parsed.preset.format_version != FORMAT_VERSION {
@@ -194,20 +271,88 @@ impl Preset {
         preset
             .params
             .validate()
-            .map_err(|source| PresetError::Invalid {
+            .map_err(|error| PresetError::Invalid {
                 file: file.to_path_buf(),
-                source,
+                error,
             })?;
         Ok(preset)
     }
 
-    /// Reads and validates a preset file.
-    pub fn load(path: &Path) -> Result<Self, PresetError> {
-        let text = std::fs::read_to_string(path).map_err(|source| PresetError::Io {
-            file: path.to_path_buf(),
-            source,
+    /// Parses a preset from the raw bytes of a file, which must be UTF-8 text of at most
+    /// [`MAX_PRESET_BYTES`]; `file` is used in messages only.
+    pub fn from_bytes(bytes: &[u8], file: &Path) -> Result<Self, PresetError> {
+        if bytes.len() as u64 > MAX_PRESET_BYTES {
+            return Err(PresetError::TooLarge {
+                file: file.to_path_buf(),
+                what: format!("{} bytes is over", bytes.len()),
+                limit: MAX_PRESET_BYTES,
+            });
+        }
+        let text = std::str::from_utf8(bytes).map_err(|e| {
+            let at = e.valid_up_to();
+            let before = &bytes[..at];
+            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+            let line_start = before
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |i| i + 1);
+            PresetError::Parse {
+                file: file.to_path_buf(),
+                line,
+                column: at - line_start + 1,
+                message: format!(
+                    "not UTF-8 text: invalid byte 0x{:02x}; a preset is a TOML text file",
+                    bytes[at]
+                ),
+            }
         })?;
-        Self::from_toml(&text, path)
+        if let Some(at) = text.find('\0') {
+            let (line, column) = line_column(text, at);
+            return Err(PresetError::Parse {
+                file: file.to_path_buf(),
+                line,
+                column,
+                message: "a NUL byte: a preset is a TOML text file".into(),
+            });
+        }
+        Self::from_toml(text, file)
+    }
+
+    /// Reads and validates a preset file. Files over [`MAX_PRESET_BYTES`] are refused before
+    /// they are read whole (a device such as `/dev/zero` after reading just past the limit).
+    pub fn load(path: &Path) -> Result<Self, PresetError> {
+        use std::io::Read;
+        let io = |error| PresetError::Io {
+            file: path.to_path_buf(),
+            error,
+        };
+        let file = std::fs::File::open(path).map_err(io)?;
+        let meta = file.metadata().map_err(io)?;
+        if meta.is_dir() {
+            return Err(io(std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a directory, not a preset file",
+            )));
+        }
+        if meta.is_file() && meta.len() > MAX_PRESET_BYTES {
+            return Err(PresetError::TooLarge {
+                file: path.to_path_buf(),
+                what: format!("{} bytes is over", meta.len()),
+                limit: MAX_PRESET_BYTES,
+            });
+        }
+        let mut bytes = Vec::new();
+        file.take(MAX_PRESET_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.len() as u64 > MAX_PRESET_BYTES {
+            return Err(PresetError::TooLarge {
+                file: path.to_path_buf(),
+                what: "reads past".into(),
+                limit: MAX_PRESET_BYTES,
+            });
+        }
+        Self::from_bytes(&bytes, path)
     }
 
     /// The preset as TOML text.
@@ -222,24 +367,16 @@ impl Preset {
 
     /// Writes the preset atomically (temporary file in the same directory, then rename).
     pub fn save(&self, path: &Path) -> Result<(), PresetError> {
-        write_atomic(path, self.to_toml().as_bytes()).map_err(|source| PresetError::Io {
+        write_atomic(path, self.to_toml().as_bytes()).map_err(|error| PresetError::Io {
             file: path.to_path_buf(),
-            source,
+            error,
         })
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+/// Writes `bytes` to `path` atomically: [`crate::fsutil::write_atomic_bytes`].
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
-    tmp.write_all(bytes)?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+    crate::fsutil::write_atomic_bytes(path, bytes)
 }
 
 /// Loads a preset given as a path or as the name of a shipped preset (`paper`,
@@ -261,7 +398,7 @@ pub fn resolve(name_or_path: &str) -> Result<Preset, PresetError> {
     }
     Err(PresetError::Io {
         file: direct.to_path_buf(),
-        source: std::io::Error::new(
+        error: std::io::Error::new(
             std::io::ErrorKind::NotFound,
             "no such preset file, and no shipped preset of that name in presets/",
         ),
@@ -337,5 +474,87 @@ mod tests {
         p.params.effects.friction.coulomb_n = 12.5;
         let back = Preset::from_toml(&p.to_toml(), Path::new("rt.toml")).unwrap();
         assert_eq!(back, p);
+    }
+
+    #[test]
+    fn type_errors_name_the_key() {
+        for (text, expected) in [
+            (
+                "[body]\nmass_kg = { a = 1 }\n",
+                "k.toml: line 2, column 11: `body.mass_kg`: invalid type: map, expected f64",
+            ),
+            (
+                "body.mass_kg = true\n",
+                "k.toml: line 1, column 16: `body.mass_kg`: invalid type: boolean `true`, \
+                 expected f64",
+            ),
+            (
+                "[effects]\nfriction = { coulomb_n = \"x\" }\n",
+                "k.toml: line 2, column 26: `effects.friction.coulomb_n`: invalid type: \
+                 string \"x\", expected f64",
+            ),
+        ] {
+            let e = Preset::from_toml(text, Path::new("k.toml")).unwrap_err();
+            assert_eq!(e.to_string(), expected);
+        }
+    }
+
+    #[test]
+    fn oversized_binary_and_directory_presets_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let big = dir.path().join("big.toml");
+        std::fs::File::create(&big)
+            .unwrap()
+            .set_len(MAX_PRESET_BYTES + 1)
+            .unwrap();
+        let e = Preset::load(&big).unwrap_err();
+        assert!(matches!(e, PresetError::TooLarge { .. }), "{e}");
+        assert!(
+            e.to_string()
+                .ends_with("big.toml: 1048577 bytes is over the limit of 1048576 bytes (1 MiB) for a preset; is it a preset file?"),
+            "{e}"
+        );
+        let e = Preset::load(Path::new("/dev/zero")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "/dev/zero: reads past the limit of 1048576 bytes (1 MiB) for a preset; is it a \
+             preset file?"
+        );
+        let e = Preset::load(dir.path()).unwrap_err();
+        assert!(
+            e.to_string()
+                .ends_with(": is a directory, not a preset file"),
+            "{e}"
+        );
+        let e = Preset::from_bytes(b"[body]\nmass_kg = \xff\n", Path::new("b.toml")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "b.toml: line 2, column 11: not UTF-8 text: invalid byte 0xff; a preset is a TOML \
+             text file"
+        );
+    }
+
+    #[test]
+    fn saved_presets_honour_the_umask() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("p.toml");
+        Preset::paper().save(&f).unwrap();
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            // 0666 less the umask (Linux reports it in /proc), not a private temporary 0600.
+            let umask = std::fs::read_to_string("/proc/self/status")
+                .ok()
+                .and_then(|s| {
+                    s.lines()
+                        .find_map(|l| l.strip_prefix("Umask:"))
+                        .and_then(|v| u32::from_str_radix(v.trim(), 8).ok())
+                });
+            if let Some(umask) = umask {
+                let mode = f.metadata().unwrap().permissions().mode() & 0o777;
+                assert_eq!(mode, 0o666 & !umask, "mode {mode:o}, umask {umask:o}");
+            }
+        }
+        assert_eq!(Preset::load(&f).unwrap(), Preset::paper());
     }
 }

@@ -29,8 +29,10 @@ pub enum Drive {
 pub enum SimError {
     /// A state became non-finite or left its physical bound: the run diverged.
     #[error(
-        "{model} model diverged at t = {t:.6} s: state {state} = {value:e} (bound ±{bound:e}); \
-         check the gains (an unstable loop) or reduce numerics.max_step_s"
+        "{model} model diverged at t = {t:.6} s: state {state} = {} (bound ±{}); \
+         check the gains (an unstable loop) or reduce numerics.max_step_s",
+        crate::params::fmt_value(*.value),
+        crate::params::fmt_value(*.bound)
     )]
     Diverged {
         /// Which model.
@@ -155,6 +157,46 @@ pub struct Trace {
     pub contacts: Vec<ContactEvent>,
     /// Integrator work.
     pub stats: StepStats,
+}
+
+/// What a streamed run leaves besides its samples ([`Simulation::run_streaming`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    /// Which model produced it.
+    pub model: ModelKind,
+    /// Samples passed to the recorder.
+    pub samples: u64,
+    /// Whether the recorder stopped the run before its end.
+    pub stopped: bool,
+    /// End-stop contacts / stroke overruns.
+    pub contacts: Vec<ContactEvent>,
+    /// Integrator work.
+    pub stats: StepStats,
+}
+
+impl RunSummary {
+    /// The trace of these samples.
+    pub fn into_trace(self, samples: Vec<Sample>) -> Trace {
+        Trace {
+            model: self.model,
+            samples,
+            contacts: self.contacts,
+            stats: self.stats,
+        }
+    }
+}
+
+/// Steps between recorded samples at `rate_hz` for an internal step `h` [s] (at least 1).
+pub fn record_every(h: f64, rate_hz: f64) -> u64 {
+    ((1.0 / rate_hz) / h).round().max(1.0) as u64
+}
+
+/// Samples a run to `t_end` [s] recorded at `rate_hz` with internal step `h` gives, both
+/// ends included (what [`Simulation::run_trace`] returns); saturates for absurd inputs.
+pub fn sample_count(t_end: f64, rate_hz: f64, h: f64) -> u64 {
+    let every = record_every(h, rate_hz);
+    let n_end = (t_end / h - 1e-9).ceil().max(0.0) as u64;
+    (n_end / every).saturating_add(1)
 }
 
 impl Trace {
@@ -591,15 +633,67 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
 
     /// Runs from the current state to `t_end` and returns the recorded trace at `rate_hz`.
     pub fn run_trace(&mut self, t_end: f64, rate_hz: f64) -> Result<Trace, SimError> {
-        let every = ((1.0 / rate_hz) / self.h).round().max(1.0) as u64;
-        let mut samples = Vec::with_capacity((t_end * rate_hz) as usize + 2);
-        self.run_until(t_end, every, |s| samples.push(s))?;
-        Ok(Trace {
+        let n = sample_count(t_end, rate_hz, self.h);
+        let mut samples = Vec::with_capacity(usize::try_from(n).unwrap_or(0).min(1 << 24));
+        let summary = self.run_streaming(t_end, rate_hz, |s| {
+            samples.push(s);
+            true
+        })?;
+        Ok(summary.into_trace(samples))
+    }
+
+    /// Runs from the current state to `t_end`, passing each sample at `rate_hz` to `record`
+    /// as it is made (the samples of [`Self::run_trace`], without keeping them: memory does
+    /// not grow with the duration). `record` returns `false` to stop the run early.
+    pub fn run_streaming(
+        &mut self,
+        t_end: f64,
+        rate_hz: f64,
+        mut record: impl FnMut(Sample) -> bool,
+    ) -> Result<RunSummary, SimError> {
+        let every = record_every(self.h, rate_hz);
+        let mut samples = 0u64;
+        let mut stopped = false;
+        let mut go = true;
+        self.run_until_while(t_end, every, |s| {
+            samples += 1;
+            go = record(s);
+            stopped = !go;
+            go
+        })?;
+        Ok(RunSummary {
             model: M::KIND,
             samples,
+            stopped,
             contacts: self.contacts.clone(),
             stats: self.stats,
         })
+    }
+
+    /// [`Self::run_until`], stopping early when `record` returns `false`.
+    fn run_until_while(
+        &mut self,
+        t_end: f64,
+        every: u64,
+        mut record: impl FnMut(Sample) -> bool,
+    ) -> Result<(), SimError> {
+        let every = every.max(1);
+        if self.steps == 0 && !record(self.sample()) {
+            return Ok(());
+        }
+        let n_end = (t_end / self.h - 1e-9).ceil() as u64;
+        let mut to_record = every - self.steps % every;
+        while self.steps < n_end {
+            self.step()?;
+            to_record -= 1;
+            if to_record == 0 {
+                to_record = every;
+                if !record(self.sample()) {
+                    return Ok(());
+                }
+            }
+        }
+        Ok(())
     }
 }
 

@@ -4,20 +4,20 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn bin() -> Command {
+pub(crate) fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_seat-twin"))
 }
 
-fn run(args: &[&str]) -> Output {
+pub(crate) fn run(args: &[&str]) -> Output {
     bin().args(args).output().expect("the binary runs")
 }
 
-fn tmp() -> tempfile::TempDir {
+pub(crate) fn tmp() -> tempfile::TempDir {
     tempfile::tempdir().expect("a temporary directory")
 }
 
 /// Header and rows of a CSV written by the CLI (comment lines skipped).
-fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+pub(crate) fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).expect("the output exists");
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<String> = lines
@@ -44,7 +44,7 @@ fn column(header: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
     rows.iter().map(|r| r[i]).collect()
 }
 
-fn stderr(o: &Output) -> String {
+pub(crate) fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 

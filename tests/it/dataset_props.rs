@@ -1,8 +1,11 @@
-//! Property tests of the CSV record reader and writer (`dataset`).
+//! Property tests of the CSV record reader and writer (`dataset`). The number of cases of the
+//! reader's properties is raised for the long run by `SEAT_TWIN_FUZZ_CASES` (see `fuzz`).
 
+use crate::fuzz::{config, config_scaled};
 use proptest::prelude::*;
 use seat_twin::dataset::{
-    RecordKind, parse_record, parse_record_bytes, read_record, write_csv, write_csv_atomic,
+    COLUMNS, RecordKind, column_limit, parse_record, parse_record_bytes, read_record, write_csv,
+    write_csv_atomic,
 };
 use std::path::Path;
 
@@ -42,14 +45,19 @@ fn parse_never_panics(text: &str, kind: RecordKind) -> Result<(), TestCaseError>
     Ok(())
 }
 
-/// Finite numbers of every scale, including ±0 and subnormals.
+/// Finite numbers of every scale within ±1000 (the smallest column bound), including ±0 and
+/// subnormals.
 fn value() -> impl Strategy<Value = f64> {
     prop_oneof![
         3 => -1e3..1e3f64,
-        1 => any::<f64>().prop_filter("finite", |v| v.is_finite()),
+        1 => any::<f64>()
+            .prop_filter("finite", |v| v.is_finite())
+            .prop_map(|v| if v.abs() > 1e3 { 1e3 / v } else { v }),
         1 => Just(0.0),
         1 => Just(-0.0),
         1 => Just(5e-324),
+        1 => Just(1e3),
+        1 => Just(-1e3),
     ]
 }
 
@@ -177,7 +185,7 @@ fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(512))]
+    #![proptest_config(config(512))]
 
     #[test]
     fn arbitrary_strings_never_panic(text in any::<String>(), kind in kind()) {
@@ -199,6 +207,12 @@ proptest! {
             Err(e) => prop_assert!(e.to_string().starts_with(FILE)),
         }
     }
+
+}
+
+proptest! {
+    // Each case builds a valid record of up to 200 rows: a tenth of the long run's cases.
+    #![proptest_config(config_scaled(512, 10))]
 
     #[test]
     fn mutated_valid_files_never_panic(
@@ -242,6 +256,11 @@ proptest! {
         let unknown = r.warnings.iter().filter(|w| w.contains("unknown column")).count();
         prop_assert_eq!(unknown, usize::from(v.header.contains(&"extra")));
     }
+}
+
+proptest! {
+    // Writes and syncs a file per case: not part of the long run.
+    #![proptest_config(ProptestConfig::with_cases(128))]
 
     #[test]
     fn atomic_write_then_read_round_trips(v in valid()) {
@@ -255,5 +274,93 @@ proptest! {
         for (i, row) in v.rows.iter().enumerate() {
             prop_assert_eq!(r.t[i].to_bits(), row[t_col].to_bits());
         }
+    }
+}
+
+/// A record with one cell replaced by `cell` in column `col` at data row `row`.
+fn with_cell(col: usize, row: usize, cell: &str) -> (String, &'static str, usize) {
+    let name = COLUMNS[col];
+    let mut header: Vec<&str> = vec!["t", "v_in", "u"];
+    if !header.contains(&name) {
+        header.push(name);
+    }
+    let j = header.iter().position(|h| *h == name).unwrap();
+    let mut text = header.join(",");
+    text.push('\n');
+    for i in 0..6 {
+        let mut cells: Vec<String> = header
+            .iter()
+            .map(|h| {
+                if *h == "t" {
+                    format!("{}", i as f64 / 1000.0)
+                } else {
+                    "0".into()
+                }
+            })
+            .collect();
+        if i == row {
+            cells[j] = cell.to_string();
+        }
+        text.push_str(&cells.join(","));
+        text.push('\n');
+    }
+    (text, name, row + 2)
+}
+
+proptest! {
+    #![proptest_config(config(512))]
+
+    /// A cell beyond its column's bound is an error naming the file, line and column; one
+    /// within it is read as written.
+    #[test]
+    fn cells_beyond_their_column_bound_are_refused_by_line_and_column(
+        col in 1usize..COLUMNS.len(),
+        row in 1usize..6,
+        factor in prop_oneof![0.0..=1.0f64, 1.0..1e290f64],
+        negative in any::<bool>(),
+    ) {
+        let limit = column_limit(COLUMNS[col]);
+        let v = limit * factor * if negative { -1.0 } else { 1.0 };
+        let (text, name, line) = with_cell(col, row, &format!("{v:e}"));
+        match parse_record(&text, path(), RecordKind::Measured) {
+            Ok(r) => {
+                prop_assert!(v.abs() <= limit, "{} = {} accepted", name, v);
+                prop_assert_eq!(r.column(name).unwrap()[row], v);
+            }
+            Err(e) => {
+                prop_assert!(v.abs() > limit, "{} = {} refused: {}", name, v, e);
+                let msg = e.to_string();
+                let expected = format!("{FILE}: line {line}, column \"{name}\"");
+                prop_assert!(msg.starts_with(&expected), "{}", msg);
+                prop_assert!(msg.contains("is beyond"), "{}", msg);
+            }
+        }
+    }
+
+    /// A row with a field more or less than the header names a column of the header.
+    #[test]
+    fn a_wrong_field_count_names_a_header_column(
+        extra in prop_oneof![Just(-2i32), Just(-1), Just(1), Just(3)],
+        row in 0usize..5,
+    ) {
+        let header = ["t", "x", "xdd", "note"];
+        let mut text = header.join(",") + "\n";
+        for i in 0..5 {
+            let n = if i == row { (4 + extra) as usize } else { 4 };
+            let cells: Vec<String> = (0..n)
+                .map(|j| if j == 0 { format!("{}", i as f64 / 100.0) } else { "1".into() })
+                .collect();
+            text.push_str(&cells.join(","));
+            text.push('\n');
+        }
+        let e = parse_record(&text, path(), RecordKind::Excitation).unwrap_err();
+        let msg = e.to_string();
+        let named = if extra < 0 { header[(4 + extra) as usize] } else { "note" };
+        prop_assert!(
+            msg.starts_with(&format!("{FILE}: line {}: ", row + 2)),
+            "{}", msg
+        );
+        prop_assert!(msg.contains(&format!("column \"{named}\"")), "{}", msg);
+        prop_assert!(!msg.contains("\"-\""), "{}", msg);
     }
 }

@@ -3,9 +3,11 @@
 //! Each module is one area; its own docs say what it proves.
 
 mod cli;
+mod cli_hardening;
 mod control;
 mod dataset_props;
 mod engine;
+mod fuzz;
 mod gui;
 mod identify;
 mod integrator;
