@@ -79,6 +79,8 @@ pub enum ScenarioArg {
     Sine,
     /// Valve linear chirp from --f0 to --f1, platform still, open loop.
     Chirp,
+    /// A seat-test input spectral class (--class NAME: EM1–EM9, IT1–IT4, AG1–AG3), closed loop.
+    Class,
 }
 
 /// `--method`.
@@ -136,6 +138,9 @@ pub enum Command {
         /// A platform record (CSV: `t` and `x` and/or `xdd`, SI); runs closed loop on it.
         #[arg(long)]
         excitation: Option<PathBuf>,
+        /// Input spectral class of `--scenario class` (EM1–EM9, IT1–IT4, AG1–AG3).
+        #[arg(long)]
+        class: Option<String>,
         /// Output sample rate [Hz].
         #[arg(long, default_value_t = 1000.0, allow_hyphen_values = true)]
         rate: f64,
