@@ -11,7 +11,7 @@
 //!    by the sensor noise, because the position of an integrating plant drifts.
 //! 2. The data are checked first: too short, no excitation, no `v_in`/`u` → verdict
 //!    `insufficient_data`, naming what is missing, and nothing is fitted. Then the records are
-//!    split ([`Split`]): with three or more, every third is held out; with fewer, the last
+//!    split ([`Split`]): with six or more, every third is held out; with fewer, the last
 //!    third of each. Every fit below sees the fit part only.
 //! 3. [`calibrate`]: the paper's own method (section 4: delay from the phase slope of the sine
 //!    tests, Cd from their gain) gives the start; Levenberg–Marquardt then fits `Cd`, `τ` and
@@ -592,10 +592,15 @@ fn part_name(r: &PreparedRecord) -> String {
     }
 }
 
-/// The fit/validation split: with three records or more every third one (the 3rd, 6th, …
-/// in the order given) is held out; with fewer, the last third of each record is.
+/// Least number of records for a split by records (below it, each record is split in time).
+pub const MIN_RECORDS_FOR_RECORD_SPLIT: usize = 6;
+
+/// The fit/validation split: with [`MIN_RECORDS_FOR_RECORD_SPLIT`] records or more every third
+/// one (the 3rd, 6th, … in the order given) is held out; with fewer, holding out whole records
+/// would take away too much of what the effects show in (one of five tests may be the only
+/// one that excites an effect), so the last third of each record is held out instead.
 fn split_records(recs: &[PreparedRecord]) -> (Vec<PreparedRecord>, Vec<PreparedRecord>, String) {
-    if recs.len() >= 3 {
+    if recs.len() >= MIN_RECORDS_FOR_RECORD_SPLIT {
         let (mut fit, mut val) = (Vec::new(), Vec::new());
         for (i, r) in recs.iter().enumerate() {
             if i % 3 == 2 {
@@ -623,8 +628,8 @@ fn split_records(recs: &[PreparedRecord]) -> (Vec<PreparedRecord>, Vec<PreparedR
         (
             fit,
             val,
-            "fewer than three records: the first two thirds of each record are fitted, the \
-             last third is held out for validation (the replay runs through the whole record)"
+            "fewer than six records: the first two thirds of each record are fitted, the last \
+             third is held out for validation (the replay runs through the whole record)"
                 .into(),
         )
     }
