@@ -265,7 +265,11 @@ pub struct ResidualLeft {
 }
 
 /// Finds what is left in the residual of `replays` (see [`ResidualLeft`]).
-pub fn residual_left(records: &[PreparedRecord], replays: &[Replay], threshold: f64) -> ResidualLeft {
+pub fn residual_left(
+    records: &[PreparedRecord],
+    replays: &[Replay],
+    threshold: f64,
+) -> ResidualLeft {
     let mut all: Vec<(usize, &'static str, f64)> = Vec::new();
     for (i, r) in replays.iter().enumerate() {
         let e = &r.errors;
@@ -340,17 +344,15 @@ pub fn residual_left(records: &[PreparedRecord], replays: &[Replay], threshold: 
         ("sign of velocity", |_, r, k| r.twin_du[k].signum()),
         ("twin body acceleration", |_, r, k| r.twin_ydd[k]),
         ("stroke u", |_, r, k| r.sim.u[k]),
-        ("load pressure p1 − p2", |_, r, k| r.sim.p1[k] - r.sim.p2[k]),
+        ("load pressure p1 − p2", |_, r, k| {
+            r.sim.p1[k] - r.sim.p2[k]
+        }),
         ("flow |Q|·Q", |_, r, k| r.sim.q2[k] * r.sim.q2[k].abs()),
         ("time in the record", |p, _, k| k as f64 * p.dt),
     ];
     let mut correlations = Vec::new();
     for ch in ["du", "ydd"] {
-        let rows: Vec<usize> = flagged
-            .iter()
-            .filter(|x| x.1 == ch)
-            .map(|x| x.0)
-            .collect();
+        let rows: Vec<usize> = flagged.iter().filter(|x| x.1 == ch).map(|x| x.0).collect();
         if rows.is_empty() {
             continue;
         }

@@ -830,7 +830,6 @@ fn sine_frequency(v: &[f64], dt: f64) -> Option<f64> {
     (span > 0.0).then(|| (crossings.len() - 1) as f64 / span)
 }
 
-
 /// A report for data that cannot be calibrated: the nominal replay (when possible), no
 /// effect, nothing fitted.
 fn insufficient_report(
@@ -889,10 +888,15 @@ fn insufficient_report(
 
 /// Largest weighted RMS of any channel of a record.
 fn worst_channel(c: &ChannelErrors) -> f64 {
-    [Some(c.weighted_du), c.weighted_ydd, c.weighted_p1, c.weighted_p2]
-        .into_iter()
-        .flatten()
-        .fold(0.0, f64::max)
+    [
+        Some(c.weighted_du),
+        c.weighted_ydd,
+        c.weighted_p1,
+        c.weighted_p2,
+    ]
+    .into_iter()
+    .flatten()
+    .fold(0.0, f64::max)
 }
 
 /// Calibrates the twin on measured records: the paper's method, then Levenberg–Marquardt on
@@ -1114,7 +1118,9 @@ pub fn calibrate(
         .filter(|e| !e.enabled(params))
         .collect();
     let mut round = 0;
-    while !remaining.is_empty() && added.len() < options.max_effects && round < 2 * options.max_effects
+    while !remaining.is_empty()
+        && added.len() < options.max_effects
+        && round < 2 * options.max_effects
     {
         round += 1;
         set_stage(format!("candidate effects (round {round})"));
@@ -1246,8 +1252,7 @@ pub fn calibrate(
 
     let at_noise = |e: &ErrorSummary| {
         e.value <= options.noise_level
-            && e
-                .files
+            && e.files
                 .iter()
                 .all(|(_, c)| worst_channel(c) <= options.noise_level_record)
     };
@@ -1262,9 +1267,8 @@ pub fn calibrate(
     } else {
         Verdict::Unexplained
     };
-    let residual_left = (verdict == Verdict::Unexplained).then(|| {
-        diagnose::residual_left(&all, &replays_after, options.noise_level_record)
-    });
+    let residual_left = (verdict == Verdict::Unexplained)
+        .then(|| diagnose::residual_left(&all, &replays_after, options.noise_level_record));
     let effects = added
         .iter()
         .map(|(e, score, gain, val)| {

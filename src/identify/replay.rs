@@ -466,7 +466,10 @@ impl PreparedRecord {
         let k = self.window.len().div_ceil(self.decimate.max(1));
         let mut chunks = wres.chunks(k.max(1));
         let w_du = chunks.next().map(rms).unwrap_or(0.0);
-        let w_ydd = self.ydd_meas_f.as_ref().and_then(|_| chunks.next().map(rms));
+        let w_ydd = self
+            .ydd_meas_f
+            .as_ref()
+            .and_then(|_| chunks.next().map(rms));
         let mut w_p = [None, None];
         for (j, slot) in w_p.iter_mut().enumerate() {
             if self.p_meas_f[j].is_some() {

@@ -307,7 +307,10 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
         "\n### Raw signals\n\nNRMSE of the raw channels: {}.\n",
         super::RAW_NRMSE
     );
-    let _ = writeln!(s, "| stage | all records | held-out records |\n|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| stage | all records | held-out records |\n|---|---|---|"
+    );
     for (name, all) in [
         ("nominal", &r.raw_nrmse.nominal),
         ("before", &r.raw_nrmse.before),
@@ -459,10 +462,7 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
             signed(a.acceleration)
         );
     }
-    let _ = writeln!(
-        s,
-        "\n## Per file (weighted RMS; u̇ NRMSE before → after)\n"
-    );
+    let _ = writeln!(s, "\n## Per file (weighted RMS; u̇ NRMSE before → after)\n");
     for ((n, b), (_, a)) in r.error_before.files.iter().zip(&r.error_after.files) {
         let _ = writeln!(
             s,
@@ -472,11 +472,8 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
             num(100.0 * b.du_nrmse, 2),
             num(100.0 * a.du_nrmse, 2),
             match (b.ydd_nrmse, a.ydd_nrmse) {
-                (Some(x), Some(y)) => format!(
-                    " (ÿ {} % → {} %)",
-                    num(100.0 * x, 2),
-                    num(100.0 * y, 2)
-                ),
+                (Some(x), Some(y)) =>
+                    format!(" (ÿ {} % → {} %)", num(100.0 * x, 2), num(100.0 * y, 2)),
                 _ => String::new(),
             }
         );
