@@ -1187,7 +1187,9 @@ pub fn calibrate(
         remaining.retain(|e| *e != best);
         // Validation: the effect must improve the error on the held-out records.
         let trial_val = val_rms(&refit.params)?;
-        if !(trial_val < (1.0 - options.min_validation_gain) * current_val) {
+        // (A NaN validation error does not improve either.)
+        let improves = trial_val < (1.0 - options.min_validation_gain) * current_val;
+        if !improves {
             notes.push(format!(
                 "round {round}: `{}` improved the fit records (ΔBIC {score:.1}, {:.1} % of the \
                  residual) but not the held-out ones (validation weighted RMS {current_val:.3} → \

@@ -348,10 +348,15 @@ fn summary(r: &CalibrationReport) -> String {
         .files
         .iter()
         .map(|(f, e)| {
-            let w = [Some(e.weighted_du), e.weighted_ydd, e.weighted_p1, e.weighted_p2]
-                .into_iter()
-                .flatten()
-                .fold(0.0, f64::max);
+            let w = [
+                Some(e.weighted_du),
+                e.weighted_ydd,
+                e.weighted_p1,
+                e.weighted_p2,
+            ]
+            .into_iter()
+            .flatten()
+            .fold(0.0, f64::max);
             (f.clone(), w)
         })
         .max_by(|a, b| a.1.total_cmp(&b.1));
@@ -826,10 +831,8 @@ fn short_record(n: usize) -> Record {
         31,
         false,
     );
-    for v in [&mut r.v_in, &mut r.u, &mut r.ydd] {
-        if let Some(v) = v {
-            v.truncate(n);
-        }
+    for v in [&mut r.v_in, &mut r.u, &mut r.ydd].into_iter().flatten() {
+        v.truncate(n);
     }
     r.t.truncate(n);
     r
