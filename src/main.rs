@@ -556,6 +556,10 @@ fn run(cmd: Command) -> Result<()> {
                     ("preset".into(), preset.clone()),
                     ("replayed".into(), data.display().to_string()),
                     (
+                        "excitation".into(),
+                        identify::replay::EXCITATION_CONDITIONING.into(),
+                    ),
+                    (
                         "units".into(),
                         "t s, u m, ydd m/s^2, p1 Pa, p2 Pa, xv m, q1 m^3/s, q2 m^3/s".into(),
                     ),
@@ -615,16 +619,28 @@ fn run(cmd: Command) -> Result<()> {
                 .commit()
                 .with_context(|| format!("moving the results into {}", out.display()))?;
             println!("verdict: {}", report.verdict.name());
+            for m in &report.missing {
+                println!("missing: {m}");
+            }
             for e in &report.effects {
                 println!("effect {}: {:?}", e.effect.name(), e.params);
             }
             for v in &report.calibrated {
-                println!("{} = {:.6} ± {:.2e}", v.name, v.value, v.std);
+                println!(
+                    "{}",
+                    identify::report::format_parameter(&v.name, v.value, v.std)
+                );
             }
             println!(
                 "weighted error: nominal {:.3}, before {:.3}, after {:.3}",
                 report.error_nominal.value, report.error_before.value, report.error_after.value
             );
+            if let Some(v) = &report.error_validation {
+                println!(
+                    "validation (held-out): before {:.3}, after {:.3}",
+                    v.before, v.after
+                );
+            }
             println!(
                 "calibrated in {elapsed:.1} s ({} replays); report in {}",
                 report.evaluations,

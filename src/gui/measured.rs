@@ -808,8 +808,12 @@ impl MeasuredData {
                     identify::Verdict::Explained => Color32::from_rgb(40, 160, 60),
                     identify::Verdict::NoMissingEffect => Color32::from_rgb(40, 120, 200),
                     identify::Verdict::Unexplained => Color32::from_rgb(220, 120, 20),
+                    identify::Verdict::InsufficientData => Color32::from_rgb(200, 60, 60),
                 }),
         );
+        for m in &r.missing {
+            ui.label(format!("missing: {m}"));
+        }
         egui::Grid::new("measured_errors")
             .striped(true)
             .num_columns(4)
@@ -842,6 +846,12 @@ impl MeasuredData {
                 row("before (Cd, τ re-fitted)", &r.error_before);
                 row("after (with effects)", &r.error_after);
             });
+        if let Some(v) = &r.error_validation {
+            ui.monospace(format!(
+                "validation (held-out records): weighted error {:.3} before → {:.3} after",
+                v.before, v.after
+            ));
+        }
         ui.weak("weighted error: 1.0 = sensor-noise level (see report.md for the metric)");
         for v in &r.calibrated {
             ui.monospace(super::format::fitted(&v.name, v.value, v.std));

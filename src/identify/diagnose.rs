@@ -235,6 +235,195 @@ pub fn high_frequency_share(records: &[PreparedRecord], replays: &[Replay], f_hz
     if all > 0.0 { hi / all } else { 0.0 }
 }
 
+/// One record's channel whose residual stays above the noise.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LeftChannel {
+    /// Record (file) name.
+    pub file: String,
+    /// Channel: `du`, `ydd`, `p1` or `p2`.
+    pub channel: String,
+    /// Its weighted RMS residual (1 = noise level).
+    pub weighted_rms: f64,
+}
+
+/// What a twin still misses: where the residual above the noise is, in which frequency band,
+/// and what it correlates with.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ResidualLeft {
+    /// The whole finding, in one paragraph.
+    pub summary: String,
+    /// Record channels above the per-record noise level, worst first (the worst three when
+    /// only the pooled error is above it).
+    pub channels: Vec<LeftChannel>,
+    /// Share of the weighted residual power of those channels per band `[lo, hi)` Hz.
+    pub bands: Vec<([f64; 2], f64)>,
+    /// The band with most of that power.
+    pub main_band_hz: [f64; 2],
+    /// Correlation of the residual of those channels with candidate explanatory signals,
+    /// strongest first: `(signal, channel, r)`.
+    pub correlations: Vec<(String, String, f64)>,
+}
+
+/// Finds what is left in the residual of `replays` (see [`ResidualLeft`]).
+pub fn residual_left(
+    records: &[PreparedRecord],
+    replays: &[Replay],
+    threshold: f64,
+) -> ResidualLeft {
+    let mut all: Vec<(usize, &'static str, f64)> = Vec::new();
+    for (i, r) in replays.iter().enumerate() {
+        let e = &r.errors;
+        for (c, v) in [
+            ("du", Some(e.weighted_du)),
+            ("ydd", e.weighted_ydd),
+            ("p1", e.weighted_p1),
+            ("p2", e.weighted_p2),
+        ] {
+            if let Some(v) = v.filter(|v| v.is_finite()) {
+                all.push((i, c, v));
+            }
+        }
+    }
+    all.sort_by(|a, b| b.2.total_cmp(&a.2));
+    let mut flagged: Vec<(usize, &'static str, f64)> =
+        all.iter().copied().filter(|x| x.2 > threshold).collect();
+    if flagged.is_empty() {
+        flagged = all.iter().copied().take(3).collect();
+    }
+    let edges = [0.0, 0.5, 2.0, 5.0, 10.0, 20.0, f64::INFINITY];
+    let mut power = vec![0.0; edges.len() - 1];
+    // Residual of a flagged channel (filtered as in the metric) on its window, in units of its
+    // weight scale.
+    let residual = |i: usize, c: &str| -> Option<Vec<f64>> {
+        let (p, r) = (&records[i], &replays[i]);
+        let w = p.window.clone();
+        match c {
+            "du" => Some(r.residual_du[w].iter().map(|v| v / p.scale_du).collect()),
+            "ydd" => r
+                .residual_ydd
+                .as_ref()
+                .map(|v| v[w].iter().map(|v| v / p.scale_ydd).collect()),
+            _ => None,
+        }
+    };
+    for &(i, c, _) in &flagged {
+        let Some(e) = residual(i, c) else { continue };
+        let (f, a) = spectrum(&e, records[i].dt);
+        for (fk, ak) in f.iter().zip(&a) {
+            if let Some(b) = (0..power.len()).find(|&b| *fk >= edges[b] && *fk < edges[b + 1]) {
+                power[b] += ak * ak;
+            }
+        }
+    }
+    let total: f64 = power.iter().sum();
+    let bands: Vec<([f64; 2], f64)> = (0..power.len())
+        .map(|b| {
+            let hi = if edges[b + 1].is_finite() {
+                edges[b + 1]
+            } else {
+                records.first().map(|r| 0.5 / r.dt).unwrap_or(500.0)
+            };
+            (
+                [edges[b], hi],
+                if total > 0.0 { power[b] / total } else { 0.0 },
+            )
+        })
+        .collect();
+    let main = bands
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|b| (b.0, b.1))
+        .unwrap_or(([0.0, 0.0], 0.0));
+    // Correlations with signals that an effect outside the library could depend on.
+    type Sig = fn(&PreparedRecord, &Replay, usize) -> f64;
+    let signals: [(&str, Sig); 10] = [
+        ("spool position xv", |_, r, k| r.sim.xv[k]),
+        ("spool opening |xv|", |_, r, k| r.sim.xv[k].abs()),
+        ("command v_in", |p, _, k| p.v_in[k]),
+        ("twin velocity du/dt", |_, r, k| r.twin_du[k]),
+        ("sign of velocity", |_, r, k| r.twin_du[k].signum()),
+        ("twin body acceleration", |_, r, k| r.twin_ydd[k]),
+        ("stroke u", |_, r, k| r.sim.u[k]),
+        ("load pressure p1 − p2", |_, r, k| {
+            r.sim.p1[k] - r.sim.p2[k]
+        }),
+        ("flow |Q|·Q", |_, r, k| r.sim.q2[k] * r.sim.q2[k].abs()),
+        ("time in the record", |p, _, k| k as f64 * p.dt),
+    ];
+    let mut correlations = Vec::new();
+    for ch in ["du", "ydd"] {
+        let rows: Vec<usize> = flagged.iter().filter(|x| x.1 == ch).map(|x| x.0).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        for (name, f) in signals {
+            let mut pairs = Vec::new();
+            for &i in &rows {
+                let (p, r) = (&records[i], &replays[i]);
+                let res = if ch == "du" {
+                    Some(&r.residual_du)
+                } else {
+                    r.residual_ydd.as_ref()
+                };
+                let Some(res) = res else { continue };
+                let scale = if ch == "du" { p.scale_du } else { p.scale_ydd };
+                for k in p.window.clone().step_by(p.decimate.max(1)) {
+                    pairs.push((f(p, r, k), res[k] / scale));
+                }
+            }
+            let c = correlation(&pairs);
+            if c.is_finite() {
+                correlations.push((name.to_string(), ch.to_string(), c));
+            }
+        }
+    }
+    correlations.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
+    correlations.truncate(4);
+    let channels: Vec<LeftChannel> = flagged
+        .iter()
+        .map(|&(i, c, v)| LeftChannel {
+            file: records[i].name.clone(),
+            channel: c.to_string(),
+            weighted_rms: v,
+        })
+        .collect();
+    let list: Vec<String> = channels
+        .iter()
+        .take(6)
+        .map(|c| format!("{} {} ({:.2})", c.file, c.channel, c.weighted_rms))
+        .collect();
+    let corr: Vec<String> = correlations
+        .iter()
+        .map(|(s, c, r)| format!("{s} ({c} residual, r = {r:+.2})"))
+        .collect();
+    let summary = format!(
+        "Left above the noise (weighted RMS, 1 = noise; limit {threshold:.1} per record and \
+         channel): {}{}. {:.0} % of that residual's power lies in {:.1}–{:.1} Hz. It correlates \
+         most with: {}.",
+        list.join(", "),
+        if channels.len() > 6 {
+            format!(" and {} more", channels.len() - 6)
+        } else {
+            String::new()
+        },
+        100.0 * main.1,
+        main.0[0],
+        main.0[1],
+        if corr.is_empty() {
+            "nothing tested".to_string()
+        } else {
+            corr.join(", ")
+        }
+    );
+    ResidualLeft {
+        summary,
+        channels,
+        bands,
+        main_band_hz: main.0,
+        correlations,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -5,6 +5,16 @@
 //! on the record's time grid with the largest RK4 step ≤ `numerics.max_step_s` that divides the
 //! sample step.
 //!
+//! **Conditioning of the measured excitation** ([`EXCITATION_CONDITIONING`]). The recorded
+//! platform acceleration is not fed raw: it is low-passed at [`EXCITATION_LOWPASS_HZ`] with a
+//! zero-phase 6th-order Butterworth filter (run forward and backward, so
+//! `|H|² = 1/(1 + (f/30 Hz)¹²)`: flat to 1 % up to 20 Hz, −98 dB at 77 Hz). The twin's oil
+//! column is a mass on a fluid spring with almost no damping (about 77 Hz, ζ ≈ 3·10⁻⁴ with the
+//! paper's parameters): the accelerometer's white noise has power there, and fed raw it makes
+//! the replayed `ÿ` ring at a hundred times the measured one. A seat rig's platform motion lies
+//! far below 30 Hz, so the filter removes noise, not motion. A record with `x` but no `xdd` is
+//! filtered the same way before its double difference.
+//!
 //! **Error metric.** Open-loop replay of a flow-controlled cylinder integrates every flow error
 //! into a drift of `u`, so position is a poor thing to fit. The metric compares two channels
 //! that do not integrate the error:
@@ -32,6 +42,56 @@ use crate::params::Params;
 use crate::scenario::{CommandSignal, PlatformMotion, SampledMotion};
 use crate::simulation::{Drive, Simulation, step_for_rate};
 use std::sync::Arc;
+
+/// Cut-off of the zero-phase low-pass applied to the recorded platform motion before it drives
+/// the twin [Hz] (see the [module docs](self)); at most 0.3 × the sample rate.
+pub const EXCITATION_LOWPASS_HZ: f64 = 30.0;
+
+/// How the measured excitation is conditioned, and why (for file headers and reports).
+pub const EXCITATION_CONDITIONING: &str = "platform xdd (or x) low-passed before it drives the \
+twin: zero-phase 6th-order Butterworth at 30 Hz, run forward and backward (|H|^2 = \
+1/(1+(f/30 Hz)^12); flat within 1 % to 20 Hz, -98 dB at 77 Hz); xd and x are its trapezoidal \
+integrals. Why: the twin's oil-column mode (about 77 Hz, damping ratio about 3e-4) is almost \
+undamped, and the accelerometer's white noise, fed raw, makes the replayed ydd ring far above \
+the measured one; the platform motion of a seat rig lies well below 30 Hz. v_in is used as \
+recorded.";
+
+/// Zero-phase Butterworth low-pass of order `order` (even), run forward and backward:
+/// `|H|² = 1/(1 + (f/fc)^(2·order))`, no phase shift. Each pass starts in steady state at the
+/// end value it starts from.
+pub fn butterworth_zero_phase(x: &[f64], dt: f64, fc: f64, order: usize) -> Vec<f64> {
+    let k = (std::f64::consts::PI * fc * dt).tan();
+    let sections: Vec<[f64; 5]> = (1..=order / 2)
+        .map(|i| {
+            let theta = (2 * i - 1) as f64 * std::f64::consts::PI / (2 * order) as f64;
+            let q = 1.0 / (2.0 * theta.cos());
+            let norm = 1.0 / (1.0 + k / q + k * k);
+            let b0 = k * k * norm;
+            [
+                b0,
+                2.0 * b0,
+                b0,
+                2.0 * (k * k - 1.0) * norm,
+                (1.0 - k / q + k * k) * norm,
+            ]
+        })
+        .collect();
+    let mut y = x.to_vec();
+    for c in &sections {
+        biquad_pass(&mut y, c, false);
+    }
+    for c in &sections {
+        biquad_pass(&mut y, c, true);
+    }
+    y
+}
+
+/// The platform acceleration conditioned as the twin's replay uses it (see
+/// [`EXCITATION_CONDITIONING`]).
+pub fn condition_excitation(xdd: &[f64], dt: f64) -> Vec<f64> {
+    let fc = EXCITATION_LOWPASS_HZ.min(0.3 / dt);
+    butterworth_zero_phase(xdd, dt, fc, 6)
+}
 
 /// Signal-processing settings of the error metric.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -120,6 +180,11 @@ pub struct PreparedRecord {
     pub noise_p: [f64; 2],
     /// Low-pass cut-off used [Hz].
     pub lowpass_hz: f64,
+    /// Raw measured chamber pressures `p1`, `p2` [Pa gauge], each if recorded.
+    pub p_raw: [Option<Vec<f64>>; 2],
+    /// The samples whose residuals count (the whole record unless the record is split in
+    /// time for validation, see [`Self::windowed`]); the replay always covers the whole record.
+    pub window: std::ops::Range<usize>,
 }
 
 impl PreparedRecord {
@@ -149,7 +214,7 @@ impl PreparedRecord {
         let x = record.x.as_ref().filter(|v| moving(v));
         let (platform, platform_moves) = match (xdd, x) {
             (Some(xdd), _) => {
-                let m = SampledMotion::from_acceleration(dt, xdd.clone());
+                let m = SampledMotion::from_acceleration(dt, condition_excitation(xdd, dt));
                 let m = match &record.x {
                     Some(x) => m.with_reported_position(x.clone()),
                     None => m,
@@ -157,7 +222,10 @@ impl PreparedRecord {
                 (PlatformMotion::Sampled(m), true)
             }
             (None, Some(x)) => (
-                PlatformMotion::Sampled(SampledMotion::from_position(dt, x.clone())),
+                PlatformMotion::Sampled(SampledMotion::from_position(
+                    dt,
+                    condition_excitation(x, dt),
+                )),
                 true,
             ),
             (None, None) => (PlatformMotion::Still, false),
@@ -187,6 +255,7 @@ impl PreparedRecord {
             })
             .unwrap_or(1.0);
         let mut p_meas_f = [None, None];
+        let p_raw = [record.p1.clone(), record.p2.clone()];
         let mut scale_p = [1.0; 2];
         let mut noise_p = [0.0; 2];
         for (i, raw) in [&record.p1, &record.p2].into_iter().enumerate() {
@@ -223,7 +292,21 @@ impl PreparedRecord {
             scale_p,
             noise_p,
             lowpass_hz,
+            p_raw,
+            window: 0..record.len(),
         })
+    }
+
+    /// The same record with only the samples in `window` counted in its residuals and errors.
+    pub fn windowed(&self, window: std::ops::Range<usize>) -> Self {
+        let mut r = self.clone();
+        r.window = window.start.min(self.len)..window.end.min(self.len);
+        r
+    }
+
+    /// Sample indices of the decimated residual (within the window).
+    fn eval_indices(&self) -> std::iter::StepBy<std::ops::Range<usize>> {
+        self.window.clone().step_by(self.decimate.max(1))
     }
 
     /// Duration [s].
@@ -233,7 +316,7 @@ impl PreparedRecord {
 
     /// Number of weighted residuals this record contributes.
     pub fn residual_len(&self) -> usize {
-        let k = self.len.div_ceil(self.decimate);
+        let k = self.window.len().div_ceil(self.decimate.max(1));
         let channels = 1
             + usize::from(self.ydd_meas_f.is_some())
             + self.p_meas_f.iter().filter(|p| p.is_some()).count();
@@ -308,58 +391,106 @@ impl PreparedRecord {
     /// channels the record has.
     pub fn weighted_residuals(&self, sim: &SimChannels, out: &mut Vec<f64>) {
         let du_sim_f = filtered_derivative(&sim.u, self.dt, self.lowpass_hz);
-        for i in (0..self.len).step_by(self.decimate) {
+        for i in self.eval_indices() {
             out.push((du_sim_f[i] - self.du_meas_f[i]) / self.scale_du);
         }
         if let Some(ym) = &self.ydd_meas_f {
             let ys = lowpass(&sim.ydd, self.dt, self.lowpass_hz);
-            for i in (0..self.len).step_by(self.decimate) {
+            for i in self.eval_indices() {
                 out.push((ys[i] - ym[i]) / self.scale_ydd);
             }
         }
         for (k, sim_p) in [&sim.p1, &sim.p2].into_iter().enumerate() {
             if let Some(pm) = &self.p_meas_f[k] {
                 let ps = lowpass(sim_p, self.dt, self.lowpass_hz);
-                for i in (0..self.len).step_by(self.decimate) {
+                for i in self.eval_indices() {
                     out.push((ps[i] - pm[i]) / self.scale_p[k]);
                 }
             }
         }
     }
 
+    /// Raw-signal errors of a replay on the window: every written channel the record also
+    /// has (`u`, `ÿ`, `p1`, `p2`), unfiltered, sample by sample on the record's own grid.
+    pub fn raw_errors(&self, sim: &SimChannels) -> RawErrors {
+        let w = self.window.clone();
+        let ch = |twin: &[f64], meas: &[f64]| RawChannel::of(&twin[w.clone()], &meas[w.clone()]);
+        RawErrors {
+            u: ch(&sim.u, &self.u),
+            ydd: self.ydd.as_ref().map(|m| ch(&sim.ydd, m)),
+            p1: self.p_raw[0].as_ref().map(|m| ch(&sim.p1, m)),
+            p2: self.p_raw[1].as_ref().map(|m| ch(&sim.p2, m)),
+        }
+    }
+
     /// Unweighted channel errors of a replay.
     pub fn channel_errors(&self, sim: &SimChannels) -> ChannelErrors {
+        let w = self.window.clone();
         let du_sim_f = filtered_derivative(&sim.u, self.dt, self.lowpass_hz);
-        let e_du: Vec<f64> = du_sim_f
+        let e_du: Vec<f64> = du_sim_f[w.clone()]
             .iter()
-            .zip(&self.du_meas_f)
+            .zip(&self.du_meas_f[w.clone()])
             .map(|(a, b)| a - b)
             .collect();
-        let e_u: Vec<f64> = sim.u.iter().zip(&self.u).map(|(a, b)| a - b).collect();
+        let e_u: Vec<f64> = sim.u[w.clone()]
+            .iter()
+            .zip(&self.u[w.clone()])
+            .map(|(a, b)| a - b)
+            .collect();
         let (ydd, ydd_nrmse) = match &self.ydd_meas_f {
             Some(ym) => {
                 let ys = lowpass(&sim.ydd, self.dt, self.lowpass_hz);
-                let e: Vec<f64> = ys.iter().zip(ym).map(|(a, b)| a - b).collect();
+                let e: Vec<f64> = ys[w.clone()]
+                    .iter()
+                    .zip(&ym[w.clone()])
+                    .map(|(a, b)| a - b)
+                    .collect();
                 let r = rms(&e);
-                (Some(r), Some(r / rms(ym).max(1e-12)))
+                (Some(r), Some(r / rms(&ym[w.clone()]).max(1e-12)))
             }
             None => (None, None),
         };
         let p_err = |k: usize, sim_p: &[f64]| {
             self.p_meas_f[k].as_ref().map(|pm| {
                 let ps = lowpass(sim_p, self.dt, self.lowpass_hz);
-                rms(&ps.iter().zip(pm).map(|(a, b)| a - b).collect::<Vec<_>>())
+                rms(&ps[w.clone()]
+                    .iter()
+                    .zip(&pm[w.clone()])
+                    .map(|(a, b)| a - b)
+                    .collect::<Vec<_>>())
             })
         };
+        // Weighted RMS per channel, in the order of `weighted_residuals`.
+        let mut wres = Vec::new();
+        self.weighted_residuals(sim, &mut wres);
+        let k = self.window.len().div_ceil(self.decimate.max(1));
+        let mut chunks = wres.chunks(k.max(1));
+        let w_du = chunks.next().map(rms).unwrap_or(0.0);
+        let w_ydd = self
+            .ydd_meas_f
+            .as_ref()
+            .and_then(|_| chunks.next().map(rms));
+        let mut w_p = [None, None];
+        for (j, slot) in w_p.iter_mut().enumerate() {
+            if self.p_meas_f[j].is_some() {
+                *slot = chunks.next().map(rms);
+            }
+        }
         ChannelErrors {
             p1: p_err(0, &sim.p1),
             p2: p_err(1, &sim.p2),
             du: rms(&e_du),
-            du_nrmse: rms(&e_du) / rms(&self.du_meas_f).max(1e-12),
+            du_nrmse: rms(&e_du) / rms(&self.du_meas_f[w.clone()]).max(1e-12),
             ydd,
             ydd_nrmse,
             u: rms(&e_u),
-            samples: self.len,
+            samples: w.len(),
+            weighted: rms(&wres),
+            weighted_du: w_du,
+            weighted_ydd: w_ydd,
+            weighted_p1: w_p[0],
+            weighted_p2: w_p[1],
+            raw: self.raw_errors(sim),
         }
     }
 }
@@ -381,8 +512,63 @@ pub struct ChannelErrors {
     pub p2: Option<f64>,
     /// RMS error of the relative displacement [m] (open loop: includes drift; not fitted).
     pub u: f64,
-    /// Samples in the record.
+    /// Samples counted (the record's, or its window's).
     pub samples: usize,
+    /// RMS of the noise-weighted residual of this record (1 = sensor-noise level).
+    pub weighted: f64,
+    /// The same for the velocity channel alone.
+    pub weighted_du: f64,
+    /// The same for the acceleration channel, if measured.
+    pub weighted_ydd: Option<f64>,
+    /// The same for `p1`, if measured.
+    pub weighted_p1: Option<f64>,
+    /// The same for `p2`, if measured.
+    pub weighted_p2: Option<f64>,
+    /// Errors of the raw (unfiltered) channels, as `seat-twin replay` writes them.
+    pub raw: RawErrors,
+}
+
+/// Error of one raw channel of a replay against the record.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct RawChannel {
+    /// RMS of twin − measured [SI].
+    pub rms_error: f64,
+    /// Standard deviation of the measured channel about its mean [SI].
+    pub measured_std: f64,
+    /// `rms_error / measured_std` [-] (0 when the channel does not vary).
+    pub nrmse: f64,
+}
+
+impl RawChannel {
+    fn of(twin: &[f64], meas: &[f64]) -> Self {
+        let e: Vec<f64> = twin.iter().zip(meas).map(|(a, b)| a - b).collect();
+        let n = meas.len().max(1) as f64;
+        let mean = meas.iter().sum::<f64>() / n;
+        let dev: Vec<f64> = meas.iter().map(|v| v - mean).collect();
+        let (rms_error, measured_std) = (rms(&e), rms(&dev));
+        Self {
+            rms_error,
+            measured_std,
+            nrmse: if measured_std > 0.0 {
+                rms_error / measured_std
+            } else {
+                0.0
+            },
+        }
+    }
+}
+
+/// Raw-channel errors of a replay (`None`: the record lacks the channel).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct RawErrors {
+    /// Relative displacement [m].
+    pub u: RawChannel,
+    /// Body acceleration [m/s²].
+    pub ydd: Option<RawChannel>,
+    /// Upper chamber pressure [Pa].
+    pub p1: Option<RawChannel>,
+    /// Lower chamber pressure [Pa].
+    pub p2: Option<RawChannel>,
 }
 
 /// One record replayed through the twin: the simulated channels aligned with the record and
@@ -604,6 +790,26 @@ mod tests {
             "{mid}"
         );
         assert!((prep.channel_errors(&sim).p1.unwrap() - 1e5).abs() < 1.0);
+    }
+
+    /// The excitation filter does what its documentation states: flat within 1 % to 20 Hz,
+    /// −6 dB at 30 Hz (the combined gain of both passes, |H|²), −98 dB at the 77 Hz mode.
+    #[test]
+    fn excitation_filter_passes_the_rig_band_and_kills_the_oil_column_mode() {
+        let dt = 1e-3;
+        let n = 20_000;
+        let gain = |f: f64| {
+            let x: Vec<f64> = (0..n)
+                .map(|i| (2.0 * std::f64::consts::PI * f * i as f64 * dt).sin())
+                .collect();
+            let y = condition_excitation(&x, dt);
+            let mid = n / 4..3 * n / 4;
+            rms(&y[mid.clone()]) / rms(&x[mid])
+        };
+        assert!((gain(5.0) - 1.0).abs() < 1e-3, "{}", gain(5.0));
+        assert!((gain(20.0) - 1.0).abs() < 0.01, "{}", gain(20.0));
+        assert!((gain(30.0) - 0.5).abs() < 0.01, "{}", gain(30.0));
+        assert!(gain(77.0) < 3e-5, "{}", gain(77.0));
     }
 
     #[test]

@@ -38,13 +38,14 @@ fn error_json(e: &ErrorSummary) -> Value {
     })
 }
 
-/// The `report.json` document (SI).
+/// The `report.json` document (SI). Non-finite numbers become `null` (serde_json's rule), so
+/// the document never holds NaN.
 pub fn report_json(r: &CalibrationReport) -> Value {
     let mut calibrated = serde_json::Map::new();
     let mut unc = serde_json::Map::new();
     for v in &r.calibrated {
-        calibrated.insert(v.name.clone(), json!(v.value));
-        unc.insert(v.name.clone(), json!(finite(v.std)));
+        calibrated.insert(v.name.clone(), finite(v.value));
+        unc.insert(v.name.clone(), finite(v.std));
     }
     let first_round: Vec<Value> = r
         .candidates
@@ -57,6 +58,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
         .collect();
     json!({
         "verdict": r.verdict.name(),
+        "missing": r.missing,
         "effects": r.effects.iter().map(|e| json!({
             "name": e.effect.name(),
             "params": e.params,
@@ -68,7 +70,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
         "candidate_rounds": r.candidates.iter().map(|c| json!({
             "round": c.round, "name": c.effect.name(), "score": c.score,
             "relative_gain": c.relative_gain, "params": c.params})).collect::<Vec<_>>(),
-        "score": "ΔBIC = n_eff·ln(RSS_candidate/RSS_current) + Δk·ln(n_eff) against the model of that round; negative is better",
+        "score": "ΔBIC = n_eff·ln(RSS_candidate/RSS_current) + Δk·ln(n_eff) against the model of that round, on the fit records; negative is better",
         "calibrated_parameters": calibrated,
         "calibrated_uncertainties": unc,
         "mass_fitted": r.mass_fitted,
@@ -77,6 +79,20 @@ pub fn report_json(r: &CalibrationReport) -> Value {
         "error_paper_baseline": r.error_baseline.as_ref().map(error_json),
         "error_before": error_json(&r.error_before),
         "error_after": error_json(&r.error_after),
+        "error_training": r.error_training,
+        "error_validation": r.error_validation.as_ref().map(|v| json!({
+            "before": v.before,
+            "after": v.after,
+            "metric": v.metric,
+            "channels": v.channels.iter()
+                .map(|(k, [b, a])| (k.clone(), json!({"before": b, "after": a})))
+                .collect::<serde_json::Map<_, _>>(),
+            "files": v.files,
+            "split": r.split.rule,
+        })),
+        "split": r.split,
+        "raw_nrmse": r.raw_nrmse,
+        "residual_left": r.residual_left,
         "diagnostics_before": r.diagnostics_before,
         "diagnostics_after": r.diagnostics_after,
         "n_residuals": r.n,
@@ -113,6 +129,89 @@ pub fn calibrated_preset(r: &CalibrationReport) -> Preset {
     }
 }
 
+/// A number with `decimals` decimals, or `—` when it is not finite.
+fn num(v: f64, decimals: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.decimals$}")
+    } else {
+        "—".into()
+    }
+}
+
+/// Decimals that show two significant digits of `std` (at least `min`, at most 9).
+fn decimals_for(std: f64, min: usize) -> usize {
+    if !(std.is_finite() && std > 0.0) {
+        return min;
+    }
+    let d = 1 - std.log10().floor() as i64;
+    (d.max(min as i64).min(9)) as usize
+}
+
+/// `value ± std` in a display unit: `(symbol, scale from SI, unit)` by parameter name.
+fn display_unit(name: &str) -> (&'static str, f64, &'static str) {
+    match name {
+        "cd" => ("Cd", 1.0, ""),
+        "tau_s" => ("τ", 1e3, "ms"),
+        "mass_kg" => ("m", 1.0, "kg"),
+        "coulomb_n" => ("F_c", 1.0, "N"),
+        "viscous_n_s_per_m" => ("b", 1.0, "N·s/m"),
+        "overlap_m" => ("overlap", 1e6, "µm"),
+        "bias_v" => ("bias", 1e3, "mV"),
+        "coefficient_m3_per_s_pa" => ("C_leak", 1e12, "×10⁻¹² m³/(s·Pa)"),
+        "effective_bulk_modulus_pa" => ("β", 1e-9, "GPa"),
+        "droop_pa_per_m3_s" => ("droop", 1e-5 / 6e4, "bar/(L/min)"),
+        _ => ("", 1.0, ""),
+    }
+}
+
+/// `τ = 17.50 ± 0.01 ms`: the parameter in its display unit with its 1-σ uncertainty.
+pub fn format_parameter(name: &str, value: f64, std: f64) -> String {
+    let (sym, k, unit) = display_unit(name);
+    let sym = if sym.is_empty() { name } else { sym };
+    let (v, u) = (value * k, std * k.abs());
+    let d = decimals_for(u, if v.abs() >= 100.0 { 0 } else { 2 });
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    if u.is_finite() {
+        format!("{sym} = {} ± {}{unit}", num(v, d), num(u, d))
+    } else {
+        format!("{sym} = {}{unit} (uncertainty not determined)", num(v, d))
+    }
+}
+
+/// A parameter value alone in its display unit (`0.596 GPa`).
+fn format_value(name: &str, value: f64) -> String {
+    let (_, k, unit) = display_unit(name);
+    let v = value * k;
+    let d = if v.abs() >= 100.0 {
+        1
+    } else if v.abs() >= 1.0 {
+        3
+    } else {
+        4
+    };
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    format!("{}{unit}", num(v, d))
+}
+
+fn channel_list(m: &std::collections::BTreeMap<String, f64>) -> String {
+    let order = ["u", "ydd", "p1", "p2"];
+    let mut parts = Vec::new();
+    for c in order {
+        if let Some(v) = m.get(c) {
+            parts.push(format!("{c} {}", num(*v, 3)));
+        }
+    }
+    parts.join(", ")
+}
+
 /// The Markdown report.
 pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String {
     let mut s = String::new();
@@ -122,56 +221,137 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
         "**Verdict: `{}`** — {}\n",
         r.verdict.name(),
         match r.verdict {
-            Verdict::Explained => "the residual was traced to the effect(s) below.",
+            Verdict::Explained =>
+                "the added effect(s) below bring the residual down to the sensor-noise level on every record.",
             Verdict::NoMissingEffect =>
                 "the twin with re-fitted declared parameters explains the data to the noise level; nothing was added.",
             Verdict::Unexplained =>
-                "a residual above the noise remains and no effect of the library earns its parameters.",
+                "a residual above the sensor noise remains; the effects below (if any) helped, but what is left is not in the library (see \"What is left\").",
+            Verdict::InsufficientData =>
+                "the records cannot determine the twin's parameters; nothing was calibrated and no calibrated.toml was written.",
         }
     );
+    if !r.missing.is_empty() {
+        let _ = writeln!(s, "## What is missing\n");
+        for m in &r.missing {
+            let _ = writeln!(s, "- {m}");
+        }
+        let _ = writeln!(s);
+    }
     let _ = writeln!(s, "Records: {}.\n", r.files.join(", "));
+    if !r.split.rule.is_empty() {
+        let _ = writeln!(
+            s,
+            "Fit/validation split: {}. Fitted: {}. Held out: {}.\n",
+            r.split.rule,
+            r.split.fit.join(", "),
+            r.split.validation.join(", ")
+        );
+    }
     let _ = writeln!(s, "## Error metric\n\n{}\n", super::METRIC);
     let _ = writeln!(
         s,
-        "| stage | weighted RMS | u̇ RMS [mm/s] | ÿ RMS [m/s²] | u RMS [mm] |\n|---|---|---|---|---|"
+        "| stage (all records) | weighted RMS | u̇ RMS [mm/s] | ÿ RMS [m/s²] | u RMS [mm] |\n|---|---|---|---|---|"
     );
     let row = |s: &mut String, name: &str, e: &ErrorSummary| {
         let c = |k: &str| e.channels.get(k).copied().unwrap_or(f64::NAN);
         let _ = writeln!(
             s,
-            "| {name} | {:.3} | {:.3} | {:.4} | {:.3} |",
-            e.value,
-            1e3 * c("du"),
-            c("ydd"),
-            1e3 * c("u")
+            "| {name} | {} | {} | {} | {} |",
+            num(e.value, 3),
+            num(1e3 * c("du"), 3),
+            num(c("ydd"), 4),
+            num(1e3 * c("u"), 3)
         );
     };
     row(&mut s, "nominal (preset as given)", &r.error_nominal);
     if let Some(e) = &r.error_baseline {
         row(&mut s, "paper's section-4 method", e);
     }
-    row(
-        &mut s,
-        "before (declared parameters re-fitted)",
-        &r.error_before,
+    if r.verdict != Verdict::InsufficientData {
+        row(
+            &mut s,
+            "before (declared parameters re-fitted)",
+            &r.error_before,
+        );
+        row(&mut s, "after (with added effects)", &r.error_after);
+    }
+    if r.error_training.is_some() || r.error_validation.is_some() {
+        let _ = writeln!(s, "\n### Fit and validation\n");
+        let _ = writeln!(
+            s,
+            "| records | weighted RMS before | after | per channel (before → after) |\n|---|---|---|---|"
+        );
+        for (name, e) in [
+            ("fitted", &r.error_training),
+            ("held out (validation)", &r.error_validation),
+        ] {
+            if let Some(e) = e {
+                let ch: Vec<String> = e
+                    .channels
+                    .iter()
+                    .map(|(k, [b, a])| format!("{k} {} → {}", num(*b, 3), num(*a, 3)))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "| {name} | {} | {} | {} |",
+                    num(e.before, 3),
+                    num(e.after, 3),
+                    ch.join(", ")
+                );
+            }
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\n### Raw signals\n\nNRMSE of the raw channels: {}.\n",
+        super::RAW_NRMSE
     );
-    row(&mut s, "after (with added effects)", &r.error_after);
+    let _ = writeln!(
+        s,
+        "| stage | all records | held-out records |\n|---|---|---|"
+    );
+    for (name, all) in [
+        ("nominal", &r.raw_nrmse.nominal),
+        ("before", &r.raw_nrmse.before),
+        ("after", &r.raw_nrmse.after),
+    ] {
+        let val = r
+            .raw_nrmse
+            .validation
+            .get(name)
+            .map(channel_list)
+            .unwrap_or_else(|| "—".into());
+        let _ = writeln!(s, "| {name} | {} | {val} |", channel_list(all));
+    }
+    if r.verdict == Verdict::InsufficientData {
+        if !r.notes.is_empty() {
+            let _ = writeln!(s, "\n## Notes\n");
+            for n in &r.notes {
+                let _ = writeln!(s, "- {n}");
+            }
+        }
+        return s;
+    }
     let _ = writeln!(s, "\n## Declared parameters\n");
     let _ = writeln!(
         s,
-        "| parameter | nominal | paper method | calibrated | 1-σ |\n|---|---|---|---|---|"
+        "| parameter | nominal | paper method | calibrated (± 1-σ) |\n|---|---|---|---|"
     );
     for v in &r.calibrated {
         let nominal = v.knob.value(&r.nominal);
         let paper = match (&r.baseline, v.knob) {
-            (Some(b), super::Knob::Cd) => format!("{:.5}", b.cd),
-            (Some(b), super::Knob::Tau) => format!("{:.5}", b.tau_s),
+            (Some(b), super::Knob::Cd) => format_value(&v.name, b.cd),
+            (Some(b), super::Knob::Tau) => format_value(&v.name, b.tau_s),
             _ => "—".into(),
         };
         let _ = writeln!(
             s,
-            "| {} | {:.5} | {} | {:.5} | {:.2e} |",
-            v.name, nominal, paper, v.value, v.std
+            "| {} | {} | {} | {} |",
+            v.name,
+            format_value(&v.name, nominal),
+            paper,
+            format_parameter(&v.name, v.value, v.std)
         );
     }
     let _ = writeln!(s, "\n## Effects added\n");
@@ -182,14 +362,29 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
         let _ = writeln!(s, "### `{}`\n", e.effect.name());
         for (k, v) in &e.params {
             let u = e.uncertainties.get(k).copied().unwrap_or(f64::NAN);
-            let _ = writeln!(s, "- {k} = {v:.4e} ± {u:.2e}");
+            let _ = writeln!(s, "- {}", format_parameter(k, *v, u));
         }
         let _ = writeln!(s, "\nEvidence: {}\n", e.evidence);
     }
+    if let Some(left) = &r.residual_left {
+        let _ = writeln!(s, "## What is left\n\n{}\n", left.summary);
+        let _ = writeln!(s, "| band [Hz] | share of the residual power |\n|---|---|");
+        for (b, share) in &left.bands {
+            let _ = writeln!(
+                s,
+                "| {}–{} | {} % |",
+                num(b[0], 1),
+                num(b[1], 1),
+                num(100.0 * share, 1)
+            );
+        }
+        let _ = writeln!(s);
+    }
     let _ = writeln!(
         s,
-        "## Candidates\n\nScore = ΔBIC against the model of the round \
-         (n = {}, n_eff = {:.0}); an effect is added when ΔBIC < 0 and it removes enough of the residual.\n",
+        "## Candidates\n\nScore = ΔBIC against the model of the round, on the fit records \
+         (n = {}, n_eff = {:.0}); an effect is added when ΔBIC < 0, it removes enough of the \
+         residual and it lowers the validation error on the held-out records.\n",
         r.n, r.n_eff
     );
     let _ = writeln!(
@@ -200,15 +395,15 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
         let p: Vec<String> = c
             .params
             .iter()
-            .map(|(k, v)| format!("{k} = {v:.3e}"))
+            .map(|(k, v)| format!("{} = {}", display_unit(k).0, format_value(k, *v)))
             .collect();
         let _ = writeln!(
             s,
-            "| {} | {} | {:.1} | {:.1} % | {} |",
+            "| {} | {} | {} | {} % | {} |",
             c.round,
             c.effect.name(),
-            c.score,
-            100.0 * c.relative_gain,
+            num(c.score, 1),
+            num(100.0 * c.relative_gain, 1),
             p.join(", ")
         );
     }
@@ -220,19 +415,30 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
     );
     let _ = writeln!(
         s,
-        "| lag-1 autocorrelation | {:.3} | {:.3} |",
-        wb.lag1, wa.lag1
+        "| lag-1 autocorrelation | {} | {} |",
+        num(wb.lag1, 3),
+        num(wa.lag1, 3)
     );
     let _ = writeln!(
         s,
-        "| share of lags 1–{} outside the white-noise band | {:.2} | {:.2} |",
-        wb.max_lag, wb.share_outside, wa.share_outside
+        "| share of lags 1–{} outside the white-noise band | {} | {} |",
+        wb.max_lag,
+        num(wb.share_outside, 2),
+        num(wa.share_outside, 2)
     );
     let _ = writeln!(
         s,
-        "| ÿ residual power above 30 Hz | {:.3} | {:.3} |",
-        r.diagnostics_before.high_frequency_share, r.diagnostics_after.high_frequency_share
+        "| ÿ residual power above 30 Hz | {} | {} |",
+        num(r.diagnostics_before.high_frequency_share, 3),
+        num(r.diagnostics_after.high_frequency_share, 3)
     );
+    let signed = |v: f64| {
+        if v.is_finite() {
+            format!("{v:+.3}")
+        } else {
+            "—".into()
+        }
+    };
     for (b, a) in r
         .diagnostics_before
         .correlations
@@ -241,24 +447,33 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
     {
         let _ = writeln!(
             s,
-            "| corr(u̇ residual, `{}`) → {} | {:+.3} | {:+.3} |",
-            b.feature, b.effect, b.velocity, a.velocity
+            "| corr(u̇ residual, `{}`) → {} | {} | {} |",
+            b.feature,
+            b.effect,
+            signed(b.velocity),
+            signed(a.velocity)
         );
         let _ = writeln!(
             s,
-            "| corr(ÿ residual, `{}`) → {} | {:+.3} | {:+.3} |",
-            b.feature, b.effect, b.acceleration, a.acceleration
+            "| corr(ÿ residual, `{}`) → {} | {} | {} |",
+            b.feature,
+            b.effect,
+            signed(b.acceleration),
+            signed(a.acceleration)
         );
     }
-    let _ = writeln!(s, "\n## Per file (u̇ NRMSE before → after)\n");
+    let _ = writeln!(s, "\n## Per file (weighted RMS; u̇ NRMSE before → after)\n");
     for ((n, b), (_, a)) in r.error_before.files.iter().zip(&r.error_after.files) {
         let _ = writeln!(
             s,
-            "- {n}: {:.2} % → {:.2} %{}",
-            100.0 * b.du_nrmse,
-            100.0 * a.du_nrmse,
+            "- {n}: weighted {} → {}; u̇ {} % → {} %{}",
+            num(b.weighted, 3),
+            num(a.weighted, 3),
+            num(100.0 * b.du_nrmse, 2),
+            num(100.0 * a.du_nrmse, 2),
             match (b.ydd_nrmse, a.ydd_nrmse) {
-                (Some(x), Some(y)) => format!(" (ÿ {:.2} % → {:.2} %)", 100.0 * x, 100.0 * y),
+                (Some(x), Some(y)) =>
+                    format!(" (ÿ {} % → {} %)", num(100.0 * x, 2), num(100.0 * y, 2)),
                 _ => String::new(),
             }
         );
@@ -454,7 +669,8 @@ pub fn write_plots(r: &CalibrationReport, dir: &Path) -> Result<(), ReportError>
 }
 
 /// Writes `report.json`, `report.md`, `calibrated.toml` and the plots into `dir` (created if
-/// needed). Each file is written atomically.
+/// needed; with the verdict `insufficient_data`, only the two reports). Each file is written
+/// atomically.
 pub fn write_all(
     r: &CalibrationReport,
     dir: &Path,
@@ -465,8 +681,11 @@ pub fn write_all(
         move |source| ReportError::Io { path, source }
     };
     std::fs::create_dir_all(dir).map_err(io(dir))?;
-    write_plots(r, dir)?;
-    calibrated_preset(r).save(&dir.join("calibrated.toml"))?;
+    // Data that cannot determine the twin give no calibrated preset and no plots.
+    if r.verdict != Verdict::InsufficientData {
+        write_plots(r, dir)?;
+        calibrated_preset(r).save(&dir.join("calibrated.toml"))?;
+    }
     let json = serde_json::to_string_pretty(&report_json(r)).unwrap_or_default();
     let p = dir.join("report.json");
     write_atomic(&p, json.as_bytes()).map_err(io(&p))?;
