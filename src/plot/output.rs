@@ -1,11 +1,13 @@
 //! The two outputs of a figure: a PNG rendered at twice the size and averaged down (so lines
-//! are anti-aliased), and an SVG whose text is set by the viewer. Each file is written to a
-//! temporary file beside its destination and renamed.
+//! are anti-aliased), and an SVG whose text is set by the viewer. Each file is written with
+//! [`crate::fsutil::write_atomic_bytes`] (a temporary file beside it, renamed).
 
 use super::canvas::Ctx;
 use super::render::{Drawn, render};
 use super::text::font;
 use super::{Figure, PlotError};
+use crate::fsutil::write_atomic_bytes;
+use image::ImageEncoder;
 use plotters::prelude::*;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -27,21 +29,17 @@ pub fn save_figure(
     let (w, h) = size(fig);
 
     let (rgb, _) = render_rgb(fig)?;
-    write_atomic(&png, |tmp| {
-        let mut enc = BitMapBackend::new(tmp, (w, h));
-        enc.blit_bitmap((0, 0), (w, h), &rgb)
-            .map_err(|e| PlotError::Backend(e.to_string()))?;
-        enc.present()
-            .map_err(|e| PlotError::Backend(format!("{}: {e}", png.display())))
-    })?;
-
+    let mut encoded = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut encoded)
+        .write_image(&rgb, w, h, image::ColorType::Rgb8)
+        .map_err(|e| PlotError::Backend(format!("{}: {e}", png.display())))?;
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| PlotError::Io { path, source }
+    };
+    write_atomic_bytes(&png, &encoded).map_err(io(&png))?;
     let (text, _) = render_svg(fig)?;
-    write_atomic(&svg, |tmp| {
-        std::fs::write(tmp, text.as_bytes()).map_err(|source| PlotError::Io {
-            path: tmp.to_path_buf(),
-            source,
-        })
-    })?;
+    write_atomic_bytes(&svg, text.as_bytes()).map_err(io(&svg))?;
     Ok((png, svg))
 }
 
@@ -101,38 +99,6 @@ fn with_suffix(p: &Path, suffix: &str) -> PathBuf {
     let mut s: OsString = p.as_os_str().to_owned();
     s.push(suffix);
     PathBuf::from(s)
-}
-
-/// Creates a temporary file beside `dest` (with the same extension, which the PNG encoder
-/// needs), lets `fill` write it by path, syncs it and renames it onto `dest`.
-fn write_atomic(
-    dest: &Path,
-    fill: impl FnOnce(&Path) -> Result<(), PlotError>,
-) -> Result<(), PlotError> {
-    let dir = match dest.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let ext = dest
-        .extension()
-        .map(|e| format!(".{}", e.to_string_lossy()))
-        .unwrap_or_default();
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".plot-").suffix(&ext);
-    // Like a file created normally (0666 less the umask), not tempfile's private 0600.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let tmp = builder
-        .tempfile_in(&dir)
-        .map_err(|source| PlotError::Io { path: dir, source })?;
-    fill(tmp.path())?;
-    let io = |source| PlotError::Io {
-        path: dest.to_path_buf(),
-        source,
-    };
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(dest).map_err(|e| io(e.error))?;
-    Ok(())
 }
 
 /// `f`×`f` box filter of an RGB buffer.
