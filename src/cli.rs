@@ -245,7 +245,7 @@ pub enum Command {
         /// Objective: aw (Wk-weighted RMS), vdv or seat.
         #[arg(long, default_value = "aw")]
         objective: String,
-        /// Tuning input: `ride` (the paper's random ride).
+        /// Tuning input: `ride` (the paper's random ride) or `class:NAME` (a seat-test input class).
         #[arg(long, default_value = "ride")]
         excitation: String,
         /// Number of tuning rides (seeds 1..=N); as many held-out rides use seeds 101...

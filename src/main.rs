@@ -623,7 +623,12 @@ fn run(cmd: Command) -> Result<()> {
                 println!("missing: {m}");
             }
             for e in &report.effects {
-                println!("effect {}: {:?}", e.effect.name(), e.params);
+                let params: Vec<String> = e
+                    .params
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {}", identify::report::format_value(k, *v)))
+                    .collect();
+                println!("effect {}: {}", e.effect.name(), params.join(", "));
             }
             for v in &report.calibrated {
                 println!(
@@ -699,11 +704,16 @@ fn run_tune(
         None => params.controller.kind,
     };
     let objective: tune::Objective = objective.parse().map_err(anyhow::Error::msg)?;
-    if excitation != "ride" {
-        bail!(
-            "--excitation {excitation}: this build tunes on `ride` (the paper's random ride) only"
-        );
-    }
+    let input = match excitation {
+        "ride" => tune::TuneInput::Ride,
+        other => match other.strip_prefix("class:") {
+            Some(name) => tune::TuneInput::Class(find_class(name)?),
+            None => bail!(
+                "--excitation {other}: expected `ride` or `class:NAME` (classes: {})",
+                seat_twin::seat_test::classes::names()
+            ),
+        },
+    };
     check_range("--seeds", seeds as f64, 1.0, 20.0, "")?;
     check_range("--duration", duration, 5.0, 600.0, "s")?;
     check_range("--evaluations", evaluations as f64, 10.0, 10_000.0, "")?;
@@ -712,6 +722,7 @@ fn run_tune(
     let opts = tune::TuneOptions {
         kind,
         objective,
+        input,
         tune_seeds: (1..=n).collect(),
         heldout_seeds: (101..101 + n).collect(),
         duration_s: duration,
@@ -720,8 +731,9 @@ fn run_tune(
     };
     let started = std::time::Instant::now();
     eprintln!(
-        "tuning {kind} for {} on {n} ride(s) of {duration:.0} s (held out: {n}){}",
+        "tuning {kind} for {} on {n} ride(s) of {duration:.0} s of {} (held out: {n}){}",
         objective.name(),
+        input.describe(),
         if robust {
             ", worst case over the spread"
         } else {

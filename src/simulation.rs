@@ -11,6 +11,7 @@
 use crate::control::{ControlLaw, Controller, Measurement};
 use crate::delay::{DelayLine, Tap};
 use crate::integrate::{Etd4, StepStats, rk4_step};
+pub use crate::model::CommandPath;
 use crate::model::{Inputs, Model, ModelKind, Outputs};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::{CommandSignal, PlatformMotion, PlatformSample};
@@ -236,23 +237,6 @@ pub struct Simulation<M: Model<N>, const N: usize> {
     exponential: Option<Box<Etd4<N>>>,
 }
 
-/// Command delay and saturation a model sees: `(τ [s], Vmax [V])`.
-pub trait CommandPath {
-    /// Pure delay of the command [s].
-    fn command_delay(&self) -> f64;
-    /// Saturation of the command [V].
-    fn command_limit(&self) -> f64;
-}
-
-impl CommandPath for crate::model::twin::Twin {
-    fn command_delay(&self) -> f64 {
-        self.params().valve.tau_s
-    }
-    fn command_limit(&self) -> f64 {
-        self.params().valve.v_max_v
-    }
-}
-
 impl Simulation<crate::model::twin::Twin, 10> {
     /// The twin from rest, stepped with `params.numerics.integrator` at step `h` [s].
     ///
@@ -372,7 +356,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     pub fn use_exponential(&mut self) -> Result<(), crate::integrate::Etd4Error> {
         let rest = self.model.rest_state();
         let scales = self.model.state_scales();
-        let a = crate::analysis::frequency_response::jacobian(&self.model, &rest, &scales);
+        let a = crate::model::jacobian(&self.model, &rest, &scales);
         // Unit inputs in the probe make the rows the inputs enter count as nonlinear.
         let inputs = Inputs {
             v_valve: 1.0,

@@ -208,29 +208,7 @@ impl OpenLoop {
     }
 }
 
-/// Numerical Jacobian `∂f/∂y` (central differences, step 1e-6 of each state's scale) of a
-/// model at state `y0` with zero inputs; `a[i][j] = ∂f_i/∂y_j`.
-pub fn jacobian<M: Model<N>, const N: usize>(
-    model: &M,
-    y0: &[f64; N],
-    scales: &[f64; N],
-) -> [[f64; N]; N] {
-    let inputs = Inputs::default();
-    let mut a = [[0.0; N]; N];
-    for j in 0..N {
-        let h = 1e-6 * scales[j];
-        let mut yp = *y0;
-        let mut ym = *y0;
-        yp[j] += h;
-        ym[j] -= h;
-        let fp = model.derivatives(0.0, &yp, &inputs);
-        let fm = model.derivatives(0.0, &ym, &inputs);
-        for i in 0..N {
-            a[i][j] = (fp[i] - fm[i]) / (2.0 * h);
-        }
-    }
-    a
-}
+pub use crate::model::jacobian;
 
 /// Numerical linearisation of a model at state `y0` with zero inputs.
 pub fn linearise<M: Model<N>, const N: usize>(

@@ -183,7 +183,7 @@ pub fn format_parameter(name: &str, value: f64, std: f64) -> String {
 }
 
 /// A parameter value alone in its display unit (`0.596 GPa`).
-fn format_value(name: &str, value: f64) -> String {
+pub fn format_value(name: &str, value: f64) -> String {
     let (_, k, unit) = display_unit(name);
     let v = value * k;
     let d = if v.abs() >= 100.0 {

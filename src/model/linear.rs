@@ -45,7 +45,7 @@ pub fn g_of(l: &LinearParams, omega_rad_s: f64) -> Complex64 {
     sp2 * l.kg_m_per_s_v * (-s * l.tau_s).exp() / (s * s + 2.0 * l.zeta * l.sp_rad_s * s + sp2)
 }
 
-impl crate::simulation::CommandPath for LinearModel {
+impl super::CommandPath for LinearModel {
     fn command_delay(&self) -> f64 {
         self.lin.tau_s
     }

@@ -143,3 +143,45 @@ pub trait Model<const N: usize>: Clone + Send + Sync {
         [1.0; N]
     }
 }
+
+/// Command delay and saturation a model sees: `(τ [s], Vmax [V])`. The simulation reads the
+/// controller's command back `τ` late and clamps it to `±Vmax` before the model gets it.
+pub trait CommandPath {
+    /// Pure delay of the command [s].
+    fn command_delay(&self) -> f64;
+    /// Saturation of the command [V] (0 for a model without a valve).
+    fn command_limit(&self) -> f64;
+}
+
+impl CommandPath for twin::Twin {
+    fn command_delay(&self) -> f64 {
+        self.params().valve.tau_s
+    }
+    fn command_limit(&self) -> f64 {
+        self.params().valve.v_max_v
+    }
+}
+
+/// Numerical Jacobian `∂f/∂y` (central differences, step 1e-6 of each state's scale) of a
+/// model at state `y0` with zero inputs; `a[i][j] = ∂f_i/∂y_j`.
+pub fn jacobian<M: Model<N>, const N: usize>(
+    model: &M,
+    y0: &[f64; N],
+    scales: &[f64; N],
+) -> [[f64; N]; N] {
+    let inputs = Inputs::default();
+    let mut a = [[0.0; N]; N];
+    for j in 0..N {
+        let h = 1e-6 * scales[j];
+        let mut yp = *y0;
+        let mut ym = *y0;
+        yp[j] += h;
+        ym[j] -= h;
+        let fp = model.derivatives(0.0, &yp, &inputs);
+        let fm = model.derivatives(0.0, &ym, &inputs);
+        for i in 0..N {
+            a[i][j] = (fp[i] - fm[i]) / (2.0 * h);
+        }
+    }
+    a
+}

@@ -46,7 +46,7 @@ impl PassiveModel {
     }
 }
 
-impl crate::simulation::CommandPath for PassiveModel {
+impl super::CommandPath for PassiveModel {
     fn command_delay(&self) -> f64 {
         0.0
     }

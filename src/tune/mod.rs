@@ -25,6 +25,8 @@ use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::{ControllerKind, ControllerParams, Params};
 use crate::scenario::{PlatformMotion, RandomRide};
+use crate::seat_test::InputClass;
+use crate::seat_test::signal::ClassMotion;
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use rayon::prelude::*;
@@ -86,6 +88,42 @@ impl std::str::FromStr for Objective {
     }
 }
 
+/// The platform motion of the tuning (and held-out) rides.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TuneInput {
+    /// The paper's band-limited random ride (section 6).
+    Ride,
+    /// A seat-test input spectral class ([`crate::seat_test`]), one record per seed.
+    Class(&'static InputClass),
+}
+
+impl TuneInput {
+    /// What the rides are, for reports.
+    pub fn describe(&self) -> String {
+        match self {
+            TuneInput::Ride => "the paper's band-limited random ride".into(),
+            TuneInput::Class(c) => format!("seat-test input class {}", c.name),
+        }
+    }
+
+    /// The motion for one seed and duration [s].
+    pub fn motion(&self, seed: u64, duration_s: f64) -> Result<PlatformMotion, TuneError> {
+        match self {
+            TuneInput::Ride => Ok(ride(seed, duration_s)),
+            TuneInput::Class(class) => {
+                let m = ClassMotion {
+                    seed,
+                    ..ClassMotion::new(class, duration_s)
+                };
+                m.validate()
+                    .and_then(|()| m.generate())
+                    .map(PlatformMotion::Sampled)
+                    .map_err(|e| TuneError::Input(e.to_string()))
+            }
+        }
+    }
+}
+
 /// How to tune.
 #[derive(Debug, Clone)]
 pub struct TuneOptions {
@@ -93,6 +131,8 @@ pub struct TuneOptions {
     pub kind: ControllerKind,
     /// What to minimise.
     pub objective: Objective,
+    /// The rides' platform motion.
+    pub input: TuneInput,
     /// Seeds of the tuning rides.
     pub tune_seeds: Vec<u64>,
     /// Seeds of the held-out rides (confirmation only).
@@ -110,6 +150,7 @@ impl Default for TuneOptions {
         Self {
             kind: ControllerKind::Paper,
             objective: Objective::Aw,
+            input: TuneInput::Ride,
             tune_seeds: vec![1, 2, 3],
             heldout_seeds: vec![101, 102, 103],
             duration_s: 60.0,
@@ -137,6 +178,9 @@ pub enum TuneError {
     /// No seeds to tune on.
     #[error("tune needs at least one tuning seed")]
     NoSeeds,
+    /// The ride motion could not be made.
+    #[error("tuning input: {0}")]
+    Input(String),
     /// The optimiser failed.
     #[error("optimiser: {0}")]
     Optimiser(String),
@@ -192,6 +236,8 @@ pub struct TuneResult {
     pub kind: ControllerKind,
     /// Objective minimised.
     pub objective: Objective,
+    /// What the rides were.
+    pub input: String,
     /// The starting controller (the preset's gains) on the tuning rides.
     pub baseline: Evaluation,
     /// The tuned controller on the tuning rides.
@@ -497,14 +543,16 @@ pub fn tune(
     } else {
         plants_of(vec![nominal])
     };
-    let rides: Vec<PlatformMotion> = opts
-        .tune_seeds
-        .iter()
-        .map(|&s| ride(s, opts.duration_s))
-        .collect();
+    let motions = |seeds: &[u64]| {
+        seeds
+            .iter()
+            .map(|&s| opts.input.motion(s, opts.duration_s))
+            .collect::<Result<Vec<_>, _>>()
+    };
+    let rides = motions(&opts.tune_seeds)?;
     let problem = Problem {
         plants,
-        rides,
+        rides: rides.clone(),
         duration_s: opts.duration_s,
         objective: opts.objective,
         kind: opts.kind,
@@ -559,11 +607,7 @@ pub fn tune(
         .filter(|e| !baseline.feasible || e.objective < baseline.objective)
         .cloned()
         .unwrap_or_else(|| baseline.clone());
-    let heldout: Vec<PlatformMotion> = opts
-        .heldout_seeds
-        .iter()
-        .map(|&s| ride(s, opts.duration_s))
-        .collect();
+    let heldout = motions(&opts.heldout_seeds)?;
     let nominal_problem = Problem {
         plants: plants_of(vec![nominal]),
         rides: heldout,
@@ -571,10 +615,11 @@ pub fn tune(
     };
     let baseline_heldout = nominal_problem.evaluate(nominal.controller);
     let tuned_heldout = nominal_problem.evaluate(tuned.controller);
-    let robustness = robustness_table(&nominal, tuned.controller, opts);
+    let robustness = robustness_table(&nominal, tuned.controller, &rides, opts);
     Ok(TuneResult {
         kind: opts.kind,
         objective: opts.objective,
+        input: opts.input.describe(),
         pareto: pareto_front(&log),
         evaluations: nominal_problem.count.load(Ordering::Relaxed),
         baseline,
@@ -594,19 +639,15 @@ pub fn tune(
 fn robustness_table(
     nominal: &Params,
     c: ControllerParams,
+    rides: &[PlatformMotion],
     opts: &TuneOptions,
 ) -> Vec<RobustnessRow> {
-    let rides: Vec<PlatformMotion> = opts
-        .tune_seeds
-        .iter()
-        .map(|&s| ride(s, opts.duration_s))
-        .collect();
     spread(nominal)
         .into_iter()
         .map(|mut p| {
             p.controller = c;
             let (objective, max_u, contacts) =
-                score_rides(&p, &rides, opts.duration_s, opts.objective);
+                score_rides(&p, rides, opts.duration_s, opts.objective);
             RobustnessRow {
                 cd: p.valve.cd,
                 tau_s: p.valve.tau_s,

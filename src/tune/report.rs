@@ -100,6 +100,7 @@ pub fn report_json(r: &TuneResult, wall_s: f64) -> Value {
         "duration_s": r.duration_s,
         "robust": r.robust,
         "stop_reason": r.stop_reason,
+        "input": r.input,
     })
 }
 
@@ -141,8 +142,8 @@ pub fn report_md(r: &TuneResult, params: &Params, wall_s: f64) -> String {
     let _ = writeln!(
         s,
         "Structure **{}**, objective **{}** of the body ({unit}), {} tuning ride(s) (seeds {:?}) \
-         and {} held-out ride(s) (seeds {:?}) of {:.0} s each (the paper's band-limited random \
-         ride), metrics after the first {:.0} s.{}\n",
+         and {} held-out ride(s) (seeds {:?}) of {:.0} s each ({}), metrics after the first \
+         {:.0} s.{}\n",
         r.kind,
         r.objective.name(),
         r.tune_seeds.len(),
@@ -150,6 +151,7 @@ pub fn report_md(r: &TuneResult, params: &Params, wall_s: f64) -> String {
         r.heldout_seeds.len(),
         r.heldout_seeds,
         r.duration_s,
+        r.input,
         super::SETTLE_S,
         if r.robust {
             " Optimised for the worst case over the parameter spread (Cd ±10 %, τ ±3 ms, mass ±20 %)."

@@ -15,6 +15,7 @@ fn short(kind: ControllerKind) -> TuneOptions {
     TuneOptions {
         kind,
         objective: Objective::Aw,
+        input: tune::TuneInput::Ride,
         tune_seeds: vec![1],
         heldout_seeds: vec![101],
         duration_s: 12.0,
@@ -126,4 +127,22 @@ fn tune_outputs_load_and_carry_the_interface_keys() {
     ] {
         assert!(dir.path().join(f).metadata().unwrap().len() > 1000, "{f}");
     }
+}
+
+#[test]
+fn tune_runs_on_a_seat_test_class() {
+    let p = Params::paper();
+    let class = seat_twin::seat_test::find("AG1").unwrap();
+    let o = TuneOptions {
+        input: tune::TuneInput::Class(class),
+        duration_s: 20.0,
+        max_evaluations: 10,
+        ..short(ControllerKind::Paper)
+    };
+    let r = tune::tune(&p, &o, None).unwrap();
+    assert!(r.input.contains("AG1"), "{}", r.input);
+    assert!(r.baseline.objective.is_finite() && r.tuned.objective.is_finite());
+    assert!(r.tuned.objective <= r.baseline.objective || !r.baseline.feasible);
+    // The class is far stronger than the paper's ride (AG1: 2.26 m/s² rms against 0.47).
+    assert!(r.baseline.objective > 0.3, "{}", r.baseline.objective);
 }
