@@ -7,7 +7,7 @@
 //! bit. Why the exponential method by default: those hose modes ring with a damping ratio of
 //! 6e-4, and RK4 needs ≈ 0.1 ms to follow the ringing to 1e-4 m/s² in ÿ, while [`Etd4`] takes
 //! the linear part exactly and reaches the same accuracy at 0.5 ms (see [`Etd4`]). Both orders
-//! are verified in `tests/integrator.rs`, and the accuracy against a 10× finer run is measured
+//! are verified in `tests/it/integrator.rs`, and the accuracy against a 10× finer run is measured
 //! by `seat-twin bench`.
 
 /// Counters of integrator work, so that a regression shows as work before it shows as time.

@@ -11,7 +11,7 @@
 //! ```
 //!
 //! (one matrix exponential, computed once per run). The only approximation is the hold of
-//! the inputs between samples, O(h²) in their curvature; `tests/physics.rs` checks the result
+//! the inputs between samples, O(h²) in their curvature; `tests/it/physics.rs` checks the result
 //! against the closed-form transmissibility and this module's tests against a fine RK4 run.
 //! `A` and `B` are read off the model's own [`Model::derivatives`] (exact for a linear model),
 //! so there is one definition of each model.

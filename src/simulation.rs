@@ -428,7 +428,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     /// open-loop command that jumps on a grid point (a sine test starting at t = τ) is read
     /// as its right limit at the start of a step and its left limit at the end, whatever the
     /// rounding of `t − τ`. Without this, RK4 drops to first order on such tests
-    /// (`tests/integrator.rs`).
+    /// (`tests/it/integrator.rs`).
     #[inline(always)]
     fn valve_command(&self, ts: f64, side: f64, ys: &[f64; N], xdd0: f64, xdds: f64) -> f64 {
         let tq = ts - self.tau;
