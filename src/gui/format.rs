@@ -7,19 +7,9 @@ use crate::params::Params;
 /// Symbol, display scale (display = SI × scale), unit of a fitted parameter by its report
 /// name (`tau_s`, `effective_bulk_modulus_pa`, …). Unknown names pass through unchanged.
 pub fn display_of(name: &str) -> (&str, f64, &'static str) {
-    match name {
-        "cd" => ("Cd", 1.0, ""),
-        "tau_s" => ("τ", 1e3, "ms"),
-        "mass_kg" => ("m", 1.0, "kg"),
-        "coulomb_n" => ("F_c", 1.0, "N"),
-        "viscous_n_s_per_m" => ("b", 1.0, "N·s/m"),
-        "stribeck_n" => ("F_s", 1.0, "N"),
-        "overlap_m" => ("overlap", 1e6, "µm"),
-        "bias_v" => ("V_bias", 1e3, "mV"),
-        "coefficient_m3_per_s_pa" => ("C_leak", 6e9, "(L/min)/bar"),
-        "effective_bulk_modulus_pa" => ("β", 1e-9, "GPa"),
-        "droop_pa_per_m3_s" => ("droop", 1e-5 / 6e4, "bar/(L/min)"),
-        other => (other, 1.0, ""),
+    match crate::identify::report::display_unit(name) {
+        ("", _, _) => (name, 1.0, ""),
+        known => known,
     }
 }
 
