@@ -1,0 +1,149 @@
+//! Physical effects that the paper's model lacks, each off by default.
+
+use serde::{Deserialize, Serialize};
+
+/// Physical effects that the paper's model lacks (issue 4). All off by default; each is a real
+/// part of the twin, usable in simulation, the app and presets.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct EffectsParams {
+    /// Seal and slide friction.
+    pub friction: FrictionEffect,
+    /// Spool overlap (dead band) around null.
+    pub valve_overlap: OverlapEffect,
+    /// Valve null offset, expressed as a command bias.
+    pub valve_offset: OffsetEffect,
+    /// Internal leakage across the piston.
+    pub leakage: LeakageEffect,
+    /// Reduced effective bulk modulus (air, hose walls).
+    pub compliance: ComplianceEffect,
+    /// Supply pressure falling with drawn flow.
+    pub supply_sag: SupplySagEffect,
+}
+
+/// Coulomb + viscous friction with an optional Stribeck peak, smoothed at zero velocity:
+/// `F = (Fc + Fs·exp(−(v/vs)²))·tanh(v/v_eps) + b·v`, opposing the relative velocity `u̇`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FrictionEffect {
+    /// Effect active.
+    pub enabled: bool,
+    /// Coulomb force `Fc` [N], 0 ..= 5000.
+    pub coulomb_n: f64,
+    /// Viscous coefficient `b` [N·s/m], 0 ..= 1e5.
+    pub viscous_n_s_per_m: f64,
+    /// Extra static (Stribeck) force `Fs` above Coulomb [N], 0 ..= 5000.
+    pub stribeck_n: f64,
+    /// Stribeck velocity `vs` [m/s], 1e-5 ..= 1.
+    pub stribeck_velocity_m_s: f64,
+    /// Smoothing velocity `v_eps` of the sign function [m/s], 1e-5 ..= 0.1.
+    pub smoothing_velocity_m_s: f64,
+}
+
+impl Default for FrictionEffect {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            coulomb_n: 0.0,
+            viscous_n_s_per_m: 0.0,
+            stribeck_n: 0.0,
+            stribeck_velocity_m_s: 0.005,
+            smoothing_velocity_m_s: 1.0e-3,
+        }
+    }
+}
+
+/// Symmetric spool overlap: the orifices open only once `|xv|` exceeds the overlap.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OverlapEffect {
+    /// Effect active.
+    pub enabled: bool,
+    /// Overlap on each side of null [m], 0 ..= 0.01.
+    pub overlap_m: f64,
+}
+
+impl Default for OverlapEffect {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            overlap_m: 0.0,
+        }
+    }
+}
+
+/// Valve null offset, as a constant bias added to the delayed command at the valve.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OffsetEffect {
+    /// Effect active.
+    pub enabled: bool,
+    /// Command bias [V], -5 ..= 5.
+    pub bias_v: f64,
+}
+
+impl Default for OffsetEffect {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            bias_v: 0.0,
+        }
+    }
+}
+
+/// Laminar internal leakage from the upper to the lower chamber: `Ql = Cl·(p1 − p2)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LeakageEffect {
+    /// Effect active.
+    pub enabled: bool,
+    /// Leakage coefficient `Cl` [m³/(s·Pa)], 0 ..= 1e-9.
+    pub coefficient_m3_per_s_pa: f64,
+}
+
+impl Default for LeakageEffect {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            coefficient_m3_per_s_pa: 0.0,
+        }
+    }
+}
+
+/// Reduced effective bulk modulus of the oil in chambers and hoses.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ComplianceEffect {
+    /// Effect active.
+    pub enabled: bool,
+    /// Effective bulk modulus [Pa], 1e6 ..= 1e10 (replaces `fluid.bulk_modulus_pa`).
+    pub effective_bulk_modulus_pa: f64,
+}
+
+impl Default for ComplianceEffect {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            effective_bulk_modulus_pa: 1.2e9,
+        }
+    }
+}
+
+/// Supply pressure drooping linearly with the flow drawn from it: `pA,eff = pA − r·Q`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SupplySagEffect {
+    /// Effect active.
+    pub enabled: bool,
+    /// Droop `r` [Pa/(m³/s)], 0 ..= 1e12 (1e10 ≈ 1.7 bar per L/min).
+    pub droop_pa_per_m3_s: f64,
+}
+
+impl Default for SupplySagEffect {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            droop_pa_per_m3_s: 0.0,
+        }
+    }
+}

@@ -1,0 +1,349 @@
+//! Parameter structs of the rig, its controller and the numerics.
+//!
+//! Every field is in SI units, documents its unit and valid range, and is checked by
+//! [`Params::validate`]. Defaults are the paper's adjusted twin (section 3 and 4.2, with the
+//! corrections listed in `docs/model.md`): `Cd = 0.1506`, `τ = 17.5 ms`, `k = 3680 N/m` in total.
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+mod controller;
+mod effects;
+mod models;
+mod numerics;
+mod plant;
+mod table;
+
+pub use controller::{ControllerKind, ControllerParams};
+pub use effects::{
+    ComplianceEffect, EffectsParams, FrictionEffect, LeakageEffect, OffsetEffect, OverlapEffect,
+    SupplySagEffect,
+};
+pub use models::{LinearParams, PassiveParams};
+pub use numerics::{Integrator, NumericsParams};
+pub use plant::{BodyParams, CylinderParams, FluidParams, HoseParams, SupplyParams, ValveParams};
+pub use table::{Display, PARAMS, ParamSpec, spec};
+
+/// A parameter outside its allowed range, or an inconsistent combination.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParamError {
+    /// A value outside `[min, max]` (or not finite).
+    #[error(
+        "parameter `{name}` = {} is outside the allowed range [{}, {}] {unit}",
+        fmt_value(*.value),
+        fmt_value(*.min),
+        fmt_value(*.max)
+    )]
+    OutOfRange {
+        /// Dotted name as in the preset file, e.g. `valve.cd`.
+        name: String,
+        /// The offending value.
+        value: f64,
+        /// Smallest allowed value.
+        min: f64,
+        /// Largest allowed value.
+        max: f64,
+        /// Unit of the value.
+        unit: &'static str,
+    },
+    /// Two parameters that are individually valid but not together.
+    #[error("parameters are inconsistent: {0}")]
+    Inconsistent(String),
+}
+
+/// A number for people: at most 6 significant digits, plain for 1e-4 ≤ |x| < 1e7 (`0.0005`,
+/// `11.7`, `3680`), scientific otherwise (`1e-6`, `1.5e300`); never hundreds of digits.
+pub fn fmt_value(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let r: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    let a = r.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if (1e-4..1e7).contains(&a) {
+        format!("{r}")
+    } else {
+        format!("{r:e}")
+    }
+}
+
+/// Checks `min <= value <= max` and finiteness.
+pub(crate) fn check(
+    name: &str,
+    value: f64,
+    min: f64,
+    max: f64,
+    unit: &'static str,
+) -> Result<(), ParamError> {
+    if value.is_finite() && value >= min && value <= max {
+        Ok(())
+    } else {
+        Err(ParamError::OutOfRange {
+            name: name.to_string(),
+            value,
+            min,
+            max,
+            unit,
+        })
+    }
+}
+
+/// Everything that defines the rig, its controller and the numerics. The content of a preset.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Params {
+    /// Suspended body and springs.
+    pub body: BodyParams,
+    /// Cylinder and end stops.
+    pub cylinder: CylinderParams,
+    /// Hoses.
+    pub hose: HoseParams,
+    /// Supply.
+    pub supply: SupplyParams,
+    /// Valve.
+    pub valve: ValveParams,
+    /// Oil.
+    pub fluid: FluidParams,
+    /// Controller: the paper's Eq. (16) or another structure ([`ControllerKind`]).
+    pub controller: ControllerParams,
+    /// Passive reference.
+    pub passive: PassiveParams,
+    /// Simplified model G(s).
+    pub linear: LinearParams,
+    /// Integrator options.
+    pub numerics: NumericsParams,
+    /// Optional physical effects (off by default).
+    pub effects: EffectsParams,
+}
+
+impl Params {
+    /// The paper's adjusted digital twin (Cd = 0.1506, τ = 17.5 ms).
+    pub fn paper() -> Self {
+        Self::default()
+    }
+
+    /// Checks every parameter against its range in [`PARAMS`] and the relations between them.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        self.check_ranges()?;
+        let c = &self.cylinder;
+        if c.rod_m >= c.bore_m {
+            return Err(ParamError::OutOfRange {
+                name: "cylinder.rod_m".into(),
+                value: c.rod_m,
+                min: 0.0,
+                max: c.bore_m,
+                unit: "m (must be smaller than cylinder.bore_m)",
+            });
+        }
+        let s = &self.supply;
+        if s.return_pressure_pa >= s.supply_pressure_pa {
+            return Err(ParamError::OutOfRange {
+                name: "supply.return_pressure_pa".into(),
+                value: s.return_pressure_pa,
+                min: 0.0,
+                max: s.supply_pressure_pa,
+                unit: "Pa (must be below supply.supply_pressure_pa)",
+            });
+        }
+        let limit = self.step_limit_s();
+        if self.numerics.max_step_s > limit {
+            return Err(ParamError::OutOfRange {
+                name: "numerics.max_step_s".into(),
+                value: self.numerics.max_step_s,
+                min: 1e-6,
+                max: limit,
+                unit: match self.numerics.integrator {
+                    Integrator::Rk4 => "s (RK4 stability limit from the hose and oil-column modes)",
+                    Integrator::Exponential => {
+                        "s (stability limit of the explicit part: end-stop contact, friction)"
+                    }
+                },
+            });
+        }
+        Ok(())
+    }
+
+    /// Bulk modulus in use [Pa]: the compliance effect's, if enabled, else the fluid's.
+    pub fn effective_bulk_modulus_pa(&self) -> f64 {
+        if self.effects.compliance.enabled {
+            self.effects.compliance.effective_bulk_modulus_pa
+        } else {
+            self.fluid.bulk_modulus_pa
+        }
+    }
+
+    /// Largest stable step of the configured integrator [s].
+    pub fn step_limit_s(&self) -> f64 {
+        match self.numerics.integrator {
+            Integrator::Rk4 => self.rk4_step_limit_s(),
+            Integrator::Exponential => self.exponential_step_limit_s(),
+        }
+    }
+
+    /// Rate of the smoothed friction seen as a viscous damper of slope (Fc + Fs)/v_eps + b, per
+    /// unit mass [1/s] (a real eigenvalue); 0 with friction off.
+    fn friction_rate_rad_s(&self) -> f64 {
+        let fr = &self.effects.friction;
+        if fr.enabled {
+            ((fr.coulomb_n + fr.stribeck_n) / fr.smoothing_velocity_m_s + fr.viscous_n_s_per_m)
+                / self.body.mass_kg
+        } else {
+            0.0
+        }
+    }
+
+    /// Largest stable step of the exponential integrator [s], capped at 1 ms. Its linear part
+    /// (hoses, oil column, spool) is exact; what it treats explicitly and could destabilise is
+    /// the end-stop contact (spring on the body while in contact) and smoothed friction.
+    pub fn exponential_step_limit_s(&self) -> f64 {
+        let w_contact = (self.cylinder.end_stop_stiffness_n_per_m / self.body.mass_kg).sqrt();
+        let w_friction = self.friction_rate_rad_s();
+        (0.85 * 2.83 / w_contact.max(w_friction)).min(1e-3)
+    }
+
+    /// Largest stable RK4 step [s], from the fastest oscillatory modes: the hose L–C mode
+    /// (`1/√(I·C_eq)`) and the body on the oil column; RK4's stability boundary on the imaginary
+    /// axis is `|hλ| ≈ 2.83`, and we keep a 15 % margin.
+    pub fn rk4_step_limit_s(&self) -> f64 {
+        let d = derived(self);
+        // Hose inertance between the hose capacitance and the chamber capacitance in series.
+        let c_series = d.c_hose * d.c_chamber / (d.c_hose + d.c_chamber);
+        let w_hose = 1.0 / (d.inertance * c_series).sqrt();
+        // Body on two oil columns (chamber + hose capacitance per side), plus end-stop contact.
+        let k_oil = 2.0 * d.area.powi(2) / (d.c_chamber + d.c_hose);
+        let w_body =
+            ((k_oil + self.cylinder.end_stop_stiffness_n_per_m) / self.body.mass_kg).sqrt();
+        let w_spool =
+            self.valve.omega_n_rad_s * (self.valve.zeta + (self.valve.zeta.powi(2) + 1.0).sqrt());
+        let w_friction = self.friction_rate_rad_s();
+        let w_max = w_hose.max(w_body).max(w_spool).max(w_friction);
+        0.85 * 2.83 / w_max
+    }
+}
+
+/// Largest pure delay accepted anywhere [s].
+pub const MAX_DELAY_S: f64 = 0.1;
+
+/// Lumped hydraulic quantities derived from the parameters, Eqs. (8)–(11).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Derived {
+    /// Piston area A1 = A2 [m²].
+    pub area: f64,
+    /// Hose resistance R, Eq. (8) [Pa·s/m³].
+    pub resistance: f64,
+    /// Hose inertance I, Eq. (9) [kg/m⁴].
+    pub inertance: f64,
+    /// Hose capacitance C, Eq. (10) [m³/Pa].
+    pub c_hose: f64,
+    /// Chamber capacitance C_c, Eq. (11) [m³/Pa].
+    pub c_chamber: f64,
+}
+
+/// Computes the lumped hose and chamber quantities of Eqs. (8)–(11), with the effective bulk
+/// modulus (compliance effect) applied to hoses and chambers alike.
+pub fn derived(p: &Params) -> Derived {
+    let beta = p.effective_bulk_modulus_pa();
+    let (l, d) = (p.hose.length_m, p.hose.diameter_m);
+    let area = p.cylinder.piston_area_m2();
+    Derived {
+        area,
+        resistance: 128.0 * p.fluid.viscosity_pa_s * l / (PI * d.powi(4)),
+        inertance: 4.0 * p.fluid.density_kg_m3 * l / (PI * d * d),
+        c_hose: PI * l * d * d / (4.0 * beta),
+        c_chamber: PI
+            * p.cylinder.stroke_m
+            * (p.cylinder.bore_m.powi(2) - p.cylinder.rod_m.powi(2))
+            / (8.0 * beta),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_defaults_validate() {
+        Params::paper().validate().unwrap();
+    }
+
+    #[test]
+    fn derived_quantities_match_hand_calculation() {
+        let d = derived(&Params::paper());
+        // A = π/4·(25² − 18²) mm² = 236.4 mm²
+        assert!((d.area - 2.3640e-4).abs() < 1e-7);
+        // R = 128·0.02·0.5/(π·1e-8) = 4.074e7 Pa·s/m³
+        assert!((d.resistance / 4.0744e7 - 1.0).abs() < 1e-3);
+        // I = 4·840·0.5/(π·1e-4) = 5.348e6 kg/m⁴
+        assert!((d.inertance / 5.3476e6 - 1.0).abs() < 1e-3);
+        // C = π·0.5·1e-4/(4·1.2e9) = 3.272e-14 m³/Pa
+        assert!((d.c_hose / 3.2725e-14 - 1.0).abs() < 1e-3);
+        // Cc = half-stroke chamber volume / β = 236.4e-6·0.035/1.2e9 = 6.895e-15 m³/Pa
+        assert!((d.c_chamber / 6.8950e-15 - 1.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn invalid_values_are_refused_with_their_name() {
+        let mut p = Params::paper();
+        p.body.mass_kg = f64::NAN;
+        let e = p.validate().unwrap_err();
+        assert!(e.to_string().contains("body.mass_kg"), "{e}");
+        let mut p = Params::paper();
+        p.body.mass_kg = -1.0;
+        assert!(p.validate().is_err());
+        let mut p = Params::paper();
+        p.cylinder.rod_m = 0.025;
+        let e = p.validate().unwrap_err();
+        assert!(e.to_string().contains("cylinder.rod_m"), "{e}");
+        let mut p = Params::paper();
+        p.supply.return_pressure_pa = 120e5;
+        assert!(p.validate().is_err());
+    }
+
+    #[test]
+    fn too_large_step_is_refused() {
+        let mut p = Params::paper();
+        p.numerics.integrator = Integrator::Rk4;
+        p.numerics.max_step_s = 9e-4;
+        let e = p.validate().unwrap_err();
+        assert!(e.to_string().contains("numerics.max_step_s"), "{e}");
+        assert!(e.to_string().contains("RK4"), "{e}");
+        // The exponential method takes 0.9 ms, until a stiff end stop makes contact too fast.
+        p.numerics.integrator = Integrator::Exponential;
+        p.validate().unwrap();
+        p.cylinder.end_stop_stiffness_n_per_m = 1e8;
+        let e = p.validate().unwrap_err();
+        assert!(e.to_string().contains("end-stop"), "{e}");
+    }
+
+    #[test]
+    fn numbers_in_messages_are_short() {
+        for (x, text) in [
+            (0.0, "0"),
+            (-0.0, "0"),
+            (11.7, "11.7"),
+            (3680.0, "3680"),
+            (5e-4, "0.0005"),
+            (1e-4, "0.0001"),
+            (1e-6, "1e-6"),
+            (1e7, "1e7"),
+            (999_999.0, "999999"),
+            (9_999_999.0, "1e7"),
+            (1e300, "1e300"),
+            (-2.5e-300, "-2.5e-300"),
+            (0.1 + 0.2, "0.3"),
+            (123.456789, "123.457"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+        ] {
+            assert_eq!(fmt_value(x), text, "{x:e}");
+        }
+        let mut p = Params::paper();
+        p.body.mass_kg = 1e300;
+        let e = p.validate().unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "parameter `body.mass_kg` = 1e300 is outside the allowed range [1, 500] kg"
+        );
+    }
+}

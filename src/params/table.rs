@@ -1,0 +1,705 @@
+//! The one table of parameters: for every number in a preset, its key, symbol, SI unit, valid
+//! range, paper value and display unit. [`Params::validate`](super::Params::validate), the
+//! app's sliders, the calibration's fitted knobs and the reports all read it from here, so a
+//! range or a unit is written once.
+
+use super::{ControllerKind, ParamError, Params, check};
+
+/// How a parameter is shown to people: `display = SI value · scale`, in `unit`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Display {
+    /// Factor from the SI value to the displayed one.
+    pub scale: f64,
+    /// Display unit (`""` for dimensionless).
+    pub unit: &'static str,
+}
+
+/// One parameter of [`Params`].
+#[derive(Clone, Copy)]
+pub struct ParamSpec {
+    /// Dotted key as in the preset file, e.g. `valve.cd`.
+    pub key: &'static str,
+    /// Short symbol for labels and reports (`Cd`, `τ`, `Kp`).
+    pub symbol: &'static str,
+    /// What it is, in a few words, with the paper's value where there is one.
+    pub doc: &'static str,
+    /// SI unit (`"-"` for dimensionless).
+    pub unit: &'static str,
+    /// Smallest valid value [SI].
+    pub min: f64,
+    /// Largest valid value [SI].
+    pub max: f64,
+    /// The paper's value [SI], if the paper gives one (its adjusted twin where it has two).
+    pub paper: Option<f64>,
+    /// Display unit and scale.
+    pub display: Display,
+    get: fn(&Params) -> f64,
+    set: fn(&mut Params, f64),
+}
+
+impl std::fmt::Debug for ParamSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ParamSpec")
+            .field("key", &self.key)
+            .field("unit", &self.unit)
+            .field("min", &self.min)
+            .field("max", &self.max)
+            .finish_non_exhaustive()
+    }
+}
+
+impl ParamSpec {
+    /// The value in `p` [SI].
+    pub fn get(&self, p: &Params) -> f64 {
+        (self.get)(p)
+    }
+
+    /// Writes `value` [SI] into `p`, unchecked (see [`Params::set`] for the checked form).
+    pub fn set_unchecked(&self, p: &mut Params, value: f64) {
+        (self.set)(p, value)
+    }
+
+    /// `min ≤ value ≤ max` and finite, else the out-of-range error naming key, range and unit.
+    pub fn check(&self, value: f64) -> Result<(), ParamError> {
+        check(self.key, value, self.min, self.max, self.unit)
+    }
+
+    /// The value in display units.
+    pub fn to_display(&self, si: f64) -> f64 {
+        si * self.display.scale
+    }
+
+    /// The SI value of a displayed one.
+    pub fn from_display(&self, shown: f64) -> f64 {
+        shown / self.display.scale
+    }
+
+    /// The valid range in display units, low end first (the scale is positive for every
+    /// entry; a test holds the table to it).
+    pub fn display_range(&self) -> (f64, f64) {
+        (self.to_display(self.min), self.to_display(self.max))
+    }
+
+    /// The controller gain this entry is (`kp_v_per_m`, …), if it is one.
+    pub fn controller_key(&self) -> Option<&'static str> {
+        self.key.strip_prefix("controller.")
+    }
+
+    /// Whether [`Params::validate`] checks this entry for `p`: every entry, except the gains
+    /// of controller kinds other than `p`'s (they keep their defaults and are not used).
+    pub fn applies_to(&self, kind: ControllerKind) -> bool {
+        self.controller_key()
+            .is_none_or(|k| kind.keys().contains(&k))
+    }
+}
+
+macro_rules! entry {
+    ($key:literal, $($field:ident).+, $sym:literal, $unit:literal, [$min:expr, $max:expr],
+     $paper:expr, ($scale:expr, $dunit:literal), $doc:literal) => {
+        ParamSpec {
+            key: $key,
+            symbol: $sym,
+            doc: $doc,
+            unit: $unit,
+            min: $min,
+            max: $max,
+            paper: $paper,
+            display: Display {
+                scale: $scale,
+                unit: $dunit,
+            },
+            get: |p| p.$($field).+,
+            set: |p, v| p.$($field).+ = v,
+        }
+    };
+}
+
+/// Pascal per bar, litre per cubic metre and seconds per minute, for display scales.
+const BAR: f64 = 1e5;
+const L_PER_MIN: f64 = 1e-3 / 60.0;
+
+/// Every number of a preset, in preset order.
+pub static PARAMS: [ParamSpec; 46] = [
+    entry!(
+        "body.mass_kg",
+        body.mass_kg,
+        "m",
+        "kg",
+        [1.0, 500.0],
+        Some(11.7),
+        (1.0, "kg"),
+        "suspended mass incl. seat, operator and payload"
+    ),
+    entry!(
+        "body.stiffness_n_per_m",
+        body.stiffness_n_per_m,
+        "k",
+        "N/m",
+        [1.0, 1e6],
+        Some(3680.0),
+        (1e-3, "kN/m"),
+        "equivalent stiffness of all springs together"
+    ),
+    entry!(
+        "cylinder.stroke_m",
+        cylinder.stroke_m,
+        "Lc",
+        "m",
+        [0.005, 1.0],
+        Some(0.070),
+        (1e3, "mm"),
+        "full stroke; the end stops sit at ±Lc/2"
+    ),
+    entry!(
+        "cylinder.bore_m",
+        cylinder.bore_m,
+        "D",
+        "m",
+        [0.005, 0.3],
+        Some(0.025),
+        (1e3, "mm"),
+        "bore (larger than the rod)"
+    ),
+    entry!(
+        "cylinder.rod_m",
+        cylinder.rod_m,
+        "d",
+        "m",
+        [0.0, 0.3],
+        Some(0.018),
+        (1e3, "mm"),
+        "rod diameter (smaller than the bore)"
+    ),
+    entry!(
+        "cylinder.end_stop_stiffness_n_per_m",
+        cylinder.end_stop_stiffness_n_per_m,
+        "k_stop",
+        "N/m",
+        [1e3, 1e8],
+        None,
+        (1e-6, "MN/m"),
+        "contact stiffness of the end stops"
+    ),
+    entry!(
+        "cylinder.end_stop_damping_n_s_per_m",
+        cylinder.end_stop_damping_n_s_per_m,
+        "c_stop",
+        "N·s/m",
+        [0.0, 1e6],
+        None,
+        (1.0, "N·s/m"),
+        "contact damping of the end stops"
+    ),
+    entry!(
+        "hose.length_m",
+        hose.length_m,
+        "Li",
+        "m",
+        [0.01, 20.0],
+        Some(0.5),
+        (1.0, "m"),
+        "length of each hose"
+    ),
+    entry!(
+        "hose.diameter_m",
+        hose.diameter_m,
+        "di",
+        "m",
+        [1e-3, 0.05],
+        Some(0.010),
+        (1e3, "mm"),
+        "inner diameter of each hose"
+    ),
+    entry!(
+        "supply.supply_pressure_pa",
+        supply.supply_pressure_pa,
+        "pA",
+        "Pa",
+        [1e5, 5e7],
+        Some(100.0 * BAR),
+        (1.0 / BAR, "bar"),
+        "feed pressure (above the return pressure)"
+    ),
+    entry!(
+        "supply.return_pressure_pa",
+        supply.return_pressure_pa,
+        "p0",
+        "Pa",
+        [0.0, 5e7],
+        Some(10.0 * BAR),
+        (1.0 / BAR, "bar"),
+        "discharge pressure (below the supply)"
+    ),
+    entry!(
+        "valve.cd",
+        valve.cd,
+        "Cd",
+        "-",
+        [1e-3, 1.0],
+        Some(0.1506),
+        (1.0, ""),
+        "flow coefficient (paper: 0.1074 initial, 0.1506 adjusted)"
+    ),
+    entry!(
+        "valve.ka_m",
+        valve.ka_m,
+        "ka",
+        "m",
+        [1e-4, 0.5],
+        Some(0.0251),
+        (1e3, "mm"),
+        "area gradient: opening area = ka·xv"
+    ),
+    entry!(
+        "valve.kv_m_per_v",
+        valve.kv_m_per_v,
+        "kv",
+        "m/V",
+        [1e-7, 1e-2],
+        Some(8e-5),
+        (1e3, "mm/V"),
+        "static spool gain"
+    ),
+    entry!(
+        "valve.omega_n_rad_s",
+        valve.omega_n_rad_s,
+        "ωn",
+        "rad/s",
+        [1.0, 1e5],
+        Some(691.0),
+        (1.0, "rad/s"),
+        "spool natural frequency"
+    ),
+    entry!(
+        "valve.zeta",
+        valve.zeta,
+        "ζs",
+        "-",
+        [0.01, 10.0],
+        Some(1.1),
+        (1.0, ""),
+        "spool damping ratio"
+    ),
+    entry!(
+        "valve.xv_max_m",
+        valve.xv_max_m,
+        "xv,max",
+        "m",
+        [1e-6, 0.05],
+        Some(0.8e-3),
+        (1e3, "mm"),
+        "spool travel limit"
+    ),
+    entry!(
+        "valve.tau_s",
+        valve.tau_s,
+        "τ",
+        "s",
+        [0.0, super::MAX_DELAY_S],
+        Some(0.0175),
+        (1e3, "ms"),
+        "pure input delay of the valve command (paper: 17.5 ms adjusted)"
+    ),
+    entry!(
+        "valve.v_max_v",
+        valve.v_max_v,
+        "Vmax",
+        "V",
+        [0.1, 100.0],
+        Some(10.0),
+        (1.0, "V"),
+        "command saturation ±Vmax"
+    ),
+    entry!(
+        "valve.laminar_core_pa",
+        valve.laminar_core_pa,
+        "p_lam",
+        "Pa",
+        [1.0, 1e6],
+        None,
+        (1.0 / BAR, "bar"),
+        "width of the laminar core of the orifice's signed square root"
+    ),
+    entry!(
+        "fluid.density_kg_m3",
+        fluid.density_kg_m3,
+        "ρ",
+        "kg/m³",
+        [500.0, 2000.0],
+        Some(840.0),
+        (1.0, "kg/m³"),
+        "oil density"
+    ),
+    entry!(
+        "fluid.viscosity_pa_s",
+        fluid.viscosity_pa_s,
+        "μ",
+        "Pa·s",
+        [1e-4, 10.0],
+        Some(0.02),
+        (1e3, "mPa·s"),
+        "dynamic viscosity of the oil"
+    ),
+    entry!(
+        "fluid.bulk_modulus_pa",
+        fluid.bulk_modulus_pa,
+        "β",
+        "Pa",
+        [1e6, 1e10],
+        Some(1.2e9),
+        (1e-9, "GPa"),
+        "bulk modulus of the oil"
+    ),
+    entry!(
+        "controller.kp_v_per_m",
+        controller.kp_v_per_m,
+        "Kp",
+        "V/m",
+        [-1e4, 1e4],
+        Some(-5.0),
+        (1.0, "V/m"),
+        "position gain on the stroke u (all kinds)"
+    ),
+    entry!(
+        "controller.ki_v_s_per_m",
+        controller.ki_v_s_per_m,
+        "Ki",
+        "V·s/m",
+        [-1e3, 1e3],
+        Some(-7.5),
+        (1.0, "V·s/m"),
+        "gain on the integral of the platform acceleration (all kinds)"
+    ),
+    entry!(
+        "controller.lead_s",
+        controller.lead_s,
+        "lead",
+        "s",
+        [0.0, 0.1],
+        None,
+        (1e3, "ms"),
+        "prediction horizon of the platform velocity (predictive)"
+    ),
+    entry!(
+        "controller.lead_cutoff_hz",
+        controller.lead_cutoff_hz,
+        "f_lead",
+        "Hz",
+        [0.5, 200.0],
+        None,
+        (1.0, "Hz"),
+        "corner of the low-pass on the predicted term (predictive)"
+    ),
+    entry!(
+        "controller.sky_v_s_per_m",
+        controller.sky_v_s_per_m,
+        "Ksky",
+        "V·s/m",
+        [-1e3, 1e3],
+        None,
+        (1.0, "V·s/m"),
+        "gain on the estimated absolute body velocity (skyhook)"
+    ),
+    entry!(
+        "controller.leak_hz",
+        controller.leak_hz,
+        "f_leak",
+        "Hz",
+        [0.01, 10.0],
+        None,
+        (1.0, "Hz"),
+        "corner of the leaky integrator of the body acceleration (skyhook)"
+    ),
+    entry!(
+        "controller.sky_cutoff_hz",
+        controller.sky_cutoff_hz,
+        "f_sky",
+        "Hz",
+        [0.5, 200.0],
+        None,
+        (1.0, "Hz"),
+        "corner of the low-pass on the body-velocity estimate (skyhook)"
+    ),
+    entry!(
+        "passive.zeta",
+        passive.zeta,
+        "ζ",
+        "-",
+        [0.0, 5.0],
+        Some(0.3),
+        (1.0, ""),
+        "damping ratio of the passive reference suspension"
+    ),
+    entry!(
+        "linear.sp_rad_s",
+        linear.sp_rad_s,
+        "sp",
+        "rad/s",
+        [1.0, 1e5],
+        Some(500.0),
+        (1.0, "rad/s"),
+        "pole location of G(s)"
+    ),
+    entry!(
+        "linear.kg_m_per_s_v",
+        linear.kg_m_per_s_v,
+        "Kg",
+        "m/(s·V)",
+        [1e-4, 10.0],
+        Some(0.13325),
+        (1e3, "mm/(s·V)"),
+        "static gain of G(s)"
+    ),
+    entry!(
+        "linear.zeta",
+        linear.zeta,
+        "ζp",
+        "-",
+        [0.0, 10.0],
+        Some(0.05),
+        (1.0, ""),
+        "damping factor of G(s)"
+    ),
+    entry!(
+        "linear.tau_s",
+        linear.tau_s,
+        "τ_G",
+        "s",
+        [0.0, super::MAX_DELAY_S],
+        Some(0.0175),
+        (1e3, "ms"),
+        "pure delay of G(s)"
+    ),
+    entry!(
+        "numerics.max_step_s",
+        numerics.max_step_s,
+        "h_max",
+        "s",
+        [1e-6, 1e-3],
+        None,
+        (1e3, "ms"),
+        "largest internal step of the twin's integrator"
+    ),
+    entry!(
+        "effects.friction.coulomb_n",
+        effects.friction.coulomb_n,
+        "F_c",
+        "N",
+        [0.0, 5000.0],
+        None,
+        (1.0, "N"),
+        "Coulomb friction force"
+    ),
+    entry!(
+        "effects.friction.viscous_n_s_per_m",
+        effects.friction.viscous_n_s_per_m,
+        "b",
+        "N·s/m",
+        [0.0, 1e5],
+        None,
+        (1.0, "N·s/m"),
+        "viscous friction coefficient"
+    ),
+    entry!(
+        "effects.friction.stribeck_n",
+        effects.friction.stribeck_n,
+        "F_s",
+        "N",
+        [0.0, 5000.0],
+        None,
+        (1.0, "N"),
+        "static (Stribeck) force above Coulomb"
+    ),
+    entry!(
+        "effects.friction.stribeck_velocity_m_s",
+        effects.friction.stribeck_velocity_m_s,
+        "v_s",
+        "m/s",
+        [1e-5, 1.0],
+        None,
+        (1e3, "mm/s"),
+        "Stribeck velocity"
+    ),
+    entry!(
+        "effects.friction.smoothing_velocity_m_s",
+        effects.friction.smoothing_velocity_m_s,
+        "v_eps",
+        "m/s",
+        [1e-5, 0.1],
+        None,
+        (1e3, "mm/s"),
+        "smoothing velocity of the friction's sign function"
+    ),
+    entry!(
+        "effects.valve_overlap.overlap_m",
+        effects.valve_overlap.overlap_m,
+        "overlap",
+        "m",
+        [0.0, 0.01],
+        None,
+        (1e6, "µm"),
+        "spool overlap on each side of null"
+    ),
+    entry!(
+        "effects.valve_offset.bias_v",
+        effects.valve_offset.bias_v,
+        "V_bias",
+        "V",
+        [-5.0, 5.0],
+        None,
+        (1e3, "mV"),
+        "valve null offset as a command bias"
+    ),
+    entry!(
+        "effects.leakage.coefficient_m3_per_s_pa",
+        effects.leakage.coefficient_m3_per_s_pa,
+        "C_leak",
+        "m³/(s·Pa)",
+        [0.0, 1e-9],
+        None,
+        (BAR / L_PER_MIN, "(L/min)/bar"),
+        "internal leakage coefficient across the piston"
+    ),
+    entry!(
+        "effects.compliance.effective_bulk_modulus_pa",
+        effects.compliance.effective_bulk_modulus_pa,
+        "β",
+        "Pa",
+        [1e6, 1e10],
+        None,
+        (1e-9, "GPa"),
+        "effective bulk modulus with air and hose walls"
+    ),
+    entry!(
+        "effects.supply_sag.droop_pa_per_m3_s",
+        effects.supply_sag.droop_pa_per_m3_s,
+        "droop",
+        "Pa/(m³/s)",
+        [0.0, 1e12],
+        None,
+        (L_PER_MIN / BAR, "bar/(L/min)"),
+        "supply pressure droop per drawn flow"
+    ),
+];
+
+/// The table entry of a dotted key (`valve.cd`), `None` for an unknown key.
+pub fn spec(key: &str) -> Option<&'static ParamSpec> {
+    PARAMS.iter().find(|s| s.key == key)
+}
+
+impl Params {
+    /// The value [SI] of a parameter by its dotted key, `None` for an unknown key.
+    pub fn get(&self, key: &str) -> Option<f64> {
+        spec(key).map(|s| s.get(self))
+    }
+
+    /// Sets a parameter [SI] by its dotted key, after checking its range; the whole set is
+    /// not re-validated (relations between parameters are [`Params::validate`]'s job).
+    pub fn set(&mut self, key: &str, value: f64) -> Result<(), ParamError> {
+        let s = spec(key).ok_or_else(|| {
+            ParamError::Inconsistent(format!("`{key}` is not a parameter of a preset"))
+        })?;
+        s.check(value)?;
+        s.set_unchecked(self, value);
+        Ok(())
+    }
+
+    /// Checks every entry of [`PARAMS`] that applies (see [`ParamSpec::applies_to`]).
+    pub(super) fn check_ranges(&self) -> Result<(), ParamError> {
+        let kind = self.controller.kind;
+        PARAMS
+            .iter()
+            .filter(|s| s.applies_to(kind))
+            .try_for_each(|s| s.check(s.get(self)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The key of every entry names the field it reads, as the preset file spells it: the
+    /// paper's parameters serialised to TOML hold, at each dotted key, the value `get` reads
+    /// (for each controller kind, since a preset writes only its kind's gains).
+    #[test]
+    fn keys_match_the_preset_file() {
+        for kind in ControllerKind::ALL {
+            let mut p = Params::paper();
+            p.controller.kind = kind;
+            let doc: toml::Value = toml::Value::try_from(p).unwrap();
+            for s in PARAMS.iter().filter(|s| s.applies_to(p.controller.kind)) {
+                let mut v = &doc;
+                for part in s.key.split('.') {
+                    v = v
+                        .get(part)
+                        .unwrap_or_else(|| panic!("{} not in the preset", s.key));
+                }
+                let in_file = v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+                assert_eq!(in_file, Some(s.get(&p)), "{}", s.key);
+            }
+        }
+    }
+
+    /// Every number in a preset has an entry: the TOML of the paper's parameters has as many
+    /// numeric leaves as the table has entries, once the other kinds' gains are added.
+    #[test]
+    fn every_number_has_an_entry() {
+        fn count(v: &toml::Value) -> usize {
+            match v {
+                toml::Value::Table(t) => t.values().map(count).sum(),
+                toml::Value::Float(_) | toml::Value::Integer(_) => 1,
+                _ => 0,
+            }
+        }
+        let p = Params::paper();
+        let doc: toml::Value = toml::Value::try_from(p).unwrap();
+        let other_gains = PARAMS
+            .iter()
+            .filter(|s| !s.applies_to(p.controller.kind))
+            .count();
+        assert_eq!(count(&doc) + other_gains, PARAMS.len());
+        let mut keys: Vec<_> = PARAMS.iter().map(|s| s.key).collect();
+        keys.sort();
+        keys.dedup();
+        assert_eq!(keys.len(), PARAMS.len(), "a key is listed twice");
+    }
+
+    #[test]
+    fn paper_values_are_the_defaults_and_lie_in_range() {
+        let p = Params::paper();
+        for s in &PARAMS {
+            assert!(s.min < s.max && s.display.scale > 0.0, "{}", s.key);
+            s.check(s.get(&p)).unwrap();
+            if let Some(v) = s.paper {
+                assert_eq!(s.get(&p), v, "{}", s.key);
+            }
+        }
+    }
+
+    #[test]
+    fn set_checks_the_range_and_names_the_key() {
+        let mut p = Params::paper();
+        p.set("valve.cd", 0.12).unwrap();
+        assert_eq!(p.valve.cd, 0.12);
+        let e = p.set("valve.cd", 2.0).unwrap_err().to_string();
+        assert!(e.contains("valve.cd") && e.contains("[0.001, 1]"), "{e}");
+        assert_eq!(p.valve.cd, 0.12, "a refused value is not written");
+        assert!(p.set("valve.nothing", 1.0).is_err());
+        assert_eq!(p.get("supply.supply_pressure_pa"), Some(1e7));
+        let s = spec("supply.supply_pressure_pa").unwrap();
+        assert!((s.to_display(1e7) - 100.0).abs() < 1e-12);
+        // 1 (L/min)/bar = 1.667e-5 m³/s per 1e5 Pa.
+        let leak = spec("effects.leakage.coefficient_m3_per_s_pa").unwrap();
+        assert!((leak.to_display(1e-3 / 60.0 / 1e5) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn other_kinds_gains_are_not_checked() {
+        let mut p = Params::paper();
+        p.controller.lead_s = 5.0; // out of range, but a paper controller does not read it
+        p.validate().unwrap();
+        p.controller.kind = ControllerKind::Predictive;
+        let e = p.validate().unwrap_err().to_string();
+        assert!(e.contains("controller.lead_s"), "{e}");
+    }
+}
