@@ -702,4 +702,69 @@ mod tests {
         let e = p.validate().unwrap_err().to_string();
         assert!(e.contains("controller.lead_s"), "{e}");
     }
+
+    /// The field docs of the parameter structs state unit and range in words
+    /// (`[kg], 1 ..= 500`); they must say what the table says, for every entry.
+    #[test]
+    fn field_docs_agree_with_the_table() {
+        let sources = [
+            include_str!("plant.rs"),
+            include_str!("controller.rs"),
+            include_str!("models.rs"),
+            include_str!("numerics.rs"),
+            include_str!("effects.rs"),
+        ];
+        let section = |ty: &str| -> Option<&str> {
+            Some(match ty {
+                "BodyParams" => "body",
+                "CylinderParams" => "cylinder",
+                "HoseParams" => "hose",
+                "SupplyParams" => "supply",
+                "ValveParams" => "valve",
+                "FluidParams" => "fluid",
+                "ControllerParams" => "controller",
+                "PassiveParams" => "passive",
+                "LinearParams" => "linear",
+                "NumericsParams" => "numerics",
+                "FrictionEffect" => "effects.friction",
+                "OverlapEffect" => "effects.valve_overlap",
+                "OffsetEffect" => "effects.valve_offset",
+                "LeakageEffect" => "effects.leakage",
+                "ComplianceEffect" => "effects.compliance",
+                "SupplySagEffect" => "effects.supply_sag",
+                _ => return None,
+            })
+        };
+        let mut seen = Vec::new();
+        for src in sources {
+            let (mut current, mut doc) = (None, String::new());
+            for line in src.lines().map(str::trim) {
+                if let Some(rest) = line.strip_prefix("pub struct ") {
+                    current = section(rest.split_whitespace().next().unwrap_or(""));
+                } else if let Some(d) = line.strip_prefix("///") {
+                    doc.push_str(d);
+                    doc.push(' ');
+                    continue;
+                } else if let (Some(sec), Some(field)) = (
+                    current,
+                    line.strip_prefix("pub ")
+                        .and_then(|l| l.strip_suffix(": f64,")),
+                ) {
+                    let key = format!("{sec}.{field}");
+                    let s = spec(&key).unwrap_or_else(|| panic!("{key} has no table entry"));
+                    let unit = doc.split('[').nth(1).and_then(|u| u.split(']').next());
+                    assert_eq!(unit, Some(s.unit), "{key}: unit in its doc: {doc}");
+                    let words: Vec<&str> = doc.split_whitespace().collect();
+                    let at = words.iter().position(|w| *w == "..=");
+                    let at = at.unwrap_or_else(|| panic!("{key}: no range in its doc"));
+                    let num = |w: &str| w.trim_end_matches([',', '.', ';']).parse::<f64>().ok();
+                    assert_eq!(num(words[at - 1]), Some(s.min), "{key}: min in {doc}");
+                    assert_eq!(num(words[at + 1]), Some(s.max), "{key}: max in {doc}");
+                    seen.push(key);
+                }
+                doc.clear();
+            }
+        }
+        assert_eq!(seen.len(), PARAMS.len(), "documented: {seen:?}");
+    }
 }
