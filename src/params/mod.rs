@@ -123,43 +123,55 @@ impl Params {
         Self::default()
     }
 
-    /// Checks every parameter against its range in [`PARAMS`] and the relations between them.
+    /// Checks every parameter against its range in [`PARAMS`] and the relations between them:
+    /// rod thinner than bore, return pressure below supply, step within the method's
+    /// stability limit.
     pub fn validate(&self) -> Result<(), ParamError> {
         self.check_ranges()?;
-        let c = &self.cylinder;
-        if c.rod_m >= c.bore_m {
-            return Err(ParamError::OutOfRange {
-                name: "cylinder.rod_m".into(),
-                value: c.rod_m,
-                min: 0.0,
-                max: c.bore_m,
-                unit: "m (must be smaller than cylinder.bore_m)",
-            });
-        }
-        let s = &self.supply;
-        if s.return_pressure_pa >= s.supply_pressure_pa {
-            return Err(ParamError::OutOfRange {
-                name: "supply.return_pressure_pa".into(),
-                value: s.return_pressure_pa,
-                min: 0.0,
-                max: s.supply_pressure_pa,
-                unit: "Pa (must be below supply.supply_pressure_pa)",
-            });
-        }
-        let limit = self.step_limit_s();
-        if self.numerics.max_step_s > limit {
-            return Err(ParamError::OutOfRange {
-                name: "numerics.max_step_s".into(),
-                value: self.numerics.max_step_s,
-                min: 1e-6,
-                max: limit,
-                unit: match self.numerics.integrator {
-                    Integrator::Rk4 => "s (RK4 stability limit from the hose and oil-column modes)",
-                    Integrator::Exponential => {
-                        "s (stability limit of the explicit part: end-stop contact, friction)"
-                    }
-                },
-            });
+        let (c, s) = (&self.cylinder, &self.supply);
+        let step_unit = match self.numerics.integrator {
+            Integrator::Rk4 => "s (RK4 stability limit from the hose and oil-column modes)",
+            Integrator::Exponential => {
+                "s (stability limit of the explicit part: end-stop contact, friction)"
+            }
+        };
+        // (key, value, lowest, must stay below/at, unit with the reason, strictly below)
+        let relations = [
+            (
+                "cylinder.rod_m",
+                c.rod_m,
+                0.0,
+                c.bore_m,
+                "m (must be smaller than cylinder.bore_m)",
+                true,
+            ),
+            (
+                "supply.return_pressure_pa",
+                s.return_pressure_pa,
+                0.0,
+                s.supply_pressure_pa,
+                "Pa (must be below supply.supply_pressure_pa)",
+                true,
+            ),
+            (
+                "numerics.max_step_s",
+                self.numerics.max_step_s,
+                1e-6,
+                self.step_limit_s(),
+                step_unit,
+                false,
+            ),
+        ];
+        for (name, value, min, max, unit, strict) in relations {
+            if value > max || (strict && value == max) {
+                return Err(ParamError::OutOfRange {
+                    name: name.into(),
+                    value,
+                    min,
+                    max,
+                    unit,
+                });
+            }
         }
         Ok(())
     }
