@@ -21,7 +21,9 @@ pub use effects::{
 };
 pub use models::{LinearParams, PassiveParams};
 pub use numerics::{Integrator, NumericsParams};
-pub use plant::{BodyParams, CylinderParams, FluidParams, HoseParams, SupplyParams, ValveParams};
+pub use plant::{
+    BodyParams, CylinderParams, FluidParams, HoseParams, PlantParams, SupplyParams, ValveParams,
+};
 pub use table::{Display, PARAMS, ParamSpec, spec};
 
 /// A parameter outside its allowed range, or an inconsistent combination.
@@ -89,22 +91,15 @@ pub(crate) fn check(
     }
 }
 
-/// Everything that defines the rig, its controller and the numerics. The content of a preset.
+/// Everything that defines the rig, its controller and the numerics: the content of a preset.
+/// Three parts that change for different reasons: the [`PlantParams`] (what the twin is built
+/// from; a change rebuilds it), the [`ControllerParams`] (gains change while it runs) and the
+/// [`NumericsParams`] (how it is integrated); beside them the two reference models.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct Params {
-    /// Suspended body and springs.
-    pub body: BodyParams,
-    /// Cylinder and end stops.
-    pub cylinder: CylinderParams,
-    /// Hoses.
-    pub hose: HoseParams,
-    /// Supply.
-    pub supply: SupplyParams,
-    /// Valve.
-    pub valve: ValveParams,
-    /// Oil.
-    pub fluid: FluidParams,
+    /// The physical rig: body, cylinder, hoses, supply, valve, oil and optional effects.
+    pub plant: PlantParams,
     /// Controller: the paper's Eq. (16) or another structure ([`ControllerKind`]).
     pub controller: ControllerParams,
     /// Passive reference.
@@ -113,8 +108,6 @@ pub struct Params {
     pub linear: LinearParams,
     /// Integrator options.
     pub numerics: NumericsParams,
-    /// Optional physical effects (off by default).
-    pub effects: EffectsParams,
 }
 
 impl Params {
@@ -128,7 +121,7 @@ impl Params {
     /// stability limit.
     pub fn validate(&self) -> Result<(), ParamError> {
         self.check_ranges()?;
-        let (c, s) = (&self.cylinder, &self.supply);
+        let (c, s) = (&self.plant.cylinder, &self.plant.supply);
         let step_unit = match self.numerics.integrator {
             Integrator::Rk4 => "s (RK4 stability limit from the hose and oil-column modes)",
             Integrator::Exponential => {
@@ -178,10 +171,10 @@ impl Params {
 
     /// Bulk modulus in use [Pa]: the compliance effect's, if enabled, else the fluid's.
     pub fn effective_bulk_modulus_pa(&self) -> f64 {
-        if self.effects.compliance.enabled {
-            self.effects.compliance.effective_bulk_modulus_pa
+        if self.plant.effects.compliance.enabled {
+            self.plant.effects.compliance.effective_bulk_modulus_pa
         } else {
-            self.fluid.bulk_modulus_pa
+            self.plant.fluid.bulk_modulus_pa
         }
     }
 
@@ -196,10 +189,10 @@ impl Params {
     /// Rate of the smoothed friction seen as a viscous damper of slope (Fc + Fs)/v_eps + b, per
     /// unit mass [1/s] (a real eigenvalue); 0 with friction off.
     fn friction_rate_rad_s(&self) -> f64 {
-        let fr = &self.effects.friction;
+        let fr = &self.plant.effects.friction;
         if fr.enabled {
             ((fr.coulomb_n + fr.stribeck_n) / fr.smoothing_velocity_m_s + fr.viscous_n_s_per_m)
-                / self.body.mass_kg
+                / self.plant.body.mass_kg
         } else {
             0.0
         }
@@ -209,7 +202,8 @@ impl Params {
     /// (hoses, oil column, spool) is exact; what it treats explicitly and could destabilise is
     /// the end-stop contact (spring on the body while in contact) and smoothed friction.
     pub fn exponential_step_limit_s(&self) -> f64 {
-        let w_contact = (self.cylinder.end_stop_stiffness_n_per_m / self.body.mass_kg).sqrt();
+        let w_contact =
+            (self.plant.cylinder.end_stop_stiffness_n_per_m / self.plant.body.mass_kg).sqrt();
         let w_friction = self.friction_rate_rad_s();
         (0.85 * 2.83 / w_contact.max(w_friction)).min(1e-3)
     }
@@ -224,10 +218,11 @@ impl Params {
         let w_hose = 1.0 / (d.inertance * c_series).sqrt();
         // Body on two oil columns (chamber + hose capacitance per side), plus end-stop contact.
         let k_oil = 2.0 * d.area.powi(2) / (d.c_chamber + d.c_hose);
-        let w_body =
-            ((k_oil + self.cylinder.end_stop_stiffness_n_per_m) / self.body.mass_kg).sqrt();
-        let w_spool =
-            self.valve.omega_n_rad_s * (self.valve.zeta + (self.valve.zeta.powi(2) + 1.0).sqrt());
+        let w_body = ((k_oil + self.plant.cylinder.end_stop_stiffness_n_per_m)
+            / self.plant.body.mass_kg)
+            .sqrt();
+        let w_spool = self.plant.valve.omega_n_rad_s
+            * (self.plant.valve.zeta + (self.plant.valve.zeta.powi(2) + 1.0).sqrt());
         let w_friction = self.friction_rate_rad_s();
         let w_max = w_hose.max(w_body).max(w_spool).max(w_friction);
         0.85 * 2.83 / w_max
@@ -256,16 +251,16 @@ pub struct Derived {
 /// modulus (compliance effect) applied to hoses and chambers alike.
 pub fn derived(p: &Params) -> Derived {
     let beta = p.effective_bulk_modulus_pa();
-    let (l, d) = (p.hose.length_m, p.hose.diameter_m);
-    let area = p.cylinder.piston_area_m2();
+    let (l, d) = (p.plant.hose.length_m, p.plant.hose.diameter_m);
+    let area = p.plant.cylinder.piston_area_m2();
     Derived {
         area,
-        resistance: 128.0 * p.fluid.viscosity_pa_s * l / (PI * d.powi(4)),
-        inertance: 4.0 * p.fluid.density_kg_m3 * l / (PI * d * d),
+        resistance: 128.0 * p.plant.fluid.viscosity_pa_s * l / (PI * d.powi(4)),
+        inertance: 4.0 * p.plant.fluid.density_kg_m3 * l / (PI * d * d),
         c_hose: PI * l * d * d / (4.0 * beta),
         c_chamber: PI
-            * p.cylinder.stroke_m
-            * (p.cylinder.bore_m.powi(2) - p.cylinder.rod_m.powi(2))
+            * p.plant.cylinder.stroke_m
+            * (p.plant.cylinder.bore_m.powi(2) - p.plant.cylinder.rod_m.powi(2))
             / (8.0 * beta),
     }
 }
@@ -297,18 +292,18 @@ mod tests {
     #[test]
     fn invalid_values_are_refused_with_their_name() {
         let mut p = Params::paper();
-        p.body.mass_kg = f64::NAN;
+        p.plant.body.mass_kg = f64::NAN;
         let e = p.validate().unwrap_err();
         assert!(e.to_string().contains("body.mass_kg"), "{e}");
         let mut p = Params::paper();
-        p.body.mass_kg = -1.0;
+        p.plant.body.mass_kg = -1.0;
         assert!(p.validate().is_err());
         let mut p = Params::paper();
-        p.cylinder.rod_m = 0.025;
+        p.plant.cylinder.rod_m = 0.025;
         let e = p.validate().unwrap_err();
         assert!(e.to_string().contains("cylinder.rod_m"), "{e}");
         let mut p = Params::paper();
-        p.supply.return_pressure_pa = 120e5;
+        p.plant.supply.return_pressure_pa = 120e5;
         assert!(p.validate().is_err());
     }
 
@@ -323,7 +318,7 @@ mod tests {
         // The exponential method takes 0.9 ms, until a stiff end stop makes contact too fast.
         p.numerics.integrator = Integrator::Exponential;
         p.validate().unwrap();
-        p.cylinder.end_stop_stiffness_n_per_m = 1e8;
+        p.plant.cylinder.end_stop_stiffness_n_per_m = 1e8;
         let e = p.validate().unwrap_err();
         assert!(e.to_string().contains("end-stop"), "{e}");
     }
@@ -351,7 +346,7 @@ mod tests {
             assert_eq!(fmt_value(x), text, "{x:e}");
         }
         let mut p = Params::paper();
-        p.body.mass_kg = 1e300;
+        p.plant.body.mass_kg = 1e300;
         let e = p.validate().unwrap_err().to_string();
         assert_eq!(
             e,

@@ -1,7 +1,29 @@
 //! The physical rig: body and springs, cylinder and end stops, hoses, supply, valve, oil.
 
+use super::EffectsParams;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+
+/// The physical rig: what the twin is built from. A change here rebuilds the model (its
+/// linearisation, its exponential integrator); gains and numerics do not.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlantParams {
+    /// Suspended body and springs.
+    pub body: BodyParams,
+    /// Cylinder and end stops.
+    pub cylinder: CylinderParams,
+    /// Hoses.
+    pub hose: HoseParams,
+    /// Supply.
+    pub supply: SupplyParams,
+    /// Valve.
+    pub valve: ValveParams,
+    /// Oil.
+    pub fluid: FluidParams,
+    /// Optional physical effects (off by default).
+    pub effects: EffectsParams,
+}
 
 /// The suspended body and its springs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -121,51 +121,51 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
 pub static PARAMS: [ParamSpec; 46] = [
-    entry!("body.mass_kg", body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
+    entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
-    entry!("body.stiffness_n_per_m", body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
+    entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
         (1e-3, "kN/m"), "equivalent stiffness of all springs together"),
-    entry!("cylinder.stroke_m", cylinder.stroke_m, "Lc", "m", [0.005, 1.0], Some(0.070),
+    entry!("cylinder.stroke_m", plant.cylinder.stroke_m, "Lc", "m", [0.005, 1.0], Some(0.070),
         (1e3, "mm"), "full stroke; the end stops sit at ±Lc/2"),
-    entry!("cylinder.bore_m", cylinder.bore_m, "D", "m", [0.005, 0.3], Some(0.025), (1e3, "mm"),
+    entry!("cylinder.bore_m", plant.cylinder.bore_m, "D", "m", [0.005, 0.3], Some(0.025), (1e3, "mm"),
         "bore (larger than the rod)"),
-    entry!("cylinder.rod_m", cylinder.rod_m, "d", "m", [0.0, 0.3], Some(0.018), (1e3, "mm"),
+    entry!("cylinder.rod_m", plant.cylinder.rod_m, "d", "m", [0.0, 0.3], Some(0.018), (1e3, "mm"),
         "rod diameter (smaller than the bore)"),
-    entry!("cylinder.end_stop_stiffness_n_per_m", cylinder.end_stop_stiffness_n_per_m, "k_stop",
+    entry!("cylinder.end_stop_stiffness_n_per_m", plant.cylinder.end_stop_stiffness_n_per_m, "k_stop",
         "N/m", [1e3, 1e8], None, (1e-6, "MN/m"), "contact stiffness of the end stops"),
-    entry!("cylinder.end_stop_damping_n_s_per_m", cylinder.end_stop_damping_n_s_per_m, "c_stop",
+    entry!("cylinder.end_stop_damping_n_s_per_m", plant.cylinder.end_stop_damping_n_s_per_m, "c_stop",
         "N·s/m", [0.0, 1e6], None, (1.0, "N·s/m"), "contact damping of the end stops"),
-    entry!("hose.length_m", hose.length_m, "Li", "m", [0.01, 20.0], Some(0.5), (1.0, "m"),
+    entry!("hose.length_m", plant.hose.length_m, "Li", "m", [0.01, 20.0], Some(0.5), (1.0, "m"),
         "length of each hose"),
-    entry!("hose.diameter_m", hose.diameter_m, "di", "m", [1e-3, 0.05], Some(0.010), (1e3, "mm"),
+    entry!("hose.diameter_m", plant.hose.diameter_m, "di", "m", [1e-3, 0.05], Some(0.010), (1e3, "mm"),
         "inner diameter of each hose"),
-    entry!("supply.supply_pressure_pa", supply.supply_pressure_pa, "pA", "Pa", [1e5, 5e7],
+    entry!("supply.supply_pressure_pa", plant.supply.supply_pressure_pa, "pA", "Pa", [1e5, 5e7],
         Some(100.0 * BAR), (1.0 / BAR, "bar"), "feed pressure (above the return pressure)"),
-    entry!("supply.return_pressure_pa", supply.return_pressure_pa, "p0", "Pa", [0.0, 5e7],
+    entry!("supply.return_pressure_pa", plant.supply.return_pressure_pa, "p0", "Pa", [0.0, 5e7],
         Some(10.0 * BAR), (1.0 / BAR, "bar"), "discharge pressure (below the supply)"),
-    entry!("valve.cd", valve.cd, "Cd", "-", [1e-3, 1.0], Some(0.1506), (1.0, ""),
+    entry!("valve.cd", plant.valve.cd, "Cd", "-", [1e-3, 1.0], Some(0.1506), (1.0, ""),
         "flow coefficient (paper: 0.1074 initial, 0.1506 adjusted)"),
-    entry!("valve.ka_m", valve.ka_m, "ka", "m", [1e-4, 0.5], Some(0.0251), (1e3, "mm"),
+    entry!("valve.ka_m", plant.valve.ka_m, "ka", "m", [1e-4, 0.5], Some(0.0251), (1e3, "mm"),
         "area gradient: opening area = ka·xv"),
-    entry!("valve.kv_m_per_v", valve.kv_m_per_v, "kv", "m/V", [1e-7, 1e-2], Some(8e-5),
+    entry!("valve.kv_m_per_v", plant.valve.kv_m_per_v, "kv", "m/V", [1e-7, 1e-2], Some(8e-5),
         (1e3, "mm/V"), "static spool gain"),
-    entry!("valve.omega_n_rad_s", valve.omega_n_rad_s, "ωn", "rad/s", [1.0, 1e5], Some(691.0),
+    entry!("valve.omega_n_rad_s", plant.valve.omega_n_rad_s, "ωn", "rad/s", [1.0, 1e5], Some(691.0),
         (1.0, "rad/s"), "spool natural frequency"),
-    entry!("valve.zeta", valve.zeta, "ζs", "-", [0.01, 10.0], Some(1.1), (1.0, ""),
+    entry!("valve.zeta", plant.valve.zeta, "ζs", "-", [0.01, 10.0], Some(1.1), (1.0, ""),
         "spool damping ratio"),
-    entry!("valve.xv_max_m", valve.xv_max_m, "xv,max", "m", [1e-6, 0.05], Some(0.8e-3), (1e3, "mm"),
+    entry!("valve.xv_max_m", plant.valve.xv_max_m, "xv,max", "m", [1e-6, 0.05], Some(0.8e-3), (1e3, "mm"),
         "spool travel limit"),
-    entry!("valve.tau_s", valve.tau_s, "τ", "s", [0.0, super::MAX_DELAY_S], Some(0.0175),
+    entry!("valve.tau_s", plant.valve.tau_s, "τ", "s", [0.0, super::MAX_DELAY_S], Some(0.0175),
         (1e3, "ms"), "pure input delay of the valve command (paper: 17.5 ms adjusted)"),
-    entry!("valve.v_max_v", valve.v_max_v, "Vmax", "V", [0.1, 100.0], Some(10.0), (1.0, "V"),
+    entry!("valve.v_max_v", plant.valve.v_max_v, "Vmax", "V", [0.1, 100.0], Some(10.0), (1.0, "V"),
         "command saturation ±Vmax"),
-    entry!("valve.laminar_core_pa", valve.laminar_core_pa, "p_lam", "Pa", [1.0, 1e6], None,
+    entry!("valve.laminar_core_pa", plant.valve.laminar_core_pa, "p_lam", "Pa", [1.0, 1e6], None,
         (1.0 / BAR, "bar"), "width of the laminar core of the orifice's signed square root"),
-    entry!("fluid.density_kg_m3", fluid.density_kg_m3, "ρ", "kg/m³", [500.0, 2000.0], Some(840.0),
+    entry!("fluid.density_kg_m3", plant.fluid.density_kg_m3, "ρ", "kg/m³", [500.0, 2000.0], Some(840.0),
         (1.0, "kg/m³"), "oil density"),
-    entry!("fluid.viscosity_pa_s", fluid.viscosity_pa_s, "μ", "Pa·s", [1e-4, 10.0], Some(0.02),
+    entry!("fluid.viscosity_pa_s", plant.fluid.viscosity_pa_s, "μ", "Pa·s", [1e-4, 10.0], Some(0.02),
         (1e3, "mPa·s"), "dynamic viscosity of the oil"),
-    entry!("fluid.bulk_modulus_pa", fluid.bulk_modulus_pa, "β", "Pa", [1e6, 1e10], Some(1.2e9),
+    entry!("fluid.bulk_modulus_pa", plant.fluid.bulk_modulus_pa, "β", "Pa", [1e6, 1e10], Some(1.2e9),
         (1e-9, "GPa"), "bulk modulus of the oil"),
     entry!("controller.kp_v_per_m", controller.kp_v_per_m, "Kp", "V/m", [-1e4, 1e4], Some(-5.0),
         (1.0, "V/m"), "position gain on the stroke u (all kinds)"),
@@ -194,28 +194,28 @@ pub static PARAMS: [ParamSpec; 46] = [
         (1e3, "ms"), "pure delay of G(s)"),
     entry!("numerics.max_step_s", numerics.max_step_s, "h_max", "s", [1e-6, 1e-3], None,
         (1e3, "ms"), "largest internal step of the twin's integrator"),
-    entry!("effects.friction.coulomb_n", effects.friction.coulomb_n, "F_c", "N", [0.0, 5000.0],
+    entry!("effects.friction.coulomb_n", plant.effects.friction.coulomb_n, "F_c", "N", [0.0, 5000.0],
         None, (1.0, "N"), "Coulomb friction force"),
-    entry!("effects.friction.viscous_n_s_per_m", effects.friction.viscous_n_s_per_m, "b", "N·s/m",
+    entry!("effects.friction.viscous_n_s_per_m", plant.effects.friction.viscous_n_s_per_m, "b", "N·s/m",
         [0.0, 1e5], None, (1.0, "N·s/m"), "viscous friction coefficient"),
-    entry!("effects.friction.stribeck_n", effects.friction.stribeck_n, "F_s", "N", [0.0, 5000.0],
+    entry!("effects.friction.stribeck_n", plant.effects.friction.stribeck_n, "F_s", "N", [0.0, 5000.0],
         None, (1.0, "N"), "static (Stribeck) force above Coulomb"),
-    entry!("effects.friction.stribeck_velocity_m_s", effects.friction.stribeck_velocity_m_s, "v_s",
+    entry!("effects.friction.stribeck_velocity_m_s", plant.effects.friction.stribeck_velocity_m_s, "v_s",
         "m/s", [1e-5, 1.0], None, (1e3, "mm/s"), "Stribeck velocity"),
-    entry!("effects.friction.smoothing_velocity_m_s", effects.friction.smoothing_velocity_m_s,
+    entry!("effects.friction.smoothing_velocity_m_s", plant.effects.friction.smoothing_velocity_m_s,
         "v_eps", "m/s", [1e-5, 0.1], None, (1e3, "mm/s"),
         "smoothing velocity of the friction's sign function"),
-    entry!("effects.valve_overlap.overlap_m", effects.valve_overlap.overlap_m, "overlap", "m",
+    entry!("effects.valve_overlap.overlap_m", plant.effects.valve_overlap.overlap_m, "overlap", "m",
         [0.0, 0.01], None, (1e6, "µm"), "spool overlap on each side of null"),
-    entry!("effects.valve_offset.bias_v", effects.valve_offset.bias_v, "V_bias", "V", [-5.0, 5.0],
+    entry!("effects.valve_offset.bias_v", plant.effects.valve_offset.bias_v, "V_bias", "V", [-5.0, 5.0],
         None, (1e3, "mV"), "valve null offset as a command bias"),
-    entry!("effects.leakage.coefficient_m3_per_s_pa", effects.leakage.coefficient_m3_per_s_pa,
+    entry!("effects.leakage.coefficient_m3_per_s_pa", plant.effects.leakage.coefficient_m3_per_s_pa,
         "C_leak", "m³/(s·Pa)", [0.0, 1e-9], None, (BAR / L_PER_MIN, "(L/min)/bar"),
         "internal leakage coefficient across the piston"),
     entry!("effects.compliance.effective_bulk_modulus_pa",
-        effects.compliance.effective_bulk_modulus_pa, "β", "Pa", [1e6, 1e10], None, (1e-9, "GPa"),
+        plant.effects.compliance.effective_bulk_modulus_pa, "β", "Pa", [1e6, 1e10], None, (1e-9, "GPa"),
         "effective bulk modulus with air and hose walls"),
-    entry!("effects.supply_sag.droop_pa_per_m3_s", effects.supply_sag.droop_pa_per_m3_s, "droop",
+    entry!("effects.supply_sag.droop_pa_per_m3_s", plant.effects.supply_sag.droop_pa_per_m3_s, "droop",
         "Pa/(m³/s)", [0.0, 1e12], None, (L_PER_MIN / BAR, "bar/(L/min)"),
         "supply pressure droop per drawn flow"),
 ];
@@ -264,7 +264,11 @@ mod tests {
         for kind in ControllerKind::ALL {
             let mut p = Params::paper();
             p.controller.kind = kind;
-            let doc: toml::Value = toml::Value::try_from(p).unwrap();
+            let preset = crate::preset::Preset {
+                meta: Default::default(),
+                params: p,
+            };
+            let doc: toml::Value = toml::from_str(&preset.to_toml()).unwrap();
             for s in PARAMS.iter().filter(|s| s.applies_to(p.controller.kind)) {
                 let mut v = &doc;
                 for part in s.key.split('.') {
@@ -318,10 +322,10 @@ mod tests {
     fn set_checks_the_range_and_names_the_key() {
         let mut p = Params::paper();
         p.set("valve.cd", 0.12).unwrap();
-        assert_eq!(p.valve.cd, 0.12);
+        assert_eq!(p.plant.valve.cd, 0.12);
         let e = p.set("valve.cd", 2.0).unwrap_err().to_string();
         assert!(e.contains("valve.cd") && e.contains("[0.001, 1]"), "{e}");
-        assert_eq!(p.valve.cd, 0.12, "a refused value is not written");
+        assert_eq!(p.plant.valve.cd, 0.12, "a refused value is not written");
         assert!(p.set("valve.nothing", 1.0).is_err());
         assert_eq!(p.get("supply.supply_pressure_pa"), Some(1e7));
         let s = spec("supply.supply_pressure_pa").unwrap();
