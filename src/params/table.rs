@@ -409,4 +409,47 @@ mod tests {
         }
         assert_eq!(seen.len(), PARAMS.len(), "documented: {seen:?}");
     }
+
+    /// docs/model.md (section 9) lists every parameter with its unit and range; each row must
+    /// say what the table says, and every entry must have a row.
+    #[test]
+    fn model_docs_agree_with_the_table() {
+        let doc = include_str!("../../docs/model.md");
+        let plain = |t: &str| t.trim().replace('−', "-").replace('–', "-");
+        let mut seen = Vec::new();
+        for line in doc.lines().filter(|l| l.starts_with("| `")) {
+            let cells: Vec<String> = line.split('|').map(plain).collect();
+            let key = cells[1].trim_matches('`');
+            let key = key.split('`').next().unwrap_or(key);
+            let Some(s) = spec(key) else { continue };
+            // Plant, controller and reference tables: key | symbol | unit | range | …;
+            // the effects table: key (symbol) | unit | range | default.
+            let (unit, range) = if cells.len() == 6 {
+                (&cells[2], &cells[3])
+            } else {
+                (&cells[3], &cells[4])
+            };
+            assert_eq!(unit, s.unit, "{key}: unit in docs/model.md");
+            let (lo, hi) = range
+                .split_once('…')
+                .unwrap_or_else(|| panic!("{key}: {range}"));
+            let num = |t: &str| t.trim_end_matches([',', '.']).parse::<f64>().ok();
+            assert_eq!(
+                num(lo.split_whitespace().last().unwrap_or("")),
+                Some(s.min),
+                "{key}"
+            );
+            assert_eq!(
+                num(hi.split_whitespace().next().unwrap_or("")),
+                Some(s.max),
+                "{key}"
+            );
+            seen.push(key.to_string());
+        }
+        let missing: Vec<_> = PARAMS
+            .iter()
+            .filter(|s| !seen.iter().any(|k| k == s.key))
+            .collect();
+        assert!(missing.is_empty(), "not in docs/model.md: {missing:?}");
+    }
 }
