@@ -256,6 +256,20 @@ mod tests {
     use super::*;
 
     #[test]
+    fn line_column_counts_characters() {
+        let text = "a = 1\nβé = x".as_bytes();
+        assert_eq!(line_column(text, 0), (1, 1));
+        assert_eq!(line_column(text, 4), (1, 5));
+        assert_eq!(line_column(text, 6), (2, 1));
+        // β and é are two bytes each: `=` is the 4th character of line 2, at byte 11.
+        assert_eq!(line_column(text, 11), (2, 4));
+        // Inside é (its second byte) points at é.
+        assert_eq!(line_column(text, 9), (2, 2));
+        assert_eq!(line_column(text, text.len()), (2, 7));
+        assert_eq!(line_column(b"ok\n\xff", 3), (2, 1));
+    }
+
+    #[test]
     fn atomic_write_replaces_or_leaves_the_old_file() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("a.txt");
@@ -304,4 +318,23 @@ mod tests {
             1
         );
     }
+}
+
+/// 1-based line and column of byte offset `at` in a file's bytes, for messages that point into
+/// a file. The column counts characters (a byte that is not valid UTF-8 counts as one); an
+/// offset inside a character points at that character; one past the end is allowed.
+pub fn line_column(bytes: &[u8], at: usize) -> (usize, usize) {
+    let before = &bytes[..at.min(bytes.len())];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    // Count the bytes that start a character (not UTF-8 continuation bytes 10xxxxxx).
+    let starts = before[start..]
+        .iter()
+        .filter(|&&b| b & 0xC0 != 0x80)
+        .count();
+    let inside = bytes.get(at).is_some_and(|&b| b & 0xC0 == 0x80) && starts > 0;
+    (line, starts + 1 - usize::from(inside))
 }

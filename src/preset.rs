@@ -170,17 +170,7 @@ pub enum PresetError {
 }
 
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let mut offset = offset.min(text.len());
-    while !text.is_char_boundary(offset) {
-        offset -= 1;
-    }
-    let before = &text[..offset];
-    let line = before.matches('\n').count() + 1;
-    let column = before[before.rfind('\n').map_or(0, |i| i + 1)..]
-        .chars()
-        .count()
-        + 1;
-    (line, column)
+    crate::fsutil::line_column(text.as_bytes(), offset)
 }
 
 /// The dotted key (`body.mass_kg`) whose value spans `offset` in `text`, if any: the deepest
@@ -293,16 +283,11 @@ impl Preset {
         }
         let text = std::str::from_utf8(bytes).map_err(|e| {
             let at = e.valid_up_to();
-            let before = &bytes[..at];
-            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-            let line_start = before
-                .iter()
-                .rposition(|&b| b == b'\n')
-                .map_or(0, |i| i + 1);
+            let (line, column) = crate::fsutil::line_column(bytes, at);
             PresetError::Parse {
                 file: file.to_path_buf(),
                 line,
-                column: at - line_start + 1,
+                column,
                 message: format!(
                     "not UTF-8 text: invalid byte 0x{:02x}; a preset is a TOML text file",
                     bytes[at]
