@@ -252,6 +252,43 @@ impl Params {
     }
 }
 
+/// The table as Markdown for people writing presets: each key with its symbol, the value in
+/// `p` (SI and in display units), the valid range, the paper's value and what it is. The
+/// other controller kinds' gains are listed as unused.
+pub fn describe(p: &Params) -> String {
+    use super::fmt_value;
+    let mut out = String::from(
+        "| key | symbol | value | unit | shown as | valid range | paper | what |\n\
+         |---|---|---|---|---|---|---|---|\n",
+    );
+    for s in &PARAMS {
+        let v = s.get(p);
+        let shown = if s.display.scale == 1.0 && s.display.unit == s.unit.trim_matches('-') {
+            String::new()
+        } else {
+            format!("{} {}", fmt_value(s.to_display(v)), s.display.unit)
+        };
+        let what = if s.applies_to(p.controller.kind) {
+            s.doc.to_string()
+        } else {
+            format!("{} (not used by `{}`)", s.doc, p.controller.kind)
+        };
+        out.push_str(&format!(
+            "| `{}` | {} | {} | {} | {} | {} … {} | {} | {} |\n",
+            s.key,
+            s.symbol,
+            fmt_value(v),
+            s.unit,
+            shown,
+            fmt_value(s.min),
+            fmt_value(s.max),
+            s.paper.map_or("–".into(), fmt_value),
+            what
+        ));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -408,6 +445,27 @@ mod tests {
             }
         }
         assert_eq!(seen.len(), PARAMS.len(), "documented: {seen:?}");
+    }
+
+    #[test]
+    fn describe_lists_every_key_with_its_value() {
+        let mut p = Params::paper();
+        p.plant.supply.supply_pressure_pa = 1.5e7;
+        let text = describe(&p);
+        assert_eq!(text.lines().count(), PARAMS.len() + 2);
+        let row = text
+            .lines()
+            .find(|l| l.contains("`supply.supply_pressure_pa`"))
+            .unwrap();
+        assert!(
+            row.contains("| 1.5e7 | Pa | 150 bar | 100000 … 5e7 | 1e7 |"),
+            "{row}"
+        );
+        let lead = text
+            .lines()
+            .find(|l| l.contains("`controller.lead_s`"))
+            .unwrap();
+        assert!(lead.contains("not used by `paper`"), "{lead}");
     }
 
     /// docs/model.md (section 9) lists every parameter with its unit and range; each row must
