@@ -251,6 +251,25 @@ fn move_entries(from: &Path, to: &Path) -> io::Result<()> {
     Ok(())
 }
 
+/// 1-based line and column of byte offset `at` in a file's bytes, for messages that point into
+/// a file. The column counts characters (a byte that is not valid UTF-8 counts as one); an
+/// offset inside a character points at that character; one past the end is allowed.
+pub fn line_column(bytes: &[u8], at: usize) -> (usize, usize) {
+    let before = &bytes[..at.min(bytes.len())];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    // Count the bytes that start a character (not UTF-8 continuation bytes 10xxxxxx).
+    let starts = before[start..]
+        .iter()
+        .filter(|&&b| b & 0xC0 != 0x80)
+        .count();
+    let inside = bytes.get(at).is_some_and(|&b| b & 0xC0 == 0x80) && starts > 0;
+    (line, starts + 1 - usize::from(inside))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -318,23 +337,4 @@ mod tests {
             1
         );
     }
-}
-
-/// 1-based line and column of byte offset `at` in a file's bytes, for messages that point into
-/// a file. The column counts characters (a byte that is not valid UTF-8 counts as one); an
-/// offset inside a character points at that character; one past the end is allowed.
-pub fn line_column(bytes: &[u8], at: usize) -> (usize, usize) {
-    let before = &bytes[..at.min(bytes.len())];
-    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-    let start = before
-        .iter()
-        .rposition(|&b| b == b'\n')
-        .map_or(0, |i| i + 1);
-    // Count the bytes that start a character (not UTF-8 continuation bytes 10xxxxxx).
-    let starts = before[start..]
-        .iter()
-        .filter(|&&b| b & 0xC0 != 0x80)
-        .count();
-    let inside = bytes.get(at).is_some_and(|&b| b & 0xC0 == 0x80) && starts > 0;
-    (line, starts + 1 - usize::from(inside))
 }

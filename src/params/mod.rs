@@ -24,7 +24,7 @@ pub use numerics::{Integrator, NumericsParams};
 pub use plant::{
     BodyParams, CylinderParams, FluidParams, HoseParams, PlantParams, SupplyParams, ValveParams,
 };
-pub use table::{Display, PARAMS, ParamSpec, spec};
+pub use table::{Display, PARAMS, ParamSpec, describe, spec};
 
 /// A parameter outside its allowed range, or an inconsistent combination.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
