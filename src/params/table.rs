@@ -473,7 +473,7 @@ mod tests {
     #[test]
     fn model_docs_agree_with_the_table() {
         let doc = include_str!("../../docs/model.md");
-        let plain = |t: &str| t.trim().replace('−', "-").replace('–', "-");
+        let plain = |t: &str| t.trim().replace(['−', '–'], "-");
         let mut seen = Vec::new();
         for line in doc.lines().filter(|l| l.starts_with("| `")) {
             let cells: Vec<String> = line.split('|').map(plain).collect();
