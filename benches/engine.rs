@@ -6,6 +6,7 @@
 //! 10 s divided by the reported time per iteration.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use seat_twin::analysis::dwell;
 use seat_twin::analysis::frequency_response as fr;
 use seat_twin::bench::{bench_ride, ride_run};
 use seat_twin::experiments;
@@ -45,13 +46,13 @@ fn ride_10s(c: &mut Criterion) {
 fn table1_sweep(c: &mut Criterion) {
     let params = Params::paper();
     let tests = experiments::table1();
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     let mut group = c.benchmark_group("table1");
     group.sample_size(10);
     group.bench_function("twin_69_dwells", |b| {
         b.iter(|| {
-            let r = fr::sweep(&tests, |&(f, a)| {
-                fr::simulated_bode(&params, ModelKind::Twin, f, a, &opt)
+            let r = dwell::sweep(&tests, |&(f, a)| {
+                dwell::simulated_bode(&params, ModelKind::Twin, f, a, &opt)
             });
             black_box(r.len())
         })

@@ -2,7 +2,7 @@
 //! sweep time, measured on this machine. (The criterion benches in `benches/` measure the same
 //! kernels with statistics.)
 
-use crate::analysis::frequency_response as fr;
+use crate::analysis::dwell;
 use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::{Integrator, Params};
@@ -239,10 +239,10 @@ pub fn run_bench(params: &Params) -> Result<String, SimError> {
         );
     }
     let tests = experiments::table1();
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     let (wall, results) = timed(3, 1.0, || {
-        fr::sweep(&tests, |&(f, a)| {
-            fr::simulated_bode(params, ModelKind::Twin, f, a, &opt)
+        dwell::sweep(&tests, |&(f, a)| {
+            dwell::simulated_bode(params, ModelKind::Twin, f, a, &opt)
         })
     });
     let failures = results.iter().filter(|r| r.is_err()).count();

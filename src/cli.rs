@@ -6,6 +6,7 @@
 //! rather than clap's "unexpected argument"; [`validate`] checks every numeric option of a
 //! command against its documented range, without reading a file.
 
+use crate::analysis::response::Method;
 use crate::model::ModelKind;
 use crate::params::fmt_value;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -47,27 +48,6 @@ pub struct Cli {
     pub command: Option<Command>,
 }
 
-/// `--model`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ModelArg {
-    /// The nonlinear digital twin.
-    Twin,
-    /// The paper's linear model G(s) with the controller.
-    Linear,
-    /// The passive seat (spring and damper).
-    Passive,
-}
-
-impl From<ModelArg> for ModelKind {
-    fn from(m: ModelArg) -> Self {
-        match m {
-            ModelArg::Twin => ModelKind::Twin,
-            ModelArg::Linear => ModelKind::Linear,
-            ModelArg::Passive => ModelKind::Passive,
-        }
-    }
-}
-
 /// `--scenario`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ScenarioArg {
@@ -81,17 +61,6 @@ pub enum ScenarioArg {
     Chirp,
     /// A seat-test input spectral class (--class NAME: EM1–EM9, IT1–IT4, AG1–AG3), closed loop.
     Class,
-}
-
-/// `--method`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum MethodArg {
-    /// Closed form (linear and passive models).
-    Exact,
-    /// Sine dwell by simulation, first harmonic.
-    Simulated,
-    /// Numerical linearisation at rest, evaluated on jω (twin).
-    Linearised,
 }
 
 /// The subcommands.
@@ -110,7 +79,7 @@ pub enum Command {
     Simulate {
         /// Which model.
         #[arg(long, value_enum)]
-        model: ModelArg,
+        model: ModelKind,
         /// Preset file or shipped preset name.
         #[arg(long, default_value = "paper")]
         preset: String,
@@ -152,7 +121,7 @@ pub enum Command {
     Bode {
         /// Which model.
         #[arg(long, value_enum)]
-        model: ModelArg,
+        model: ModelKind,
         /// Preset file or shipped preset name.
         #[arg(long, default_value = "paper")]
         preset: String,
@@ -169,7 +138,7 @@ pub enum Command {
         freqs: Vec<f64>,
         /// Default: simulated for the twin, exact for the linear model.
         #[arg(long, value_enum)]
-        method: Option<MethodArg>,
+        method: Option<Method>,
         /// Output file (CSV).
         #[arg(long)]
         out: PathBuf,
@@ -178,7 +147,7 @@ pub enum Command {
     Transmissibility {
         /// Which model.
         #[arg(long, value_enum)]
-        model: ModelArg,
+        model: ModelKind,
         /// Preset file or shipped preset name.
         #[arg(long, default_value = "paper")]
         preset: String,
@@ -192,7 +161,7 @@ pub enum Command {
         freqs: Vec<f64>,
         /// Default: simulated for the twin, exact for linear and passive.
         #[arg(long, value_enum)]
-        method: Option<MethodArg>,
+        method: Option<Method>,
         /// Output file (CSV).
         #[arg(long)]
         out: PathBuf,
@@ -277,7 +246,7 @@ pub struct SeatTestArgs {
     pub preset: String,
     /// Which model.
     #[arg(long, value_enum, default_value = "twin")]
-    pub model: ModelArg,
+    pub model: ModelKind,
     /// Suspended mass [kg] (default: the preset's; the paper's rig carries 11.7 kg).
     #[arg(long, allow_hyphen_values = true)]
     pub mass: Option<f64>,

@@ -3,10 +3,9 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
-use seat_twin::analysis::frequency_response as fr;
-use seat_twin::cli::{
-    self, Cli, Command, MAX_DURATION_S, MethodArg, ScenarioArg, SeatTestArgs, check_range,
-};
+use seat_twin::analysis::dwell;
+use seat_twin::analysis::response::{Method, Response, ResponseError, response};
+use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, SeatTestArgs, check_range};
 use seat_twin::dataset::{self, RecordKind};
 use seat_twin::experiments;
 use seat_twin::fsutil::{self, OutputDir};
@@ -41,7 +40,7 @@ fn run_seat_test_command(a: SeatTestArgs) -> Result<()> {
         mass_kg: a.mass,
         duration_s: a.duration,
         seed: a.seed,
-        ..SeatTestOptions::new(class, a.model.into())
+        ..SeatTestOptions::new(class, a.model)
     };
     let result = run_seat_test(&params, &opts).with_context(|| {
         format!(
@@ -245,7 +244,7 @@ fn run(cmd: Command) -> Result<()> {
         } => {
             // Every numeric option has been checked by cli::validate.
             let params = load_params(&preset)?;
-            let kind: ModelKind = model.into();
+            let kind = model;
             let mut warnings: Vec<String> = Vec::new();
             let mut peak_input: Option<String> = None;
             let (drive, platform, default_duration, label) = match (scenario, &excitation) {
@@ -309,7 +308,7 @@ fn run(cmd: Command) -> Result<()> {
                 (Some(ScenarioArg::Chirp), None) => {
                     let d = duration.unwrap_or(10.0);
                     (
-                        fr::chirp_drive(amp, f0, f1, d),
+                        dwell::chirp_drive(amp, f0, f1, d),
                         PlatformMotion::Still,
                         d,
                         format!(
@@ -432,49 +431,8 @@ fn run(cmd: Command) -> Result<()> {
             method,
             out,
         } => {
-            let params = load_params(&preset)?;
-            let kind: ModelKind = model.into();
-            let method = method.unwrap_or(match kind {
-                ModelKind::Twin => MethodArg::Simulated,
-                _ => MethodArg::Exact,
-            });
-            let values: Vec<num_complex::Complex64> = match (kind, method) {
-                (ModelKind::Passive, _) => {
-                    bail!("the passive model has no valve: no Bode of u̇/V_in")
-                }
-                (ModelKind::Linear, MethodArg::Exact) => {
-                    freqs.iter().map(|&f| fr::linear_bode(&params, f)).collect()
-                }
-                (ModelKind::Twin, MethodArg::Linearised) => {
-                    let lin = fr::linearise_twin(&params);
-                    freqs.iter().map(|&f| lin.bode(f)).collect()
-                }
-                (_, MethodArg::Simulated) => {
-                    let opt = fr::DwellOptions::default();
-                    fr::sweep(&freqs, |&f| fr::simulated_bode(&params, kind, f, amp, &opt))
-                        .into_iter()
-                        .collect::<Result<_, _>>()?
-                }
-                (k, _) => bail!("method not available for the {} model", k.name()),
-            };
-            check_response(&freqs, &values, &format!("--amp {} V", fmt_value(amp)))?;
-            let rows = freqs
-                .iter()
-                .zip(&values)
-                .map(|(f, v)| vec![*f, v.norm() * 1000.0, v.arg().to_degrees()]);
-            dataset::write_csv_atomic(
-                &out,
-                &["freq_hz", "mag_mm_per_s_v", "phase_deg"],
-                &[
-                    ("model".into(), kind.name().into()),
-                    ("preset".into(), preset.clone()),
-                    ("amplitude_v".into(), fmt_value(amp)),
-                ],
-                rows,
-            )
-            .with_context(|| format!("writing {}", out.display()))?;
-            println!("{} points written to {}", freqs.len(), out.display());
-            Ok(())
+            let what = Response::Bode { amplitude_v: amp };
+            write_response(&preset, model, what, method, &freqs, &out)
         }
         Command::Transmissibility {
             model,
@@ -483,57 +441,8 @@ fn run(cmd: Command) -> Result<()> {
             method,
             out,
         } => {
-            let params = load_params(&preset)?;
-            let kind: ModelKind = model.into();
-            let method = method.unwrap_or(match kind {
-                ModelKind::Twin => MethodArg::Simulated,
-                _ => MethodArg::Exact,
-            });
-            let values: Vec<num_complex::Complex64> = match (kind, method) {
-                (ModelKind::Linear, MethodArg::Exact) => freqs
-                    .iter()
-                    .map(|&f| fr::linear_transmissibility(&params, f))
-                    .collect(),
-                (ModelKind::Passive, MethodArg::Exact) => freqs
-                    .iter()
-                    .map(|&f| fr::passive_transmissibility(&params, f))
-                    .collect(),
-                (ModelKind::Twin, MethodArg::Linearised) => {
-                    let lin = fr::linearise_twin(&params);
-                    freqs
-                        .iter()
-                        .map(|&f| {
-                            lin.transmissibility(&seat_twin::control::ControlLaw::new(&params), f)
-                        })
-                        .collect()
-                }
-                (_, MethodArg::Simulated) => {
-                    let opt = fr::DwellOptions::default();
-                    fr::sweep(&freqs, |&f| {
-                        fr::simulated_transmissibility(&params, kind, f, &opt)
-                    })
-                    .into_iter()
-                    .collect::<Result<_, _>>()?
-                }
-                (k, _) => bail!("method not available for the {} model", k.name()),
-            };
-            check_response(&freqs, &values, &format!("preset {preset}"))?;
-            let rows = freqs
-                .iter()
-                .zip(&values)
-                .map(|(f, v)| vec![*f, v.norm(), v.arg().to_degrees()]);
-            dataset::write_csv_atomic(
-                &out,
-                &["freq_hz", "mag", "phase_deg"],
-                &[
-                    ("model".into(), kind.name().into()),
-                    ("preset".into(), preset.clone()),
-                ],
-                rows,
-            )
-            .with_context(|| format!("writing {}", out.display()))?;
-            println!("{} points written to {}", freqs.len(), out.display());
-            Ok(())
+            let what = Response::Transmissibility;
+            write_response(&preset, model, what, method, &freqs, &out)
         }
         Command::Replay { data, preset, out } => {
             let params = load_params(&preset)?;
@@ -769,16 +678,41 @@ fn run_tune(
     Ok(())
 }
 
-/// Refuses a frequency response with a non-finite point, naming the frequency and the input
-/// it was computed from (not the output file it would have gone to).
-fn check_response(freqs: &[f64], values: &[num_complex::Complex64], input: &str) -> Result<()> {
-    if let Some((f, v)) = freqs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
-        bail!(
-            "the response at {} Hz is not a finite number ({v}); nothing was written. \
-             Check {input}",
-            fmt_value(*f)
-        );
-    }
+/// `bode` and `transmissibility`: the response by its entry point, then one CSV file. A
+/// non-finite point is refused naming the frequency and the input it came from.
+fn write_response(
+    preset: &str,
+    kind: ModelKind,
+    what: Response,
+    method: Option<Method>,
+    freqs: &[f64],
+    out: &Path,
+) -> Result<()> {
+    let params = load_params(preset)?;
+    // What a non-finite point is traced back to, and the input's own comment line.
+    let (input, extra) = match what {
+        Response::Bode { amplitude_v } => (
+            format!("--amp {} V", fmt_value(amplitude_v)),
+            vec![("amplitude_v".to_string(), fmt_value(amplitude_v))],
+        ),
+        Response::Transmissibility => (format!("preset {preset}"), Vec::new()),
+    };
+    let method = method.unwrap_or(Method::default_for(kind));
+    let values = match response(&params, kind, what, method, freqs) {
+        Err(e @ ResponseError::NotFinite { .. }) => {
+            bail!("{e}; nothing was written. Check {input}")
+        }
+        r => r?,
+    };
+    let mut comments = vec![
+        ("model".to_string(), kind.name().to_string()),
+        ("preset".to_string(), preset.to_string()),
+    ];
+    comments.extend(extra);
+    let rows = freqs.iter().zip(&values).map(|(&f, &v)| what.row(f, v));
+    dataset::write_csv_atomic(out, &what.columns(), &comments, rows)
+        .with_context(|| format!("writing {}", out.display()))?;
+    println!("{} points written to {}", freqs.len(), out.display());
     Ok(())
 }
 

@@ -1,4 +1,7 @@
-//! Analysis of models and traces: frequency responses and vibration metrics.
+//! Analysis of models and traces: frequency responses (analytic and linearised in
+//! `frequency_response`, by simulated sine dwells in `dwell`) and vibration metrics.
 
+pub mod dwell;
 pub mod frequency_response;
 pub mod metrics;
+pub mod response;

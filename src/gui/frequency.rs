@@ -8,9 +8,8 @@
 
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};
 use super::units::{db, deg};
-use crate::analysis::frequency_response::{
-    self as fr, Crossing, DwellOptions, LoopMargins, OpenLoop,
-};
+use crate::analysis::dwell::{self, DwellOptions};
+use crate::analysis::frequency_response::{self as fr, Crossing, LoopMargins, OpenLoop};
 use crate::control::ControlLaw;
 use crate::model::ModelKind;
 use crate::params::{ControllerParams, Params};
@@ -315,9 +314,9 @@ impl Dwell {
                         return;
                     }
                     let r = std::panic::catch_unwind(|| {
-                        let t = fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
+                        let t = dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
                         let b = if f <= BODE_DWELL_MAX_HZ {
-                            Some(fr::simulated_bode(
+                            Some(dwell::simulated_bode(
                                 &p,
                                 ModelKind::Twin,
                                 f,

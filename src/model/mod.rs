@@ -63,14 +63,14 @@ impl Outputs {
 }
 
 /// Which model a trace came from; decides which CSV columns exist.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum ModelKind {
-    /// The multi-physics twin.
+    /// The nonlinear digital twin.
     Twin,
-    /// The simplified model G(s).
+    /// The paper's linear model G(s) with the controller.
     Linear,
-    /// The passive reference.
+    /// The passive seat (spring and damper).
     Passive,
 }
 

@@ -2,6 +2,7 @@
 //! PNG + SVG plots (Table 1 Bode, Fig. 12 transmissibility, Figs. 13–14 cycloid,
 //! Figs. 15–16 random ride) — with an honest *paper value | this twin | note* table.
 
+use crate::analysis::dwell;
 use crate::analysis::frequency_response::{self as fr, FrequencyPoint};
 use crate::analysis::metrics;
 use crate::control::ControlLaw;
@@ -219,9 +220,9 @@ pub fn write_report(params: &Params, preset_name: &str, out: &Path) -> Result<St
 
     // --- Section 4: Table 1 on the twin, G(s) and the linearised twin.
     let tests = experiments::table1();
-    let opt = fr::DwellOptions::default();
-    let bode_results = fr::sweep(&tests, |&(f, a)| {
-        fr::simulated_bode(params, ModelKind::Twin, f, a, &opt)
+    let opt = dwell::DwellOptions::default();
+    let bode_results = dwell::sweep(&tests, |&(f, a)| {
+        dwell::simulated_bode(params, ModelKind::Twin, f, a, &opt)
     });
     let mut table1 = Vec::with_capacity(tests.len());
     for (&(f, a), r) in tests.iter().zip(bode_results) {
@@ -254,8 +255,8 @@ pub fn write_report(params: &Params, preset_name: &str, out: &Path) -> Result<St
     let dwell_freqs: Vec<f64> = vec![
         0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 12.0, 15.0, 20.0,
     ];
-    let twin_dwell: Vec<Complex64> = fr::sweep(&dwell_freqs, |&f| {
-        fr::simulated_transmissibility(params, ModelKind::Twin, f, &opt)
+    let twin_dwell: Vec<Complex64> = dwell::sweep(&dwell_freqs, |&f| {
+        dwell::simulated_transmissibility(params, ModelKind::Twin, f, &opt)
     })
     .into_iter()
     .collect::<Result<_, _>>()?;
@@ -272,7 +273,7 @@ pub fn write_report(params: &Params, preset_name: &str, out: &Path) -> Result<St
     };
 
     // --- Random rides over several seeds.
-    let rides: Vec<[Trace; 3]> = fr::sweep(&RIDE_SEEDS, |&s| ride_traces(params, s))
+    let rides: Vec<[Trace; 3]> = dwell::sweep(&RIDE_SEEDS, |&s| ride_traces(params, s))
         .into_iter()
         .collect::<Result<_, _>>()?;
     let mut rms_x = Vec::new();

@@ -5,6 +5,7 @@
 //! predictor removes the delay from the position loop, skyhook feedback damps the body); and
 //! the preset syntax.
 
+use seat_twin::analysis::dwell;
 use seat_twin::analysis::frequency_response as fr;
 use seat_twin::control::ControlLaw;
 use seat_twin::model::ModelKind;
@@ -22,11 +23,11 @@ fn with_kind(kind: ControllerKind) -> Params {
 /// the grid) against `T(jω)` from the controller's transfer functions and G(s) in closed form.
 #[test]
 fn each_controller_on_the_linear_model_matches_its_transfer_function() {
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     for kind in ControllerKind::ALL {
         let p = with_kind(kind);
         for f in [0.7, 2.5, 6.0, 11.0] {
-            let sim = fr::simulated_transmissibility(&p, ModelKind::Linear, f, &opt).unwrap();
+            let sim = dwell::simulated_transmissibility(&p, ModelKind::Linear, f, &opt).unwrap();
             let exact = fr::linear_transmissibility(&p, f);
             assert!(
                 (sim - exact).norm() < 0.01 * exact.norm().max(0.05),
@@ -40,13 +41,13 @@ fn each_controller_on_the_linear_model_matches_its_transfer_function() {
 /// linearisation closed with the same transfer functions.
 #[test]
 fn each_controller_on_the_twin_matches_the_linearised_loop() {
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     for kind in ControllerKind::ALL {
         let p = with_kind(kind);
         let lin = fr::linearise_twin(&p);
         let law = ControlLaw::new(&p);
         for f in [1.0, 5.0] {
-            let sim = fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt).unwrap();
+            let sim = dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt).unwrap();
             let l = lin.transmissibility(&law, f);
             assert!(
                 (sim - l).norm() < 0.03 * l.norm().max(0.1),
@@ -85,7 +86,7 @@ fn smith_predictor_closed_loop_is_the_delay_free_loop_delayed() {
     let mut p = with_kind(ControllerKind::Smith);
     p.controller.kp_v_per_m = -40.0;
     let l = p.linear;
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     for f in [1.0, 3.0, 8.0] {
         let w = 2.0 * PI * f;
         let s = num_complex::Complex64::new(0.0, w);
@@ -94,7 +95,7 @@ fn smith_predictor_closed_loop_is_the_delay_free_loop_delayed() {
         let u_x = (-s * l.tau_s).exp() * m * (p.controller.ki_v_s_per_m / s)
             / (1.0 - p.controller.kp_v_per_m * m);
         let expected = 1.0 + s * s * u_x;
-        let sim = fr::simulated_transmissibility(&p, ModelKind::Linear, f, &opt).unwrap();
+        let sim = dwell::simulated_transmissibility(&p, ModelKind::Linear, f, &opt).unwrap();
         assert!(
             (sim - expected).norm() < 0.01 * expected.norm().max(0.05),
             "{f} Hz: simulated {sim} vs delay-free loop delayed {expected}"

@@ -2,6 +2,7 @@
 //! frequencies, the symmetry of the circuit, and the twin against its own linearisation and
 //! against G(s) at small amplitude.
 
+use seat_twin::analysis::dwell;
 use seat_twin::analysis::frequency_response as fr;
 use seat_twin::control::ControlLaw;
 use seat_twin::experiments;
@@ -124,9 +125,9 @@ fn twin_static_gain_matches_g_and_delay_is_counted_twice() {
 fn twin_sine_dwell_matches_its_linearisation_at_small_amplitude() {
     let p = Params::paper();
     let lin = fr::linearise_twin(&p);
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     for f in [1.0, 5.0, 10.0, 20.0] {
-        let sim = fr::simulated_bode(&p, ModelKind::Twin, f, 0.05, &opt).unwrap();
+        let sim = dwell::simulated_bode(&p, ModelKind::Twin, f, 0.05, &opt).unwrap();
         let l = lin.bode(f);
         let rel = (sim - l).norm() / l.norm();
         assert!(rel < 0.02, "{f} Hz: sim {sim} vs linearised {l} ({rel})");
@@ -138,9 +139,9 @@ fn twin_sine_dwell_matches_its_linearisation_at_small_amplitude() {
 #[test]
 fn linear_model_simulation_matches_closed_form_transmissibility() {
     let p = Params::paper();
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     for f in [0.5, 2.0, 5.0, 9.0, 15.0] {
-        let sim = fr::simulated_transmissibility(&p, ModelKind::Linear, f, &opt).unwrap();
+        let sim = dwell::simulated_transmissibility(&p, ModelKind::Linear, f, &opt).unwrap();
         let exact = fr::linear_transmissibility(&p, f);
         let err = (sim - exact).norm();
         assert!(
@@ -154,9 +155,9 @@ fn linear_model_simulation_matches_closed_form_transmissibility() {
 #[test]
 fn passive_simulation_matches_closed_form() {
     let p = Params::paper();
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     for f in [1.0, 2.82, 4.0, 10.0] {
-        let sim = fr::simulated_transmissibility(&p, ModelKind::Passive, f, &opt).unwrap();
+        let sim = dwell::simulated_transmissibility(&p, ModelKind::Passive, f, &opt).unwrap();
         let exact = fr::passive_transmissibility(&p, f);
         assert!(
             (sim - exact).norm() < 0.01 * exact.norm(),
@@ -174,9 +175,9 @@ fn passive_simulation_matches_closed_form() {
 fn twin_transmissibility_linearised_vs_simulated() {
     let p = Params::paper();
     let lin = fr::linearise_twin(&p);
-    let opt = fr::DwellOptions::default();
+    let opt = dwell::DwellOptions::default();
     for f in [1.0, 4.0, 8.0, 12.0] {
-        let sim = fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt).unwrap();
+        let sim = dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt).unwrap();
         let l = lin.transmissibility(&ControlLaw::new(&p), f);
         assert!(
             (sim - l).norm() < 0.03 * l.norm().max(0.1),
