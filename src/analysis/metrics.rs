@@ -82,6 +82,7 @@
 //! that need a sample rate or a non-empty signal return a [`MetricsError`]. NaN samples
 //! propagate to the results (NaN in, NaN out).
 
+use crate::dsp::{AnalogSection, BiquadState};
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
 /// Lowest sample rate accepted by the digital Wk filter \[Hz\].
@@ -166,13 +167,9 @@ pub enum MetricsError {
     },
 }
 
-/// Root mean square of `x` [same unit as `x`, e.g. m/s²]. Returns 0 for an empty slice.
-pub fn rms(x: &[f64]) -> f64 {
-    if x.is_empty() {
-        return 0.0;
-    }
-    (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
-}
+/// Root mean square of `x` [same unit as `x`, e.g. m/s²]. Returns 0 for an empty slice
+/// (one implementation for the crate, in [`crate::dsp`]).
+pub use crate::dsp::rms;
 
 /// Peak magnitude `max |x|` [same unit as `x`]. Returns 0 for an empty slice; a NaN sample
 /// makes the result NaN.
@@ -203,41 +200,6 @@ pub fn wk_response(freq_hz: f64) -> (f64, f64) {
             let (m, p) = section.response(w);
             (mag * m, phase + p)
         })
-}
-
-/// One second-order analogue section `(n0 + n1·s + n2·s²) / (d0 + d1·s + d2·s²)`.
-#[derive(Debug, Clone, Copy)]
-struct AnalogSection {
-    num: [f64; 3],
-    den: [f64; 3],
-}
-
-impl AnalogSection {
-    /// Magnitude and phase at angular frequency `w` [rad/s].
-    fn response(&self, w: f64) -> (f64, f64) {
-        let eval = |c: &[f64; 3]| (c[0] - c[2] * w * w, c[1] * w);
-        let (nr, ni) = eval(&self.num);
-        let (dr, di) = eval(&self.den);
-        (nr.hypot(ni) / dr.hypot(di), ni.atan2(nr) - di.atan2(dr))
-    }
-
-    /// Bilinear transform `s = k·(1 − z⁻¹)/(1 + z⁻¹)`.
-    fn bilinear(&self, k: f64) -> Biquad {
-        let map = |c: &[f64; 3]| {
-            [
-                c[0] + c[1] * k + c[2] * k * k,
-                2.0 * (c[0] - c[2] * k * k),
-                c[0] - c[1] * k + c[2] * k * k,
-            ]
-        };
-        let b = map(&self.num);
-        let a = map(&self.den);
-        Biquad {
-            b: [b[0] / a[0], b[1] / a[0], b[2] / a[0]],
-            a: [a[1] / a[0], a[2] / a[0]],
-            s: [0.0; 2],
-        }
-    }
 }
 
 /// The four analogue factors of Wk, with every characteristic angular frequency passed
@@ -272,37 +234,6 @@ fn wk_sections(omega: impl Fn(f64) -> f64) -> [AnalogSection; 4] {
     ]
 }
 
-/// A second-order IIR section in transposed direct form II, `a0 = 1`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Biquad {
-    /// Numerator `b0, b1, b2`.
-    b: [f64; 3],
-    /// Denominator `a1, a2`.
-    a: [f64; 2],
-    /// State.
-    s: [f64; 2],
-}
-
-impl Biquad {
-    fn step(&mut self, x: f64) -> f64 {
-        let y = self.b[0] * x + self.s[0];
-        self.s[0] = self.b[1] * x - self.a[0] * y + self.s[1];
-        self.s[1] = self.b[2] * x - self.a[1] * y;
-        y
-    }
-
-    /// |H(e^{jθ})| at the normalised angular frequency `theta` [rad/sample].
-    fn gain(&self, theta: f64) -> f64 {
-        // Evaluate c0 + c1·e^{-jθ} + c2·e^{-2jθ}.
-        let eval = |c0: f64, c1: f64, c2: f64| {
-            let re = c0 + c1 * theta.cos() + c2 * (2.0 * theta).cos();
-            let im = -c1 * theta.sin() - c2 * (2.0 * theta).sin();
-            re.hypot(im)
-        };
-        eval(self.b[0], self.b[1], self.b[2]) / eval(1.0, self.a[0], self.a[1])
-    }
-}
-
 /// Digital ISO 2631-1 Wk weighting filter for a signal sampled at a fixed rate.
 ///
 /// A cascade of four second-order sections (band-limiting high-pass and low-pass,
@@ -312,7 +243,7 @@ impl Biquad {
 /// [`filter`](Self::filter).
 #[derive(Debug, Clone, PartialEq)]
 pub struct WkFilter {
-    sections: [Biquad; 4],
+    sections: [BiquadState; 4],
     sample_rate_hz: f64,
 }
 
@@ -331,8 +262,8 @@ impl WkFilter {
             });
         }
         let k = 2.0 * sample_rate_hz;
-        let sections =
-            wk_sections(|omega| k * (omega / k).tan()).map(|section| section.bilinear(k));
+        let sections = wk_sections(|omega| k * (omega / k).tan())
+            .map(|section| BiquadState::new(section.bilinear(k)));
         Ok(Self {
             sections,
             sample_rate_hz,
@@ -347,7 +278,7 @@ impl WkFilter {
     /// Returns the filter to rest (zero state), as after [`new`](Self::new).
     pub fn reset(&mut self) {
         for section in &mut self.sections {
-            section.s = [0.0; 2];
+            section.reset();
         }
     }
 
@@ -360,7 +291,7 @@ impl WkFilter {
     /// on the unit circle) [-]; compare with the magnitude of [`wk_response`].
     pub fn gain_at(&self, freq_hz: f64) -> f64 {
         let theta = 2.0 * PI * freq_hz / self.sample_rate_hz;
-        self.sections.iter().map(|s| s.gain(theta)).product()
+        self.sections.iter().map(|s| s.coeffs.gain(theta)).product()
     }
 }
 

@@ -4,30 +4,16 @@
 //! the plots; `report.json` stays SI. Every file is written atomically.
 
 use super::{CalibrationReport, ErrorSummary, Verdict};
-use crate::plot::{Figure, Panel, PlotError, Scale, Series, palette, save_figure};
-use crate::preset::{Preset, PresetError, PresetMeta, write_atomic};
+use crate::output::{OutputError, json_number};
+use crate::plot::{Figure, Panel, Scale, Series, palette, save_figure};
+use crate::preset::{Preset, PresetMeta, write_atomic};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// Why the report could not be written.
-#[derive(Debug, thiserror::Error)]
-pub enum ReportError {
-    /// A file could not be written.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The error.
-        source: std::io::Error,
-    },
-    /// A plot failed.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
-    /// The preset failed.
-    #[error(transparent)]
-    Preset(#[from] PresetError),
-}
+/// Why the report could not be written (the error of every output writer,
+/// [`crate::output::OutputError`]).
+pub type ReportError = OutputError;
 
 fn error_json(e: &ErrorSummary) -> Value {
     json!({
@@ -44,8 +30,8 @@ pub fn report_json(r: &CalibrationReport) -> Value {
     let mut calibrated = serde_json::Map::new();
     let mut unc = serde_json::Map::new();
     for v in &r.calibrated {
-        calibrated.insert(v.name.clone(), finite(v.value));
-        unc.insert(v.name.clone(), finite(v.std));
+        calibrated.insert(v.name.clone(), json_number(v.value));
+        unc.insert(v.name.clone(), json_number(v.std));
     }
     let first_round: Vec<Value> = r
         .candidates
@@ -63,7 +49,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             "name": e.effect.name(),
             "params": e.params,
             "uncertainties": e.uncertainties.iter()
-                .map(|(k, v)| (k.clone(), finite(*v))).collect::<serde_json::Map<_, _>>(),
+                .map(|(k, v)| (k.clone(), json_number(*v))).collect::<serde_json::Map<_, _>>(),
             "evidence": e.evidence,
         })).collect::<Vec<_>>(),
         "candidates": first_round,
@@ -101,10 +87,6 @@ pub fn report_json(r: &CalibrationReport) -> Value {
         "files": r.files,
         "notes": r.notes,
     })
-}
-
-fn finite(v: f64) -> Value {
-    if v.is_finite() { json!(v) } else { Value::Null }
 }
 
 /// The calibrated preset.
@@ -679,10 +661,7 @@ pub fn write_all(
     dir: &Path,
     elapsed_s: Option<f64>,
 ) -> Result<(), ReportError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| ReportError::Io { path, source }
-    };
+    let io = OutputError::io;
     std::fs::create_dir_all(dir).map_err(io(dir))?;
     // Data that cannot determine the twin give no calibrated preset and no plots.
     if r.verdict != Verdict::InsufficientData {
