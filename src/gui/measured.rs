@@ -336,12 +336,11 @@ impl MeasuredData {
         let job = Job::spawn("seat-twin-calibrate", &self.waker, move || {
             let cb = move |p: &Progress| {
                 if let Ok(mut g) = p2.lock() {
-                    *g = Some(p.clone());
+                    *g = Some(*p);
                 }
                 w2();
-                !c2.load(Ordering::Relaxed)
             };
-            identify::calibrate(&params, &records, &options, &cb).map_err(|e| match e {
+            identify::calibrate_with(&params, &records, &options, &c2, &cb).map_err(|e| match e {
                 IdentifyError::Cancelled => "calibration cancelled".to_string(),
                 e => format!("calibration failed: {e}"),
             })
