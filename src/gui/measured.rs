@@ -336,7 +336,7 @@ impl MeasuredData {
         let job = Job::spawn("seat-twin-calibrate", &self.waker, move || {
             let cb = move |p: &Progress| {
                 if let Ok(mut g) = p2.lock() {
-                    *g = Some(*p);
+                    *g = Some(p.clone());
                 }
                 w2();
             };

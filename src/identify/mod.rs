@@ -67,6 +67,8 @@ pub mod replay;
 pub mod report;
 pub mod result;
 pub mod stages;
+#[cfg(test)]
+mod testdata;
 
 use crate::dataset::Record;
 use crate::params::{ParamError, Params};

@@ -64,7 +64,7 @@ impl fmt::Display for Stage {
 /// budget (a fit that converges early leaves the stage before `done` reaches `total`), the
 /// re-fit's validation one more; the candidate stage counts candidate fits; the report
 /// counts its seven replay sets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Progress {
     /// The stage running.
     pub stage: Stage,
@@ -329,21 +329,22 @@ mod tests {
     fn monitor_counts_stage_work_replays_and_cancels() {
         let cancel = AtomicBool::new(false);
         let seen = Mutex::new(Vec::new());
-        let obs = |p: &Progress| seen.lock().unwrap().push(*p);
-        let m = Monitor::new(&cancel, &obs);
-        m.enter(Stage::DeclaredFit, 3);
-        m.jacobian();
-        m.evaluated();
-        m.enter(Stage::Candidates { round: 1 }, 2);
-        m.jacobian(); // not the candidate stage's unit
-        m.advance();
-        m.advance();
-        m.advance(); // never beyond the total
-        assert!(m.check().is_ok());
-        cancel.store(true, Ordering::Relaxed);
-        assert!(matches!(m.check(), Err(IdentifyError::Cancelled)));
-        assert_eq!(m.evaluations(), 1);
-        drop(m);
+        let obs = |p: &Progress| seen.lock().unwrap().push(p.clone());
+        {
+            let m = Monitor::new(&cancel, &obs);
+            m.enter(Stage::DeclaredFit, 3);
+            m.jacobian();
+            m.evaluated();
+            m.enter(Stage::Candidates { round: 1 }, 2);
+            m.jacobian(); // not the candidate stage's unit
+            m.advance();
+            m.advance();
+            m.advance(); // never beyond the total
+            assert!(m.check().is_ok());
+            cancel.store(true, Ordering::Relaxed);
+            assert!(matches!(m.check(), Err(IdentifyError::Cancelled)));
+            assert_eq!(m.evaluations(), 1);
+        }
         let seen = seen.into_inner().unwrap();
         let at = |i: usize| {
             (

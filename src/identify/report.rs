@@ -675,3 +675,134 @@ pub fn write_all(
     write_atomic(&p, report_markdown(r, elapsed_s).as_bytes()).map_err(io(&p))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::Record;
+    use crate::identify::testdata::{true_params, twin_record};
+    use crate::identify::{CalibrationOptions, Progress, Stage, calibrate_with};
+    use crate::params::Params;
+    use std::sync::atomic::AtomicBool;
+
+    fn calibrated(records: &[Record]) -> CalibrationReport {
+        let cancel = AtomicBool::new(false);
+        calibrate_with(
+            &Params::paper(),
+            records,
+            &CalibrationOptions::default(),
+            &cancel,
+            &|_: &Progress| {},
+        )
+        .unwrap()
+    }
+
+    /// The numbers of `report.json` are the result's own, and `report.md` shows the
+    /// calibrated parameters, the verdict and the optimiser's stop reason in words.
+    #[test]
+    fn report_numbers_are_the_results() {
+        let truth = true_params();
+        let r = calibrated(&[
+            twin_record(&truth, 3.0, "a.csv"),
+            twin_record(&truth, 3.0, "b.csv"),
+        ]);
+        assert_ne!(r.verdict, Verdict::InsufficientData);
+        let j = report_json(&r);
+        assert_eq!(j["verdict"], r.verdict.name());
+        for v in &r.calibrated {
+            assert_eq!(j["calibrated_parameters"][&v.name].as_f64(), Some(v.value));
+            assert_eq!(j["calibrated_uncertainties"][&v.name].as_f64(), Some(v.std));
+        }
+        // The twin made the data: the calibration finds its Cd.
+        let cd = j["calibrated_parameters"]["cd"].as_f64().unwrap();
+        assert!((cd / truth.valve.cd - 1.0).abs() < 5e-3, "{cd}");
+        for (key, e) in [
+            ("error_nominal", &r.error_nominal),
+            ("error_before", &r.error_before),
+            ("error_after", &r.error_after),
+        ] {
+            assert_eq!(j[key]["value"].as_f64(), Some(e.value), "{key}");
+        }
+        let v = r.error_validation.as_ref().unwrap();
+        assert_eq!(j["error_validation"]["before"].as_f64(), Some(v.before));
+        assert_eq!(j["error_validation"]["after"].as_f64(), Some(v.after));
+        assert_eq!(j["replays"].as_u64(), Some(r.evaluations as u64));
+        // Nominal (Cd 10 % off) is far worse than calibrated.
+        assert!(r.error_nominal.value > 3.0 * r.error_before.value);
+        let md = report_markdown(&r, Some(1.5));
+        assert!(md.contains(&format!("**Verdict: `{}`**", r.verdict.name())));
+        for v in &r.calibrated {
+            assert!(
+                md.contains(&format_parameter(&v.name, v.value, v.std)),
+                "{md}"
+            );
+        }
+        let stopped = r
+            .notes
+            .iter()
+            .find(|n| n.starts_with("declared-parameter fit stopped: "))
+            .unwrap();
+        assert!(
+            !stopped.contains('{') && !stopped.contains('"'),
+            "{stopped}"
+        );
+        assert!(md.contains(stopped.as_str()));
+    }
+
+    /// Data that cannot be calibrated: NaN never reaches a report; JSON says null, Markdown —.
+    #[test]
+    fn insufficient_data_reports_null_and_dash_never_nan() {
+        let mut rec = twin_record(&Params::paper(), 0.001, "two-rows.csv");
+        rec.v_in = None;
+        let r = calibrated(&[rec]);
+        assert_eq!(r.verdict, Verdict::InsufficientData);
+        assert!(r.error_nominal.value.is_nan());
+        let j = report_json(&r);
+        assert!(j["error_nominal"]["value"].is_null());
+        assert!(!j["missing"].as_array().unwrap().is_empty());
+        let text = serde_json::to_string(&j).unwrap();
+        assert!(!text.contains("NaN"), "{text}");
+        let md = report_markdown(&r, None);
+        assert!(!md.contains("NaN"), "{md}");
+        assert!(md.contains("| nominal (preset as given) | — |"), "{md}");
+        assert!(md.contains("no `v_in`"), "{md}");
+        // Nothing calibrated: no calibrated.toml, only the two reports.
+        let dir = tempfile::tempdir().unwrap();
+        write_all(&r, dir.path(), None).unwrap();
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["report.json", "report.md"]);
+    }
+
+    /// One cancel flag stops the run; the observer saw the stages in order up to there.
+    #[test]
+    fn cancel_stops_at_the_stage_it_is_set_in() {
+        let rec = twin_record(&true_params(), 3.0, "a.csv");
+        let cancel = AtomicBool::new(false);
+        let seen = std::sync::Mutex::new(Vec::new());
+        let observer = |p: &Progress| {
+            let mut s = seen.lock().unwrap();
+            if s.last() != Some(&p.stage) {
+                s.push(p.stage);
+            }
+            if p.stage == Stage::DeclaredFit {
+                cancel.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        };
+        let r = calibrate_with(
+            &Params::paper(),
+            &[rec],
+            &CalibrationOptions::default(),
+            &cancel,
+            &observer,
+        );
+        assert!(matches!(r, Err(crate::identify::IdentifyError::Cancelled)));
+        assert_eq!(
+            *seen.lock().unwrap(),
+            [Stage::Nominal, Stage::PaperBaseline, Stage::DeclaredFit]
+        );
+    }
+}
