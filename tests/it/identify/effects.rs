@@ -2,12 +2,9 @@
 //! demo campaign, and an effect outside the library.
 
 use super::rig::*;
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
 use seat_twin::dataset::Record;
-use seat_twin::identify::{self, CalibrationOptions, CalibrationReport, EffectId, Verdict};
+use seat_twin::identify::{self, CalibrationOptions, EffectId, Verdict};
 use seat_twin::params::Params;
-use std::f64::consts::PI;
 use std::path::PathBuf;
 
 #[test]

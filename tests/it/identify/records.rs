@@ -2,13 +2,9 @@
 //! two rows, and the held-out improvement that `calibrated.toml` reproduces.
 
 use super::rig::*;
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
 use seat_twin::dataset::Record;
-use seat_twin::identify::{self, CalibrationOptions, CalibrationReport, EffectId, Verdict};
+use seat_twin::identify::{self, CalibrationOptions, CalibrationReport, Verdict};
 use seat_twin::params::Params;
-use std::f64::consts::PI;
-use std::path::PathBuf;
 
 /// The first point: a replay of the right model against its own noisy record matches
 /// every written column the record has (u, ydd, p1, p2), raw and on the record's own grid, to
