@@ -603,21 +603,15 @@ fn demo_campaign_files_parse() {
 }
 
 #[test]
-fn parses_600k_rows_by_7_columns_quickly() {
-    // 60 s at 10 kHz; a tenth of it in unoptimised builds, where it is only checked.
+fn parses_a_long_seven_column_record() {
+    // 6 s at 10 kHz, every column present. (How fast this parses is a matter for a benchmark,
+    // not for a test: no time is measured here.)
     let rate = 10_000.0;
-    let n = if cfg!(debug_assertions) {
-        60_000
-    } else {
-        600_000
-    };
-    let mut text = String::with_capacity(n * 90);
-    text.push_str("# sample_rate_hz: 10000\nt,v_in,u,x,xdd,ydd,p1\n");
-    for i in 0..n {
+    let n = 60_000;
+    let row = |i: usize| {
         let t = i as f64 / rate;
         let s = (t * 31.4).sin();
-        let _ = writeln!(
-            text,
+        format!(
             "{:.4},{:.6},{:.6e},{:.6e},{:.6},{:.6},{:.1}",
             t,
             0.72 * s,
@@ -626,18 +620,24 @@ fn parses_600k_rows_by_7_columns_quickly() {
             0.3 * s,
             1.1 * s,
             2.0e6 + 1e5 * s
-        );
+        )
+    };
+    let mut text = String::with_capacity(n * 90);
+    text.push_str("# sample_rate_hz: 10000\nt,v_in,u,x,xdd,ydd,p1\n");
+    for i in 0..n {
+        let _ = writeln!(text, "{}", row(i));
     }
-    let start = std::time::Instant::now();
     let r = parse_record(&text, p(), RecordKind::Measured).unwrap();
-    let took = start.elapsed();
     assert_eq!(r.len(), n);
     assert!((r.duration_s() - (n - 1) as f64 / rate).abs() < 1e-6);
-    println!(
-        "parsed {} MB, {n} rows x 7 columns in {took:?}",
-        text.len() / 1_000_000
-    );
-    if !cfg!(debug_assertions) {
-        assert!(took.as_secs_f64() < 1.0, "took {took:?}");
+    assert!((r.dt - 1.0 / rate).abs() < 1e-12);
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    // Every column of a row far into the file holds the numbers written there.
+    for i in [0, 12_345, n - 1] {
+        let cells: Vec<f64> = row(i).split(',').map(|c| c.parse().unwrap()).collect();
+        for (k, name) in ["t", "v_in", "u", "x", "xdd", "ydd", "p1"].iter().enumerate() {
+            assert_eq!(r.column(name).unwrap()[i], cells[k], "row {i}, {name}");
+        }
     }
+    assert!(r.p2.is_none());
 }
