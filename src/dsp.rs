@@ -1,5 +1,5 @@
-//! Signal processing shared by the vibration metrics ([`crate::analysis::metrics`]) and the
-//! identification ([`crate::identify::replay`]): the RMS, second-order IIR sections (biquads)
+//! Signal processing shared by the vibration metrics (`analysis::metrics`) and the
+//! identification (`identify::replay`): the RMS, second-order IIR sections (biquads)
 //! and their design from analogue prototypes, Butterworth low-passes, and zero-phase
 //! (forward–backward) filtering of whole records.
 //!
@@ -17,9 +17,13 @@
 //! cascade forward and then backward: its gain is `|H|²` and its phase is zero at every
 //! frequency.
 //!
+//! [`noise_rms`] estimates a channel's sensor noise from the top of its spectrum, [`spectrum`]
+//! gives a Hann-windowed amplitude spectrum.
+//!
 //! All functions are pure; none panics on empty input.
 
 use num_complex::Complex64;
+use realfft::RealFftPlanner;
 use std::f64::consts::PI;
 
 /// Root mean square of `x` (0 for an empty slice) [same unit as `x`].
@@ -241,6 +245,60 @@ pub fn noise_gain(len: usize, op: impl Fn(&[f64]) -> Vec<f64>) -> f64 {
     op(&x).iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
+/// Noise RMS of a raw channel, estimated from the top of its spectrum: the power in
+/// `[0.3, 0.5]·fs` (where the rig's motion has almost nothing) extrapolated to the whole band
+/// as white noise. Includes quantisation (which is white at these levels).
+pub fn noise_rms(x: &[f64], dt: f64) -> f64 {
+    let _ = dt;
+    let n = x.len();
+    if n < 32 {
+        return 0.0;
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let mut buf: Vec<f64> = x.iter().map(|v| v - mean).collect();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    let mut spec = fft.make_output_vec();
+    if fft.process(&mut buf, &mut spec).is_err() {
+        return 0.0;
+    }
+    let m = spec.len();
+    let lo = (0.6 * (m as f64)) as usize;
+    let band: f64 = spec[lo..m].iter().map(|c| c.norm_sqr()).sum();
+    let fraction = (m - lo) as f64 / m as f64;
+    // Parseval for a real FFT: Σx² ≈ (2/n)·Σ_k |X_k|² over the half spectrum.
+    let power = 2.0 * band / (n as f64 * n as f64);
+    (power / fraction).sqrt()
+}
+
+/// Amplitude spectrum of a signal: `(frequency [Hz], RMS amplitude density)` on a Hann window.
+pub fn spectrum(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = x.len();
+    if n < 8 {
+        return (Vec::new(), Vec::new());
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let mut buf: Vec<f64> = x
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64).cos();
+            (v - mean) * w
+        })
+        .collect();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    let mut spec = fft.make_output_vec();
+    if fft.process(&mut buf, &mut spec).is_err() {
+        return (Vec::new(), Vec::new());
+    }
+    let df = 1.0 / (n as f64 * dt);
+    let scale = (2.0 * dt / (0.375 * n as f64)).sqrt();
+    let f = (0..spec.len()).map(|k| k as f64 * df).collect();
+    let a = spec.iter().map(|c| c.norm() * scale).collect();
+    (f, a)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -402,5 +460,39 @@ mod tests {
                 .collect()
         };
         assert!((noise_gain(100, avg4) - 0.5).abs() < 1e-12);
+    }
+
+    /// The spectrum of a sine peaks at its frequency; the noise estimate of white noise of
+    /// σ under a slow sine is σ (the sine's power lies far below the band it looks at).
+    #[test]
+    fn spectrum_peak_and_noise_estimate() {
+        let (dt, n) = (1e-3, 4000);
+        let x = sine(2.0, 50.0, dt, n, 0.0);
+        let (f, a) = spectrum(&x, dt);
+        let k = (0..a.len()).max_by(|&i, &j| a[i].total_cmp(&a[j])).unwrap();
+        assert!((f[k] - 50.0).abs() < 0.5, "{}", f[k]);
+        // A deterministic white sequence (xorshift), σ = 0.1, over a 2 Hz sine of amplitude 5.
+        let mut s: u64 = 0x9e37_79b9_7f4a_7c15;
+        let noise: Vec<f64> = (0..n)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                // Uniform on [−√3, √3]·σ has standard deviation σ.
+                0.1 * 3f64.sqrt() * (2.0 * (s >> 11) as f64 / (1u64 << 53) as f64 - 1.0)
+            })
+            .collect();
+        let y: Vec<f64> = sine(5.0, 2.0, dt, n, 0.0)
+            .iter()
+            .zip(&noise)
+            .map(|(a, b)| a + b)
+            .collect();
+        let est = noise_rms(&y, dt);
+        assert!(
+            (est / rms(&noise) - 1.0).abs() < 0.1,
+            "{est} vs {}",
+            rms(&noise)
+        );
+        assert_eq!(noise_rms(&[1.0; 10], dt), 0.0);
     }
 }

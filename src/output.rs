@@ -1,5 +1,5 @@
 //! What the writers of a command's output set share (the calibration's
-//! [`crate::identify::report`], the tuning's [`crate::tune::report`]): one error type for a
+//! `identify::report`, the tuning's `tune::report`): one error type for a
 //! file that could not be written, and JSON numbers that are never NaN.
 
 use crate::plot::PlotError;

@@ -635,7 +635,10 @@ fn parses_a_long_seven_column_record() {
     // Every column of a row far into the file holds the numbers written there.
     for i in [0, 12_345, n - 1] {
         let cells: Vec<f64> = row(i).split(',').map(|c| c.parse().unwrap()).collect();
-        for (k, name) in ["t", "v_in", "u", "x", "xdd", "ydd", "p1"].iter().enumerate() {
+        for (k, name) in ["t", "v_in", "u", "x", "xdd", "ydd", "p1"]
+            .iter()
+            .enumerate()
+        {
             assert_eq!(r.column(name).unwrap()[i], cells[k], "row {i}, {name}");
         }
     }

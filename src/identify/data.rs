@@ -1,11 +1,13 @@
 //! The data stage: which records can be replayed, whether they can determine the twin at all
 //! (`insufficient_data` otherwise), and the split into fitted and held-out parts.
 
-use super::evaluate::part_name;
+use super::evaluate::{insufficient_report, part_name, replay_all};
 use super::replay::{PreparedRecord, rms};
+use super::result::CalibrationReport;
 use super::result::Split;
 use super::{CalibrationOptions, IdentifyError};
 use crate::dataset::Record;
+use crate::params::Params;
 use rayon::prelude::*;
 
 /// Least number of records for a split by records (below it, each record is split in time).
@@ -187,4 +189,18 @@ pub fn split(all: Vec<PreparedRecord>) -> Campaign {
         validation,
         split,
     }
+}
+
+/// The report for data the check found insufficient: the nominal replay of the usable
+/// records when every one of them replays, else nothing replayed.
+pub fn insufficient_data(params: &Params, checked: DataCheck) -> CalibrationReport {
+    let all = checked.records;
+    let nominal = replay_all(params, &all).unwrap_or_default();
+    let nominal = if nominal.len() == all.len() {
+        nominal
+    } else {
+        Vec::new()
+    };
+    let all = if nominal.is_empty() { Vec::new() } else { all };
+    insufficient_report(params, all, nominal, checked.missing, checked.notes)
 }

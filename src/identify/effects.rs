@@ -5,11 +5,10 @@
 
 use super::data::Campaign;
 use super::evaluate::{replay_all, weighted_of};
-use super::fit::{self, Evaluator, FitResult, Knob};
+use super::fit::{self, Bic, Evaluator, FitResult, Knob};
 use super::progress::Stage;
 use super::replay::{PreparedRecord, rms};
 use super::result::CandidateScore;
-use super::stages::{Bic, Declared};
 use super::{CalibrationOptions, EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
@@ -218,7 +217,8 @@ pub struct EffectSearch {
     pub notes: Vec<String>,
 }
 
-/// Rounds of [`rank_candidates`] and [`try_effect`] from the declared fit: the best candidate
+/// Rounds of [`rank_candidates`] and [`try_effect`] from the declared fit `start` (of
+/// `knobs`): the best candidate
 /// is tried when its ΔBIC < 0 and it removes at least
 /// [`CalibrationOptions::min_relative_gain`] of the residual
 /// ([`CalibrationOptions::min_relative_gain_later`] after the first effect), and added when it
@@ -229,12 +229,13 @@ pub fn search(
     cx: &SearchContext<'_>,
     campaign: &Campaign,
     params: &Params,
-    declared: &Declared,
+    start: &FitResult,
+    knobs: &[Knob],
 ) -> Result<EffectSearch, IdentifyError> {
     let options = cx.options;
-    let mut current = declared.fit.clone();
+    let mut current = start.clone();
     let mut current_val = validation_rms(&current.params, &campaign.validation)?;
-    let mut knobs = declared.knobs.clone();
+    let mut knobs = knobs.to_vec();
     let mut added: Vec<Added> = Vec::new();
     let mut candidates = Vec::new();
     let mut notes = Vec::new();

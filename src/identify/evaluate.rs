@@ -263,20 +263,3 @@ pub(super) fn fmt_signed(v: f64) -> String {
         "—".into()
     }
 }
-
-/// The report for data the check found insufficient: the nominal replay of the usable
-/// records when every one of them replays, else nothing replayed.
-pub(super) fn insufficient_data(
-    params: &Params,
-    checked: super::data::DataCheck,
-) -> CalibrationReport {
-    let all = checked.records;
-    let nominal = replay_all(params, &all).unwrap_or_default();
-    let nominal = if nominal.len() == all.len() {
-        nominal
-    } else {
-        Vec::new()
-    };
-    let all = if nominal.is_empty() { Vec::new() } else { all };
-    insufficient_report(params, all, nominal, checked.missing, checked.notes)
-}

@@ -325,6 +325,37 @@ pub fn effective_count(r: &[f64]) -> f64 {
     (n * (1.0 - rho) / (1.0 + rho)).max(0.01 * n).max(1.0)
 }
 
+/// The Bayesian information criterion on the fit records, with the residual count corrected
+/// for autocorrelation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bic {
+    /// Residual count.
+    pub n: usize,
+    /// Effective (decorrelated) count ([`effective_count`]).
+    pub n_eff: f64,
+}
+
+impl Bic {
+    /// The criterion at the residual of `fit` (one more replay).
+    pub fn at(ev: &Evaluator<'_>, fit: &FitResult) -> Result<Self, IdentifyError> {
+        let r = ev.residuals(&fit.params).ok_or(IdentifyError::Cancelled)?;
+        Ok(Self {
+            n: ev.residual_len(),
+            n_eff: effective_count(&r),
+        })
+    }
+
+    /// `n_eff·ln(RSS/n) + k·ln(n_eff)` for a model of `k` parameters.
+    pub fn value(&self, rss: f64, k: usize) -> f64 {
+        self.n_eff * (rss / self.n as f64).ln() + k as f64 * self.n_eff.ln()
+    }
+
+    /// `n_eff/n`, for the fits' uncertainties.
+    pub fn ratio(&self) -> f64 {
+        self.n_eff / self.n as f64
+    }
+}
+
 /// Fits `knobs` starting from their values in `start`, with at most `max_jacobians`
 /// Jacobians. `n_eff_ratio` = n_eff/n of the residual, for the uncertainties.
 pub fn fit(

@@ -295,7 +295,7 @@ pub fn calibrate_with(
     let monitor = progress::Monitor::new(cancel, observer);
     let checked = data::check(records, options)?;
     if !checked.missing.is_empty() {
-        return Ok(evaluate::insufficient_data(params, checked));
+        return Ok(data::insufficient_data(params, checked));
     }
     let mut notes = checked.notes;
     let campaign = data::split(checked.records);
@@ -324,14 +324,14 @@ pub fn calibrate_with(
             notes,
         ));
     }
-    let bic = stages::Bic::at(&ev, &declared.fit)?;
+    let bic = fit::Bic::at(&ev, &declared.fit)?;
     let cx = effects::SearchContext {
         ev: &ev,
         bic,
         validation: &campaign.validation,
         options,
     };
-    let search = effects::search(&cx, &campaign, params, &declared)?;
+    let search = effects::search(&cx, &campaign, params, &declared.fit, &declared.knobs)?;
     notes.extend(search.notes.iter().cloned());
     let found = stages::Findings {
         campaign,

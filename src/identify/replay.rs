@@ -32,7 +32,7 @@
 //!
 //! All are decimated to about `eval_rate_hz`, and each residual is divided by
 //! `max(σ_noise, floor·RMS(signal))` of its file and channel, where `σ_noise` is the sensor
-//! noise estimated from the measured record itself (see [`super::diagnose::noise_rms`]) after
+//! noise estimated from the measured record itself (see [`crate::dsp::noise_rms`]) after
 //! the same filter. The reported error is the RMS of these weighted residuals: 1 means the twin
 //! matches the record to the sensor noise.
 
@@ -43,8 +43,8 @@ use crate::scenario::{CommandSignal, PlatformMotion, SampledMotion};
 use crate::simulation::{Drive, Simulation, step_for_rate};
 use std::sync::Arc;
 
-use crate::dsp::noise_gain;
 pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
+use crate::dsp::{noise_gain, noise_rms};
 
 /// Cut-off of the zero-phase low-pass applied to the recorded platform motion before it drives
 /// the twin [Hz] (see the [module docs](self)); at most 0.3 × the sample rate.
@@ -178,7 +178,7 @@ impl PreparedRecord {
         // A platform channel that is indistinguishable from its own sensor noise means the
         // platform was still: replaying that noise would only add noise to the twin.
         let moving = |v: &Vec<f64>| {
-            let n = super::diagnose::noise_rms(v, dt);
+            let n = noise_rms(v, dt);
             let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
             let dev: Vec<f64> = v.iter().map(|x| x - mean).collect();
             rms(&dev) > 3.0 * n.max(1e-15)
@@ -208,12 +208,8 @@ impl PreparedRecord {
         let decimate = ((fs / opt.eval_rate_hz).round() as usize).max(1);
         let du_meas_f = filtered_derivative(&u, dt, lowpass_hz);
         let ydd_meas_f = record.ydd.as_ref().map(|y| lowpass(y, dt, lowpass_hz));
-        let noise_u = super::diagnose::noise_rms(&u, dt);
-        let noise_ydd = record
-            .ydd
-            .as_ref()
-            .map(|y| super::diagnose::noise_rms(y, dt))
-            .unwrap_or(0.0);
+        let noise_u = noise_rms(&u, dt);
+        let noise_ydd = record.ydd.as_ref().map(|y| noise_rms(y, dt)).unwrap_or(0.0);
         let gain_du = noise_gain(record.len(), |x| filtered_derivative(x, dt, lowpass_hz));
         let gain_y = noise_gain(record.len(), |x| lowpass(x, dt, lowpass_hz));
         let scale_du = (noise_u * gain_du)
@@ -234,7 +230,7 @@ impl PreparedRecord {
         for (i, raw) in [&record.p1, &record.p2].into_iter().enumerate() {
             if let Some(p) = raw {
                 let f = lowpass(p, dt, lowpass_hz);
-                let n = super::diagnose::noise_rms(p, dt);
+                let n = noise_rms(p, dt);
                 // The floor is taken on the swing about the mean: the mean pressure (tens of
                 // bar) says nothing about how well the twin can follow it.
                 let mean = f.iter().sum::<f64>() / f.len().max(1) as f64;

@@ -10,7 +10,7 @@ use super::evaluate::{
     diagnostics, fmt_signed, raw_pooled, replay_all, stage_errors, summary, weighted_of,
     worst_channel,
 };
-use super::fit::{self, Evaluator, FitResult, Knob};
+use super::fit::{self, Bic, Evaluator, FitResult, Knob};
 use super::paper::paper_baseline;
 use super::progress::{Monitor, Stage};
 use super::replay::Replay;
@@ -192,37 +192,6 @@ pub fn declared_fit(
         notes,
         undetermined,
     })
-}
-
-/// The Bayesian information criterion on the fit records, with the residual count corrected
-/// for autocorrelation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Bic {
-    /// Residual count.
-    pub n: usize,
-    /// Effective (decorrelated) count ([`fit::effective_count`]).
-    pub n_eff: f64,
-}
-
-impl Bic {
-    /// The criterion at the residual of `fit` (one more replay).
-    pub fn at(ev: &Evaluator<'_>, fit: &FitResult) -> Result<Self, IdentifyError> {
-        let r = ev.residuals(&fit.params).ok_or(IdentifyError::Cancelled)?;
-        Ok(Self {
-            n: ev.residual_len(),
-            n_eff: fit::effective_count(&r),
-        })
-    }
-
-    /// `n_eff·ln(RSS/n) + k·ln(n_eff)` for a model of `k` parameters.
-    pub fn value(&self, rss: f64, k: usize) -> f64 {
-        self.n_eff * (rss / self.n as f64).ln() + k as f64 * self.n_eff.ln()
-    }
-
-    /// `n_eff/n`, for the fits' uncertainties.
-    pub fn ratio(&self) -> f64 {
-        self.n_eff / self.n as f64
-    }
 }
 
 /// The verdict from the errors before and after the effects: `explained` when effects were
