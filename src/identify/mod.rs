@@ -60,6 +60,7 @@ pub mod data;
 pub mod diagnose;
 pub mod effects;
 mod evaluate;
+pub mod figures;
 pub mod fit;
 pub mod paper;
 pub mod progress;
