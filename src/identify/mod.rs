@@ -366,3 +366,61 @@ pub fn calibrate(
     };
     calibrate_with(params, records, options, &cancel, &observer)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn effect_names_round_trip_and_each_effect_has_its_knobs() {
+        for e in EffectId::ALL {
+            assert_eq!(EffectId::from_name(e.name()), Some(e));
+            assert!(!e.knobs().is_empty());
+            assert!(
+                !e.enabled(&Params::paper()),
+                "{} is off in the paper preset",
+                e.name()
+            );
+        }
+        assert_eq!(EffectId::from_name("viscosity"), None);
+        // No two effects share a knob: adding one never re-fits another's parameter.
+        let mut all: Vec<Knob> = EffectId::ALL
+            .iter()
+            .flat_map(|e| e.knobs().to_vec())
+            .collect();
+        let n = all.len();
+        all.dedup();
+        assert_eq!(all.len(), n);
+    }
+
+    /// The text callback of `calibrate` gets the stages' words and cancels by returning
+    /// `false`; no records at all is an error, not a report.
+    #[test]
+    fn calibrate_callback_reads_stages_and_cancels() {
+        let rec = testdata::twin_record(&testdata::true_params(), 3.0, "a.csv");
+        let seen = std::sync::Mutex::new(Vec::new());
+        let r = calibrate(
+            &Params::paper(),
+            &[rec],
+            &CalibrationOptions::default(),
+            &|p: &ProgressText| {
+                let mut s = seen.lock().unwrap();
+                if s.last() != Some(&p.stage) {
+                    s.push(p.stage.clone());
+                }
+                p.stage != "declared parameters (Cd, τ, mass)"
+            },
+        );
+        assert!(matches!(r, Err(IdentifyError::Cancelled)));
+        assert_eq!(
+            *seen.lock().unwrap(),
+            [
+                "nominal replay",
+                "paper's section-4 calibration",
+                "declared parameters (Cd, τ, mass)"
+            ]
+        );
+        let none = calibrate(&Params::paper(), &[], &Default::default(), &|_| true);
+        assert!(matches!(none, Err(IdentifyError::NoRecords)));
+    }
+}
