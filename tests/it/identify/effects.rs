@@ -3,8 +3,7 @@
 
 use super::rig::*;
 use seat_twin::dataset::Record;
-use seat_twin::identify::{self, CalibrationOptions, EffectId, Verdict};
-use seat_twin::params::Params;
+use seat_twin::identify::{self, EffectId, Verdict};
 use std::path::PathBuf;
 
 #[test]
@@ -185,13 +184,7 @@ fn demo_campaign_finds_its_hidden_effect() {
                 .expect("demo file reads")
         })
         .collect();
-    let r = identify::calibrate(
-        &Params::paper(),
-        &recs,
-        &CalibrationOptions::default(),
-        &|_| true,
-    )
-    .expect("calibration runs");
+    let r = calibrate_paper(&recs);
     let s = summary(&r);
     eprintln!("demo: {s}");
 

@@ -231,13 +231,7 @@ fn calibrated_preset_reproduces_the_claimed_held_out_improvement() {
     // Order [2 Hz, 5 Hz, 20 Hz, 10 Hz, ride, 15 Hz]: the 3rd and 6th (20 Hz and 15 Hz) are held
     // out, the 10 Hz test that shows the compliance most is fitted.
     recs.swap(2, 3);
-    let r = identify::calibrate(
-        &Params::paper(),
-        &recs,
-        &CalibrationOptions::default(),
-        &|_| true,
-    )
-    .expect("calibration runs");
+    let r = calibrate_paper(&recs);
     let s = summary(&r);
     let dir = tempfile::tempdir().expect("temp dir");
     identify::report::write_all(&r, dir.path(), None).expect("reports written");

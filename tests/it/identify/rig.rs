@@ -299,10 +299,14 @@ pub(super) fn run(fx: RigEffects, seed: u64) -> CalibrationReport {
 }
 
 pub(super) fn run_with(fx: RigEffects, seed: u64, pressures: bool) -> CalibrationReport {
-    let recs = campaign(fx, seed, pressures);
+    calibrate_paper(&campaign(fx, seed, pressures))
+}
+
+/// Calibrates `recs` from the paper preset with the default options.
+pub(super) fn calibrate_paper(recs: &[Record]) -> CalibrationReport {
     identify::calibrate(
         &Params::paper(),
-        &recs,
+        recs,
         &CalibrationOptions::default(),
         &|_| true,
     )
