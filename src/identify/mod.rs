@@ -180,7 +180,7 @@ impl EffectId {
 
     /// Whether the effect is enabled in `p`.
     pub fn enabled(self, p: &Params) -> bool {
-        let e = &p.effects;
+        let e = &p.plant.effects;
         match self {
             EffectId::Friction => e.friction.enabled,
             EffectId::ValveOverlap => e.valve_overlap.enabled,
@@ -314,7 +314,7 @@ pub fn calibrate_with(
     if paper.baseline.is_none() {
         notes.push("no open-loop sine test found: the fit starts from the nominal Cd and τ".into());
     }
-    let declared = stages::declared_fit(&ev, &paper.start, params.body.mass_kg, options)?;
+    let declared = stages::declared_fit(&ev, &paper.start, params.plant.body.mass_kg, options)?;
     notes.extend(declared.notes.iter().cloned());
     if !declared.undetermined.is_empty() {
         return Ok(evaluate::insufficient_report(

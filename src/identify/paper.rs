@@ -51,8 +51,8 @@ pub(super) fn paper_baseline(
     if files.is_empty() || wsum == 0.0 {
         return None;
     }
-    let cd = (params.valve.cd * ratio_sum / wsum).clamp(1e-3, 1.0);
-    let tau = (params.valve.tau_s + sxy / sxx).clamp(0.0, 0.1);
+    let cd = (params.plant.valve.cd * ratio_sum / wsum).clamp(1e-3, 1.0);
+    let tau = (params.plant.valve.tau_s + sxy / sxx).clamp(0.0, 0.1);
     Some(PaperBaseline {
         files,
         cd,

@@ -543,7 +543,7 @@ mod tests {
         }
         // The twin made the data: the calibration finds its Cd.
         let cd = j["calibrated_parameters"]["cd"].as_f64().unwrap();
-        assert!((cd / truth.valve.cd - 1.0).abs() < 5e-3, "{cd}");
+        assert!((cd / truth.plant.valve.cd - 1.0).abs() < 5e-3, "{cd}");
         for (key, e) in [
             ("error_nominal", &r.error_nominal),
             ("error_before", &r.error_before),

@@ -82,8 +82,8 @@ pub fn paper(
     let mut start = *start;
     let mut error = None;
     if let Some(b) = &baseline {
-        start.valve.cd = b.cd;
-        start.valve.tau_s = b.tau_s;
+        start.plant.valve.cd = b.cd;
+        start.plant.valve.tau_s = b.tau_s;
         let reps = replay_all(&with_numerics_of(start, params), &campaign.all)?;
         let w = weighted_of(&campaign.all, &reps);
         error = Some(summary(&campaign.all, &reps, &w));
@@ -427,26 +427,26 @@ mod tests {
             monitor: &monitor,
         };
         let start = fit_params(&Params::paper(), &options);
-        let d = declared_fit(&ev, &start, start.body.mass_kg, &options).unwrap();
+        let d = declared_fit(&ev, &start, start.plant.body.mass_kg, &options).unwrap();
         assert!(d.undetermined.is_empty(), "{:?}", d.undetermined);
         let value = |k: Knob| d.fit.values.iter().find(|v| v.knob == k).unwrap();
         let (cd, tau) = (value(Knob::Cd), value(Knob::Tau));
         assert!(
-            (cd.value / truth.valve.cd - 1.0).abs() < 2e-3,
+            (cd.value / truth.plant.valve.cd - 1.0).abs() < 2e-3,
             "Cd {} ± {} vs {}",
             cd.value,
             cd.std,
-            truth.valve.cd
+            truth.plant.valve.cd
         );
         assert!(
-            (tau.value - truth.valve.tau_s).abs() < 5e-5,
+            (tau.value - truth.plant.valve.tau_s).abs() < 5e-5,
             "τ {} ± {} vs {}",
             tau.value,
             tau.std,
-            truth.valve.tau_s
+            truth.plant.valve.tau_s
         );
         // The starting point was far off: the fit moved, by the whole error.
-        assert!((start.valve.cd - truth.valve.cd).abs() > 0.05 * truth.valve.cd);
+        assert!((start.plant.valve.cd - truth.plant.valve.cd).abs() > 0.05 * truth.plant.valve.cd);
         assert!(d.notes.iter().any(|n| n.starts_with(&format!(
             "declared-parameter fit stopped: {} after",
             d.fit.termination

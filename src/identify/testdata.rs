@@ -42,7 +42,7 @@ pub(crate) fn twin_record(params: &Params, secs: f64, name: &str) -> Record {
 /// The paper preset with Cd 10 % low and τ 2 ms longer: "the rig" of the tests.
 pub(crate) fn true_params() -> Params {
     let mut p = Params::paper();
-    p.valve.cd *= 0.9;
-    p.valve.tau_s += 2e-3;
+    p.plant.valve.cd *= 0.9;
+    p.plant.valve.tau_s += 2e-3;
     p
 }

@@ -16,7 +16,7 @@ fn null_case_adds_nothing() {
     // The declared parameters are still re-fitted.
     assert!(r.error_before.value < r.error_nominal.value, "{s}");
     assert!(
-        (r.params.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.02,
+        (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.02,
         "{s}"
     );
 }
@@ -211,9 +211,9 @@ fn demo_campaign_finds_its_hidden_effect() {
     let cd = decl["Cd"].as_f64().expect("Cd");
     let tau = decl["tau_s"].as_f64().expect("tau_s");
     let m = decl["m_kg"].as_f64().expect("m_kg");
-    assert!((r.params.valve.cd / cd - 1.0).abs() < 0.02, "{s}");
-    assert!((r.params.valve.tau_s - tau).abs() < 0.5e-3, "{s}");
-    assert!((r.params.body.mass_kg / m - 1.0).abs() < 0.05, "{s}");
+    assert!((r.params.plant.valve.cd / cd - 1.0).abs() < 0.02, "{s}");
+    assert!((r.params.plant.valve.tau_s - tau).abs() < 0.5e-3, "{s}");
+    assert!((r.params.plant.body.mass_kg / m - 1.0).abs() < 0.05, "{s}");
     if hidden[0] == "compliance" {
         // The rig has separate hose and chamber moduli; the library fits one effective value,
         // which must lie between them.

@@ -363,8 +363,8 @@ pub(super) fn summary(r: &CalibrationReport) -> String {
         r.error_nominal.value,
         r.error_before.value,
         r.error_after.value,
-        r.params.valve.cd,
-        r.params.valve.tau_s,
+        r.params.plant.valve.cd,
+        r.params.plant.valve.tau_s,
         c.join("; ")
     )
 }
@@ -402,10 +402,10 @@ pub(super) fn check_single_with(
     assert_reduced_to_noise(&r, &s);
     // The declared mismatch is found: Cd −5 %, τ +1.5 ms.
     assert!(
-        (r.params.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
+        (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
         "{s}"
     );
-    assert!((r.params.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
+    assert!((r.params.plant.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
     r
 }
 
@@ -413,8 +413,8 @@ pub(super) fn check_single_with(
 /// hidden effect, this is the right model of the rig.
 pub(super) fn true_params() -> Params {
     let mut p = Params::paper();
-    p.valve.cd = 0.95 * 0.1506;
-    p.valve.tau_s = 0.0175 + 0.0015;
+    p.plant.valve.cd = 0.95 * 0.1506;
+    p.plant.valve.tau_s = 0.0175 + 0.0015;
     p
 }
 
