@@ -339,9 +339,8 @@ impl MeasuredData {
                     *g = Some(p.clone());
                 }
                 w2();
-                !c2.load(Ordering::Relaxed)
             };
-            identify::calibrate(&params, &records, &options, &cb).map_err(|e| match e {
+            identify::calibrate_with(&params, &records, &options, &c2, &cb).map_err(|e| match e {
                 IdentifyError::Cancelled => "calibration cancelled".to_string(),
                 e => format!("calibration failed: {e}"),
             })

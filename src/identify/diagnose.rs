@@ -11,62 +11,9 @@
 //! | `high_frequency` — residual power above 30 Hz in `ÿ` | `compliance`, mass |
 
 use super::replay::{PreparedRecord, Replay, rms};
-use realfft::RealFftPlanner;
 use serde::Serialize;
 
-/// Noise RMS of a raw channel, estimated from the top of its spectrum: the power in
-/// `[0.3, 0.5]·fs` (where the rig's motion has almost nothing) extrapolated to the whole band
-/// as white noise. Includes quantisation (which is white at these levels).
-pub fn noise_rms(x: &[f64], dt: f64) -> f64 {
-    let _ = dt;
-    let n = x.len();
-    if n < 32 {
-        return 0.0;
-    }
-    let mean = x.iter().sum::<f64>() / n as f64;
-    let mut buf: Vec<f64> = x.iter().map(|v| v - mean).collect();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(n);
-    let mut spec = fft.make_output_vec();
-    if fft.process(&mut buf, &mut spec).is_err() {
-        return 0.0;
-    }
-    let m = spec.len();
-    let lo = (0.6 * (m as f64)) as usize;
-    let band: f64 = spec[lo..m].iter().map(|c| c.norm_sqr()).sum();
-    let fraction = (m - lo) as f64 / m as f64;
-    // Parseval for a real FFT: Σx² ≈ (2/n)·Σ_k |X_k|² over the half spectrum.
-    let power = 2.0 * band / (n as f64 * n as f64);
-    (power / fraction).sqrt()
-}
-
-/// Amplitude spectrum of a signal: `(frequency [Hz], RMS amplitude density)` on a Hann window.
-pub fn spectrum(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
-    let n = x.len();
-    if n < 8 {
-        return (Vec::new(), Vec::new());
-    }
-    let mean = x.iter().sum::<f64>() / n as f64;
-    let mut buf: Vec<f64> = x
-        .iter()
-        .enumerate()
-        .map(|(i, v)| {
-            let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64).cos();
-            (v - mean) * w
-        })
-        .collect();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(n);
-    let mut spec = fft.make_output_vec();
-    if fft.process(&mut buf, &mut spec).is_err() {
-        return (Vec::new(), Vec::new());
-    }
-    let df = 1.0 / (n as f64 * dt);
-    let scale = (2.0 * dt / (0.375 * n as f64)).sqrt();
-    let f = (0..spec.len()).map(|k| k as f64 * df).collect();
-    let a = spec.iter().map(|c| c.norm() * scale).collect();
-    (f, a)
-}
+pub use crate::dsp::{noise_rms, spectrum};
 
 /// Whiteness of a residual: its normalised autocorrelation at lags 1..=`max_lag` and the share
 /// of lags outside the 95 % band `±1.96/√n` of white noise.

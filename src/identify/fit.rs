@@ -8,6 +8,7 @@
 //! because the residual samples are correlated (`n_eff` from the lag-1 autocorrelation).
 
 use super::IdentifyError;
+use super::progress::{Monitor, StopReason};
 use super::replay::PreparedRecord;
 use crate::params::Params;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
@@ -15,7 +16,7 @@ use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A fitted parameter of the twin, seen through a dimensionless unknown θ.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -73,8 +74,7 @@ impl Knob {
             Knob::Offset if e.valve_offset.enabled => e.valve_offset.bias_v / 0.02,
             Knob::Leakage if e.leakage.enabled => e.leakage.coefficient_m3_per_s_pa / 1e-12,
             Knob::Compliance if e.compliance.enabled => {
-                (p.plant.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0)
-                    .max(0.0)
+                (p.plant.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0).max(0.0)
             }
             Knob::SupplySag if e.supply_sag.enabled => e.supply_sag.droop_pa_per_m3_s / 1e10,
             _ => 0.0,
@@ -164,23 +164,20 @@ pub struct FitResult {
     /// Number of residuals.
     pub n: usize,
     /// Why the optimiser stopped.
-    pub termination: String,
+    pub termination: StopReason,
     /// Residual evaluations (each one replays every record).
     pub evaluations: usize,
     /// Correlation matrix of the fitted values (row-major, knob order).
     pub correlation: Vec<Vec<f64>>,
 }
 
-/// Shared evaluation context: records, progress/cancel and work counters.
+/// Shared evaluation context: the records and the calibration's [`Monitor`] (cancel flag,
+/// observer, replay count).
 pub struct Evaluator<'a> {
     /// The prepared records.
     pub records: &'a [PreparedRecord],
-    /// Called after each evaluation with the running count; `false` cancels.
-    pub on_eval: &'a (dyn Fn(usize) -> bool + Sync),
-    /// Total residual evaluations so far.
-    pub evaluations: AtomicUsize,
-    /// Set once cancelled.
-    pub cancelled: AtomicBool,
+    /// Progress, cancel and the count of evaluations.
+    pub monitor: &'a Monitor<'a>,
 }
 
 /// Penalty residual for a diverged replay (per element).
@@ -195,7 +192,7 @@ impl Evaluator<'_> {
     /// Weighted residual vector of all records at `params` (diverged replays give a large
     /// constant penalty, so the optimiser steps back). `None` once cancelled.
     pub fn residuals(&self, params: &Params) -> Option<Vec<f64>> {
-        if self.cancelled.load(Ordering::Relaxed) {
+        if self.monitor.is_cancelled() {
             return None;
         }
         let parts: Vec<Vec<f64>> = self
@@ -210,9 +207,8 @@ impl Evaluator<'_> {
                 v
             })
             .collect();
-        let count = self.evaluations.fetch_add(1, Ordering::Relaxed) + 1;
-        if !(self.on_eval)(count) {
-            self.cancelled.store(true, Ordering::Relaxed);
+        self.monitor.evaluated();
+        if self.monitor.is_cancelled() {
             return None;
         }
         Some(parts.concat())
@@ -304,6 +300,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
             return None;
         }
         let j = self.jacobian_at(&self.theta)?;
+        self.ev.monitor.jacobian();
         if let Ok(mut l) = self.last_jacobian.lock() {
             *l = Some((self.theta.clone(), j.clone()));
         }
@@ -326,6 +323,37 @@ pub fn effective_count(r: &[f64]) -> f64 {
         0.0
     };
     (n * (1.0 - rho) / (1.0 + rho)).max(0.01 * n).max(1.0)
+}
+
+/// The Bayesian information criterion on the fit records, with the residual count corrected
+/// for autocorrelation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bic {
+    /// Residual count.
+    pub n: usize,
+    /// Effective (decorrelated) count ([`effective_count`]).
+    pub n_eff: f64,
+}
+
+impl Bic {
+    /// The criterion at the residual of `fit` (one more replay).
+    pub fn at(ev: &Evaluator<'_>, fit: &FitResult) -> Result<Self, IdentifyError> {
+        let r = ev.residuals(&fit.params).ok_or(IdentifyError::Cancelled)?;
+        Ok(Self {
+            n: ev.residual_len(),
+            n_eff: effective_count(&r),
+        })
+    }
+
+    /// `n_eff·ln(RSS/n) + k·ln(n_eff)` for a model of `k` parameters.
+    pub fn value(&self, rss: f64, k: usize) -> f64 {
+        self.n_eff * (rss / self.n as f64).ln() + k as f64 * self.n_eff.ln()
+    }
+
+    /// `n_eff/n`, for the fits' uncertainties.
+    pub fn ratio(&self) -> f64 {
+        self.n_eff / self.n as f64
+    }
 }
 
 /// Fits `knobs` starting from their values in `start`, with at most `max_jacobians`
@@ -354,11 +382,9 @@ pub fn fit(
         .with_xtol(1e-4)
         .with_patience(20)
         .with_stepbound(1.0);
-    let evals_before = ev.evaluations.load(Ordering::Relaxed);
+    let evals_before = ev.monitor.evaluations();
     let (problem, report) = lm.minimize(problem);
-    if ev.cancelled.load(Ordering::Relaxed) {
-        return Err(IdentifyError::Cancelled);
-    }
+    ev.monitor.check()?;
     let (rss, theta) = match problem.best.lock().ok().and_then(|b| b.clone()) {
         Some(b) => b,
         None => {
@@ -420,8 +446,8 @@ pub fn fit(
         values,
         rss,
         n,
-        termination: format!("{:?}", report.termination),
-        evaluations: ev.evaluations.load(Ordering::Relaxed) - evals_before,
+        termination: StopReason::from(&report.termination),
+        evaluations: ev.monitor.evaluations() - evals_before,
         correlation,
     })
 }

@@ -32,7 +32,7 @@
 //!
 //! All are decimated to about `eval_rate_hz`, and each residual is divided by
 //! `max(σ_noise, floor·RMS(signal))` of its file and channel, where `σ_noise` is the sensor
-//! noise estimated from the measured record itself (see [`super::diagnose::noise_rms`]) after
+//! noise estimated from the measured record itself (see [`crate::dsp::noise_rms`]) after
 //! the same filter. The reported error is the RMS of these weighted residuals: 1 means the twin
 //! matches the record to the sensor noise.
 
@@ -42,6 +42,9 @@ use crate::params::Params;
 use crate::scenario::{CommandSignal, PlatformMotion, SampledMotion};
 use crate::simulation::{Drive, Simulation, step_for_rate};
 use std::sync::Arc;
+
+pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
+use crate::dsp::{noise_gain, noise_rms};
 
 /// Cut-off of the zero-phase low-pass applied to the recorded platform motion before it drives
 /// the twin [Hz] (see the [module docs](self)); at most 0.3 × the sample rate.
@@ -55,36 +58,6 @@ integrals. Why: the twin's oil-column mode (about 77 Hz, damping ratio about 3e-
 undamped, and the accelerometer's white noise, fed raw, makes the replayed ydd ring far above \
 the measured one; the platform motion of a seat rig lies well below 30 Hz. v_in is used as \
 recorded.";
-
-/// Zero-phase Butterworth low-pass of order `order` (even), run forward and backward:
-/// `|H|² = 1/(1 + (f/fc)^(2·order))`, no phase shift. Each pass starts in steady state at the
-/// end value it starts from.
-pub fn butterworth_zero_phase(x: &[f64], dt: f64, fc: f64, order: usize) -> Vec<f64> {
-    let k = (std::f64::consts::PI * fc * dt).tan();
-    let sections: Vec<[f64; 5]> = (1..=order / 2)
-        .map(|i| {
-            let theta = (2 * i - 1) as f64 * std::f64::consts::PI / (2 * order) as f64;
-            let q = 1.0 / (2.0 * theta.cos());
-            let norm = 1.0 / (1.0 + k / q + k * k);
-            let b0 = k * k * norm;
-            [
-                b0,
-                2.0 * b0,
-                b0,
-                2.0 * (k * k - 1.0) * norm,
-                (1.0 - k / q + k * k) * norm,
-            ]
-        })
-        .collect();
-    let mut y = x.to_vec();
-    for c in &sections {
-        biquad_pass(&mut y, c, false);
-    }
-    for c in &sections {
-        biquad_pass(&mut y, c, true);
-    }
-    y
-}
 
 /// The platform acceleration conditioned as the twin's replay uses it (see
 /// [`EXCITATION_CONDITIONING`]).
@@ -205,7 +178,7 @@ impl PreparedRecord {
         // A platform channel that is indistinguishable from its own sensor noise means the
         // platform was still: replaying that noise would only add noise to the twin.
         let moving = |v: &Vec<f64>| {
-            let n = super::diagnose::noise_rms(v, dt);
+            let n = noise_rms(v, dt);
             let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
             let dev: Vec<f64> = v.iter().map(|x| x - mean).collect();
             rms(&dev) > 3.0 * n.max(1e-15)
@@ -235,12 +208,8 @@ impl PreparedRecord {
         let decimate = ((fs / opt.eval_rate_hz).round() as usize).max(1);
         let du_meas_f = filtered_derivative(&u, dt, lowpass_hz);
         let ydd_meas_f = record.ydd.as_ref().map(|y| lowpass(y, dt, lowpass_hz));
-        let noise_u = super::diagnose::noise_rms(&u, dt);
-        let noise_ydd = record
-            .ydd
-            .as_ref()
-            .map(|y| super::diagnose::noise_rms(y, dt))
-            .unwrap_or(0.0);
+        let noise_u = noise_rms(&u, dt);
+        let noise_ydd = record.ydd.as_ref().map(|y| noise_rms(y, dt)).unwrap_or(0.0);
         let gain_du = noise_gain(record.len(), |x| filtered_derivative(x, dt, lowpass_hz));
         let gain_y = noise_gain(record.len(), |x| lowpass(x, dt, lowpass_hz));
         let scale_du = (noise_u * gain_du)
@@ -261,7 +230,7 @@ impl PreparedRecord {
         for (i, raw) in [&record.p1, &record.p2].into_iter().enumerate() {
             if let Some(p) = raw {
                 let f = lowpass(p, dt, lowpass_hz);
-                let n = super::diagnose::noise_rms(p, dt);
+                let n = noise_rms(p, dt);
                 // The floor is taken on the swing about the mean: the mean pressure (tens of
                 // bar) says nothing about how well the twin can follow it.
                 let mean = f.iter().sum::<f64>() / f.len().max(1) as f64;
@@ -624,126 +593,9 @@ pub fn replay_prepared(params: &Params, rec: &PreparedRecord) -> Result<Replay, 
     })
 }
 
-/// Root mean square (0 for an empty slice).
-pub fn rms(x: &[f64]) -> f64 {
-    if x.is_empty() {
-        0.0
-    } else {
-        (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
-    }
-}
-
-/// Second-order Butterworth low-pass coefficients `(b0, b1, b2, a1, a2)` (bilinear transform).
-fn butter2(dt: f64, fc: f64) -> [f64; 5] {
-    let k = (std::f64::consts::PI * fc * dt).tan();
-    let q = std::f64::consts::FRAC_1_SQRT_2;
-    let norm = 1.0 / (1.0 + k / q + k * k);
-    let b0 = k * k * norm;
-    [
-        b0,
-        2.0 * b0,
-        b0,
-        2.0 * (k * k - 1.0) * norm,
-        (1.0 - k / q + k * k) * norm,
-    ]
-}
-
-/// One pass of a biquad, started in steady state at the first value.
-fn biquad_pass(x: &mut [f64], c: &[f64; 5], reverse: bool) {
-    let n = x.len();
-    if n == 0 {
-        return;
-    }
-    let first = if reverse { x[n - 1] } else { x[0] };
-    let (mut x1, mut x2, mut y1, mut y2) = (first, first, first, first);
-    let mut step = |v: &mut f64| {
-        let x0 = *v;
-        let y0 = c[0] * x0 + c[1] * x1 + c[2] * x2 - c[3] * y1 - c[4] * y2;
-        x2 = x1;
-        x1 = x0;
-        y2 = y1;
-        y1 = y0;
-        *v = y0;
-    };
-    if reverse {
-        x.iter_mut().rev().for_each(&mut step);
-    } else {
-        x.iter_mut().for_each(&mut step);
-    }
-}
-
-/// Zero-phase low-pass: a second-order Butterworth run forward and backward twice
-/// (|H|⁴ of the biquad; −12 dB... at `fc`, −46 dB at 2·fc).
-pub fn lowpass(x: &[f64], dt: f64, fc: f64) -> Vec<f64> {
-    let c = butter2(dt, fc);
-    let mut y = x.to_vec();
-    for _ in 0..2 {
-        biquad_pass(&mut y, &c, false);
-        biquad_pass(&mut y, &c, true);
-    }
-    y
-}
-
-/// Zero-phase low-pass followed by a central difference: a smoothed derivative.
-pub fn filtered_derivative(x: &[f64], dt: f64, fc: f64) -> Vec<f64> {
-    let y = lowpass(x, dt, fc);
-    let n = y.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(1), (i + 1).min(n.saturating_sub(1)));
-            if b > a {
-                (y[b] - y[a]) / ((b - a) as f64 * dt)
-            } else {
-                0.0
-            }
-        })
-        .collect()
-}
-
-/// RMS gain of a linear operator on white noise of unit variance: √Σh² of its impulse response
-/// at the middle of a record of `len` samples (at most 4096).
-fn noise_gain(len: usize, op: impl Fn(&[f64]) -> Vec<f64>) -> f64 {
-    let n = len.clamp(16, 4096);
-    let mut x = vec![0.0; n];
-    x[n / 2] = 1.0;
-    op(&x).iter().map(|v| v * v).sum::<f64>().sqrt()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn lowpass_keeps_slow_sine_and_kills_fast_one() {
-        let dt = 1e-3;
-        let n = 4000;
-        let slow: Vec<f64> = (0..n)
-            .map(|i| (2.0 * std::f64::consts::PI * 5.0 * i as f64 * dt).sin())
-            .collect();
-        let fast: Vec<f64> = (0..n)
-            .map(|i| (2.0 * std::f64::consts::PI * 150.0 * i as f64 * dt).sin())
-            .collect();
-        let ys = lowpass(&slow, dt, 40.0);
-        let yf = lowpass(&fast, dt, 40.0);
-        let mid = 1000..3000;
-        let e = rms(&ys[mid.clone()]
-            .iter()
-            .zip(&slow[mid.clone()])
-            .map(|(a, b)| a - b)
-            .collect::<Vec<_>>());
-        assert!(e < 1e-3, "{e}");
-        assert!(rms(&yf[mid]) < 2e-3);
-    }
-
-    #[test]
-    fn filtered_derivative_of_a_ramp_is_its_slope() {
-        let dt = 1e-3;
-        let x: Vec<f64> = (0..2000).map(|i| 0.3 * i as f64 * dt).collect();
-        let d = filtered_derivative(&x, dt, 40.0);
-        for v in &d[300..1700] {
-            assert!((v - 0.3).abs() < 1e-6, "{v}");
-        }
-    }
 
     #[test]
     fn pressure_channels_enter_the_metric_only_when_recorded() {
@@ -810,10 +662,5 @@ mod tests {
         assert!((gain(20.0) - 1.0).abs() < 0.01, "{}", gain(20.0));
         assert!((gain(30.0) - 0.5).abs() < 0.01, "{}", gain(30.0));
         assert!(gain(77.0) < 3e-5, "{}", gain(77.0));
-    }
-
-    #[test]
-    fn noise_gain_of_identity_is_one() {
-        assert!((noise_gain(100, |x| x.to_vec()) - 1.0).abs() < 1e-12);
     }
 }

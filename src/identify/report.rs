@@ -1,33 +1,20 @@
 //! Writers of a calibration: `report.json`, `report.md`, `calibrated.toml` and the plots.
 //!
 //! This is the edge where SI values become display units (mm/s, ms, bar) in the Markdown and
-//! the plots; `report.json` stays SI. Every file is written atomically.
+//! the plots; `report.json` stays SI. Every file is written atomically. The figures are drawn
+//! in [`super::figures`].
 
+pub use super::figures::write_plots;
 use super::{CalibrationReport, ErrorSummary, Verdict};
-use crate::plot::{Figure, Panel, PlotError, Scale, Series, palette, save_figure};
-use crate::preset::{Preset, PresetError, PresetMeta, write_atomic};
+use crate::output::{OutputError, json_number};
+use crate::preset::{Preset, PresetMeta, write_atomic};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// Why the report could not be written.
-#[derive(Debug, thiserror::Error)]
-pub enum ReportError {
-    /// A file could not be written.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The error.
-        source: std::io::Error,
-    },
-    /// A plot failed.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
-    /// The preset failed.
-    #[error(transparent)]
-    Preset(#[from] PresetError),
-}
+/// Why the report could not be written (the error of every output writer,
+/// [`crate::output::OutputError`]).
+pub type ReportError = OutputError;
 
 fn error_json(e: &ErrorSummary) -> Value {
     json!({
@@ -44,8 +31,8 @@ pub fn report_json(r: &CalibrationReport) -> Value {
     let mut calibrated = serde_json::Map::new();
     let mut unc = serde_json::Map::new();
     for v in &r.calibrated {
-        calibrated.insert(v.name.clone(), finite(v.value));
-        unc.insert(v.name.clone(), finite(v.std));
+        calibrated.insert(v.name.clone(), json_number(v.value));
+        unc.insert(v.name.clone(), json_number(v.std));
     }
     let first_round: Vec<Value> = r
         .candidates
@@ -63,7 +50,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             "name": e.effect.name(),
             "params": e.params,
             "uncertainties": e.uncertainties.iter()
-                .map(|(k, v)| (k.clone(), finite(*v))).collect::<serde_json::Map<_, _>>(),
+                .map(|(k, v)| (k.clone(), json_number(*v))).collect::<serde_json::Map<_, _>>(),
             "evidence": e.evidence,
         })).collect::<Vec<_>>(),
         "candidates": first_round,
@@ -101,10 +88,6 @@ pub fn report_json(r: &CalibrationReport) -> Value {
         "files": r.files,
         "notes": r.notes,
     })
-}
-
-fn finite(v: f64) -> Value {
-    if v.is_finite() { json!(v) } else { Value::Null }
 }
 
 /// The calibrated preset.
@@ -498,179 +481,6 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
     s
 }
 
-fn thin(x: &[f64], max: usize) -> (Vec<usize>, usize) {
-    let step = x.len().div_ceil(max.max(1)).max(1);
-    ((0..x.len()).step_by(step).collect(), step)
-}
-
-/// Records shown in the time plots: up to four, the longest first, then the largest residual.
-fn shown(r: &CalibrationReport) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..r.records.len()).collect();
-    idx.sort_by(|&a, &b| {
-        r.error_before.files[b]
-            .1
-            .du_nrmse
-            .total_cmp(&r.error_before.files[a].1.du_nrmse)
-    });
-    idx.truncate(4);
-    idx
-}
-
-/// Writes the four figures into `dir` (PNG + SVG each).
-pub fn write_plots(r: &CalibrationReport, dir: &Path) -> Result<(), ReportError> {
-    let (c_meas, c_before, c_after) = (palette(0), palette(1), palette(2));
-    let mut fit_panels = Vec::new();
-    let mut res_panels = Vec::new();
-    for i in shown(r) {
-        let rec = &r.records[i];
-        let (ix, _) = thin(&rec.t, 3000);
-        let pick = |v: &[f64], k: f64| ix.iter().map(|&j| k * v[j]).collect::<Vec<f64>>();
-        let t = pick(&rec.t, 1.0);
-        let mut p = Panel::new(
-            format!("{}: relative velocity", rec.name),
-            "time [s]",
-            "u̇ [mm/s]",
-        );
-        p.series = vec![
-            Series::line("measured", t.clone(), pick(&rec.du_meas_f, 1e3), c_meas),
-            Series::line(
-                "twin before",
-                t.clone(),
-                pick(&r.replays_before[i].twin_du, 1e3),
-                c_before,
-            ),
-            Series::line(
-                "twin after",
-                t.clone(),
-                pick(&r.replays_after[i].twin_du, 1e3),
-                c_after,
-            ),
-        ];
-        fit_panels.push(p);
-        let mut q = Panel::new(
-            format!("{}: velocity residual (twin − measured)", rec.name),
-            "time [s]",
-            "Δu̇ [mm/s]",
-        );
-        q.series = vec![
-            Series::line(
-                "before",
-                t.clone(),
-                pick(&r.replays_before[i].residual_du, 1e3),
-                c_before,
-            ),
-            Series::line(
-                "after",
-                t.clone(),
-                pick(&r.replays_after[i].residual_du, 1e3),
-                c_after,
-            ),
-        ];
-        if let (Some(b), Some(a)) = (
-            &r.replays_before[i].residual_ydd,
-            &r.replays_after[i].residual_ydd,
-        ) {
-            let mut qa = Panel::new(
-                format!("{}: acceleration residual", rec.name),
-                "time [s]",
-                "Δÿ [m/s²]",
-            );
-            qa.series = vec![
-                Series::line("before", t.clone(), pick(b, 1.0), c_before),
-                Series::line("after", t.clone(), pick(a, 1.0), c_after),
-            ];
-            res_panels.push(q);
-            res_panels.push(qa);
-        } else {
-            res_panels.push(q);
-        }
-    }
-    let h = |n: usize| (260 * n as u32).clamp(400, 2400);
-    let mut fig = Figure::new("Measured vs twin, before and after", fit_panels);
-    fig.height = h(fig.panels.len());
-    save_figure(&fig, &dir.join("measured_vs_twin"))?;
-    let mut fig = Figure::new("Residual before and after", res_panels);
-    fig.height = h(fig.panels.len());
-    save_figure(&fig, &dir.join("residual"))?;
-
-    // Spectrum of the raw acceleration residual (else velocity), the longest record.
-    let longest = (0..r.records.len()).max_by_key(|&i| r.records[i].len);
-    let mut sp = Panel::new("", "frequency [Hz]", "amplitude density");
-    sp.x_scale = Scale::Log10;
-    sp.y_scale = Scale::Log10;
-    if let Some(i) = longest {
-        let rec = &r.records[i];
-        let res = |rep: &super::Replay| -> Vec<f64> {
-            match &rec.ydd {
-                Some(y) => rep.sim.ydd.iter().zip(y).map(|(a, b)| a - b).collect(),
-                None => rep.residual_du.clone(),
-            }
-        };
-        sp.title = format!(
-            "{}: spectrum of the {} residual",
-            rec.name,
-            if rec.ydd.is_some() {
-                "ÿ [m/s²/√Hz]"
-            } else {
-                "u̇ [m/s/√Hz]"
-            }
-        );
-        for (label, rep, c) in [
-            ("before", &r.replays_before[i], c_before),
-            ("after", &r.replays_after[i], c_after),
-        ] {
-            let (f, a) = super::diagnose::spectrum(&res(rep), rec.dt);
-            let (ix, _) = thin(&f, 4000);
-            sp.series.push(Series::line(
-                label,
-                ix.iter().map(|&j| f[j]).collect(),
-                ix.iter().map(|&j| a[j]).collect(),
-                c,
-            ));
-        }
-    }
-    save_figure(
-        &Figure::new("Residual spectrum", vec![sp]),
-        &dir.join("residual_spectrum"),
-    )?;
-
-    // Correlation with the signature features.
-    let mut cp = Panel::new(
-        "1 sign_velocity (friction) · 2 small_command (overlap) · 3 load_pressure (leakage) · \
-         4 flow_magnitude (supply sag) · 5 constant (offset) · 6 HF share (compliance)",
-        "feature",
-        "correlation [-]",
-    );
-    for (label, d, c) in [
-        ("u̇ residual before", &r.diagnostics_before, c_before),
-        ("u̇ residual after", &r.diagnostics_after, c_after),
-    ] {
-        let mut x: Vec<f64> = (1..=d.correlations.len()).map(|k| k as f64).collect();
-        let mut y: Vec<f64> = d.correlations.iter().map(|c| c.velocity).collect();
-        x.push(6.0);
-        y.push(d.high_frequency_share);
-        cp.series.push(Series::markers(label, x, y, c));
-    }
-    for (label, d, c) in [
-        ("ÿ residual before", &r.diagnostics_before, palette(3)),
-        ("ÿ residual after", &r.diagnostics_after, palette(4)),
-    ] {
-        let x: Vec<f64> = (1..=d.correlations.len())
-            .map(|k| k as f64 + 0.15)
-            .collect();
-        let y: Vec<f64> = d.correlations.iter().map(|c| c.acceleration).collect();
-        cp.series.push(Series::markers(label, x, y, c));
-    }
-    cp.y_range = Some((-1.0, 1.0));
-    cp.x_range = Some((0.5, 6.5));
-    cp.hlines = vec![(0.0, String::new())];
-    save_figure(
-        &Figure::new("Residual vs signature features", vec![cp]),
-        &dir.join("signature_correlation"),
-    )?;
-    Ok(())
-}
-
 /// Writes `report.json`, `report.md`, `calibrated.toml` and the plots into `dir` (created if
 /// needed; with the verdict `insufficient_data`, only the two reports). Each file is written
 /// atomically.
@@ -679,10 +489,7 @@ pub fn write_all(
     dir: &Path,
     elapsed_s: Option<f64>,
 ) -> Result<(), ReportError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| ReportError::Io { path, source }
-    };
+    let io = OutputError::io;
     std::fs::create_dir_all(dir).map_err(io(dir))?;
     // Data that cannot determine the twin give no calibrated preset and no plots.
     if r.verdict != Verdict::InsufficientData {
@@ -695,4 +502,135 @@ pub fn write_all(
     let p = dir.join("report.md");
     write_atomic(&p, report_markdown(r, elapsed_s).as_bytes()).map_err(io(&p))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::Record;
+    use crate::identify::testdata::{true_params, twin_record};
+    use crate::identify::{CalibrationOptions, Progress, Stage, calibrate_with};
+    use crate::params::Params;
+    use std::sync::atomic::AtomicBool;
+
+    fn calibrated(records: &[Record]) -> CalibrationReport {
+        let cancel = AtomicBool::new(false);
+        calibrate_with(
+            &Params::paper(),
+            records,
+            &CalibrationOptions::default(),
+            &cancel,
+            &|_: &Progress| {},
+        )
+        .unwrap()
+    }
+
+    /// The numbers of `report.json` are the result's own, and `report.md` shows the
+    /// calibrated parameters, the verdict and the optimiser's stop reason in words.
+    #[test]
+    fn report_numbers_are_the_results() {
+        let truth = true_params();
+        let r = calibrated(&[
+            twin_record(&truth, 3.0, "a.csv"),
+            twin_record(&truth, 3.0, "b.csv"),
+        ]);
+        assert_ne!(r.verdict, Verdict::InsufficientData);
+        let j = report_json(&r);
+        assert_eq!(j["verdict"], r.verdict.name());
+        for v in &r.calibrated {
+            assert_eq!(j["calibrated_parameters"][&v.name].as_f64(), Some(v.value));
+            assert_eq!(j["calibrated_uncertainties"][&v.name].as_f64(), Some(v.std));
+        }
+        // The twin made the data: the calibration finds its Cd.
+        let cd = j["calibrated_parameters"]["cd"].as_f64().unwrap();
+        assert!((cd / truth.plant.valve.cd - 1.0).abs() < 5e-3, "{cd}");
+        for (key, e) in [
+            ("error_nominal", &r.error_nominal),
+            ("error_before", &r.error_before),
+            ("error_after", &r.error_after),
+        ] {
+            assert_eq!(j[key]["value"].as_f64(), Some(e.value), "{key}");
+        }
+        let v = r.error_validation.as_ref().unwrap();
+        assert_eq!(j["error_validation"]["before"].as_f64(), Some(v.before));
+        assert_eq!(j["error_validation"]["after"].as_f64(), Some(v.after));
+        assert_eq!(j["replays"].as_u64(), Some(r.evaluations as u64));
+        // Nominal (Cd 10 % off) is far worse than calibrated.
+        assert!(r.error_nominal.value > 3.0 * r.error_before.value);
+        let md = report_markdown(&r, Some(1.5));
+        assert!(md.contains(&format!("**Verdict: `{}`**", r.verdict.name())));
+        for v in &r.calibrated {
+            assert!(
+                md.contains(&format_parameter(&v.name, v.value, v.std)),
+                "{md}"
+            );
+        }
+        let stopped = r
+            .notes
+            .iter()
+            .find(|n| n.starts_with("declared-parameter fit stopped: "))
+            .unwrap();
+        assert!(
+            !stopped.contains('{') && !stopped.contains('"'),
+            "{stopped}"
+        );
+        assert!(md.contains(stopped.as_str()));
+    }
+
+    /// Data that cannot be calibrated: NaN never reaches a report; JSON says null, Markdown —.
+    #[test]
+    fn insufficient_data_reports_null_and_dash_never_nan() {
+        let mut rec = twin_record(&Params::paper(), 0.001, "two-rows.csv");
+        rec.v_in = None;
+        let r = calibrated(&[rec]);
+        assert_eq!(r.verdict, Verdict::InsufficientData);
+        assert!(r.error_nominal.value.is_nan());
+        let j = report_json(&r);
+        assert!(j["error_nominal"]["value"].is_null());
+        assert!(!j["missing"].as_array().unwrap().is_empty());
+        let text = serde_json::to_string(&j).unwrap();
+        assert!(!text.contains("NaN"), "{text}");
+        let md = report_markdown(&r, None);
+        assert!(!md.contains("NaN"), "{md}");
+        assert!(md.contains("| nominal (preset as given) | — |"), "{md}");
+        assert!(md.contains("no `v_in`"), "{md}");
+        // Nothing calibrated: no calibrated.toml, only the two reports.
+        let dir = tempfile::tempdir().unwrap();
+        write_all(&r, dir.path(), None).unwrap();
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["report.json", "report.md"]);
+    }
+
+    /// One cancel flag stops the run; the observer saw the stages in order up to there.
+    #[test]
+    fn cancel_stops_at_the_stage_it_is_set_in() {
+        let rec = twin_record(&true_params(), 3.0, "a.csv");
+        let cancel = AtomicBool::new(false);
+        let seen = std::sync::Mutex::new(Vec::new());
+        let observer = |p: &Progress| {
+            let mut s = seen.lock().unwrap();
+            if s.last() != Some(&p.stage) {
+                s.push(p.stage);
+            }
+            if p.stage == Stage::DeclaredFit {
+                cancel.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        };
+        let r = calibrate_with(
+            &Params::paper(),
+            &[rec],
+            &CalibrationOptions::default(),
+            &cancel,
+            &observer,
+        );
+        assert!(matches!(r, Err(crate::identify::IdentifyError::Cancelled)));
+        assert_eq!(
+            *seen.lock().unwrap(),
+            [Stage::Nominal, Stage::PaperBaseline, Stage::DeclaredFit]
+        );
+    }
 }

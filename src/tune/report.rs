@@ -5,41 +5,22 @@
 use super::{Evaluation, TuneResult};
 use crate::analysis::frequency_response as fr;
 use crate::control::ControlLaw;
+use crate::output::{OutputError, json_number};
 use crate::params::Params;
-use crate::plot::{Figure, Panel, PlotError, Scale, Series, palette, save_figure};
-use crate::preset::{Preset, PresetError, PresetMeta, write_atomic};
+use crate::plot::{Figure, Panel, Scale, Series, palette, save_figure};
+use crate::preset::{Preset, PresetMeta, write_atomic};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// Why the outputs could not be written.
-#[derive(Debug, thiserror::Error)]
-pub enum TuneReportError {
-    /// A file could not be written.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The error.
-        source: std::io::Error,
-    },
-    /// A plot failed.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
-    /// The preset failed.
-    #[error(transparent)]
-    Preset(#[from] PresetError),
-}
-
-/// A JSON number, or null for a value that is not finite (never NaN in a report).
-fn num(v: f64) -> Value {
-    if v.is_finite() { json!(v) } else { Value::Null }
-}
+/// Why the outputs could not be written (the error of every output writer,
+/// [`crate::output::OutputError`]).
+pub type TuneReportError = OutputError;
 
 fn gains_json(e: &Evaluation) -> Value {
     let mut m = serde_json::Map::new();
     for (k, v) in &e.gains {
-        m.insert(k.clone(), num(*v));
+        m.insert(k.clone(), json_number(*v));
     }
     Value::Object(m)
 }
@@ -47,11 +28,11 @@ fn gains_json(e: &Evaluation) -> Value {
 fn eval_json(e: &Evaluation) -> Value {
     json!({
         "gains": gains_json(e),
-        "objective": num(e.objective),
-        "max_abs_u_mm": num(e.max_abs_u_m * 1e3),
+        "objective": json_number(e.objective),
+        "max_abs_u_mm": json_number(e.max_abs_u_m * 1e3),
         "contacts": e.contacts,
-        "gain_margin_db": num(e.gain_margin_db),
-        "phase_margin_deg": num(e.phase_margin_deg),
+        "gain_margin_db": json_number(e.gain_margin_db),
+        "phase_margin_deg": json_number(e.phase_margin_deg),
         "feasible": e.feasible,
     })
 }
@@ -63,17 +44,17 @@ pub fn report_json(r: &TuneResult, wall_s: f64) -> Value {
         "objective": {
             "name": r.objective.name(),
             "unit": r.objective.unit(),
-            "baseline": num(r.baseline.objective),
-            "tuned": num(r.tuned.objective),
-            "baseline_heldout": num(r.baseline_heldout.objective),
-            "tuned_heldout": num(r.tuned_heldout.objective),
+            "baseline": json_number(r.baseline.objective),
+            "tuned": json_number(r.tuned.objective),
+            "baseline_heldout": json_number(r.baseline_heldout.objective),
+            "tuned_heldout": json_number(r.tuned_heldout.objective),
         },
         "constraints": {
-            "gain_margin_db": num(r.tuned.gain_margin_db),
-            "phase_margin_deg": num(r.tuned.phase_margin_deg),
-            "max_abs_u_mm": num(r.tuned.max_abs_u_m * 1e3),
+            "gain_margin_db": json_number(r.tuned.gain_margin_db),
+            "phase_margin_deg": json_number(r.tuned.phase_margin_deg),
+            "max_abs_u_mm": json_number(r.tuned.max_abs_u_m * 1e3),
             "contacts": r.tuned.contacts,
-            "max_abs_u_mm_heldout": num(r.tuned_heldout.max_abs_u_m * 1e3),
+            "max_abs_u_mm_heldout": json_number(r.tuned_heldout.max_abs_u_m * 1e3),
             "contacts_heldout": r.tuned_heldout.contacts,
             "limits": {"gain_margin_db": super::MIN_GAIN_MARGIN_DB,
                        "phase_margin_deg": super::MIN_PHASE_MARGIN_DEG,
@@ -85,12 +66,12 @@ pub fn report_json(r: &TuneResult, wall_s: f64) -> Value {
         "tuned_heldout": eval_json(&r.tuned_heldout),
         "robustness": r.robustness.iter().map(|row| json!({
             "cd": row.cd, "tau_s": row.tau_s, "mass_kg": row.mass_kg,
-            "objective": num(row.objective), "contacts": row.contacts,
-            "max_abs_u_mm": num(row.max_abs_u_m * 1e3),
+            "objective": json_number(row.objective), "contacts": row.contacts,
+            "max_abs_u_mm": json_number(row.max_abs_u_m * 1e3),
         })).collect::<Vec<_>>(),
         "pareto": r.pareto.iter().map(|e| json!({
-            "objective": num(e.objective),
-            "max_abs_u_mm": num(e.max_abs_u_m * 1e3),
+            "objective": json_number(e.objective),
+            "max_abs_u_mm": json_number(e.max_abs_u_m * 1e3),
             "gains": gains_json(e),
         })).collect::<Vec<_>>(),
         "evaluations": r.evaluations,
@@ -279,7 +260,6 @@ pub fn write_outputs(
     dir: &Path,
     wall_s: f64,
 ) -> Result<Vec<PathBuf>, TuneReportError> {
-    let io = |path: PathBuf| move |source| TuneReportError::Io { path, source };
     let mut written = Vec::new();
     let mut tuned = *params;
     tuned.controller = r.tuned.controller;
@@ -304,10 +284,10 @@ pub fn write_outputs(
     written.push(path);
     let path = dir.join("report.json");
     let text = serde_json::to_string_pretty(&report_json(r, wall_s)).unwrap_or_default();
-    write_atomic(&path, text.as_bytes()).map_err(io(path.clone()))?;
+    write_atomic(&path, text.as_bytes()).map_err(OutputError::io(&path))?;
     written.push(path);
     let path = dir.join("report.md");
-    write_atomic(&path, report_md(r, params, wall_s).as_bytes()).map_err(io(path.clone()))?;
+    write_atomic(&path, report_md(r, params, wall_s).as_bytes()).map_err(OutputError::io(&path))?;
     written.push(path);
     // Pareto front: every feasible evaluation, the front, start and tuned.
     let mut p = Panel::new("", "max |u| on the tuning rides [mm]", r.objective.unit());

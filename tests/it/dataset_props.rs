@@ -1,7 +1,7 @@
 //! Property tests of the CSV record reader and writer (`dataset`). The number of cases of the
 //! reader's properties is raised for the long run by `SEAT_TWIN_FUZZ_CASES` (see `fuzz`).
 
-use crate::fuzz::{config, config_scaled};
+use crate::fuzz::{Mutation, apply, config, config_scaled, mutation_of};
 use proptest::prelude::*;
 use seat_twin::dataset::{
     COLUMNS, RecordKind, column_limit, parse_record, parse_record_bytes, read_record, write_csv,
@@ -142,46 +142,14 @@ fn valid() -> impl Strategy<Value = Valid> {
         )
 }
 
-/// One edit of a file's bytes.
-#[derive(Debug, Clone)]
-enum Mutation {
-    Flip { at: usize, bits: u8 },
-    Truncate { at: usize },
-    Insert { at: usize, what: &'static str },
-    Delete { at: usize, len: usize },
-}
+/// CSV tokens worth inserting.
+const CSV_TOKENS: [&str; 19] = [
+    "nan", "NaN", "inf", "-inf", "", ",", ",,", "\n", "\r\n", "#", "# k: v\n", "-", "1e999", "\"",
+    "t", "x", "\u{feff}", "é", " ",
+];
 
 fn mutation() -> impl Strategy<Value = Mutation> {
-    let token = proptest::sample::select(vec![
-        "nan", "NaN", "inf", "-inf", "", ",", ",,", "\n", "\r\n", "#", "# k: v\n", "-", "1e999",
-        "\"", "t", "x", "\u{feff}", "é", " ",
-    ]);
-    prop_oneof![
-        (any::<usize>(), 1u8..=255).prop_map(|(at, bits)| Mutation::Flip { at, bits }),
-        any::<usize>().prop_map(|at| Mutation::Truncate { at }),
-        (any::<usize>(), token).prop_map(|(at, what)| Mutation::Insert { at, what }),
-        (any::<usize>(), 1usize..20).prop_map(|(at, len)| Mutation::Delete { at, len }),
-    ]
-}
-
-fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
-    let n = bytes.len();
-    match *m {
-        Mutation::Flip { at, bits } => {
-            if n > 0 {
-                bytes[at % n] ^= bits;
-            }
-        }
-        Mutation::Truncate { at } => bytes.truncate(at % (n + 1)),
-        Mutation::Insert { at, what } => {
-            let at = at % (n + 1);
-            bytes.splice(at..at, what.bytes());
-        }
-        Mutation::Delete { at, len } => {
-            let at = at % (n + 1);
-            bytes.drain(at..(at + len).min(n));
-        }
-    }
+    mutation_of(&CSV_TOKENS)
 }
 
 proptest! {

@@ -158,20 +158,24 @@ impl Doc {
     }
 }
 
-/// One edit of a file's bytes.
+/// One edit of a file's bytes (the mutation fuzzers of the preset and dataset readers).
 #[derive(Debug, Clone)]
-enum Mutation {
+pub(crate) enum Mutation {
     Flip { at: usize, bits: u8 },
     Truncate { at: usize },
     Insert { at: usize, what: &'static str },
     Delete { at: usize, len: usize },
 }
 
-fn mutation() -> impl Strategy<Value = Mutation> {
-    let token = proptest::sample::select(vec![
-        "nan", "inf", "-", "1e999", "\"", "'", "[", "]", "[[", "=", "\n", "{", "}", ",", ".", "#",
-        "\0", "é", "0x1F", "true", "\"\"\"",
-    ]);
+/// Preset-reader tokens worth inserting.
+const PRESET_TOKENS: [&str; 21] = [
+    "nan", "inf", "-", "1e999", "\"", "'", "[", "]", "[[", "=", "\n", "{", "}", ",", ".", "#",
+    "\0", "é", "0x1F", "true", "\"\"\"",
+];
+
+/// A random edit: a flipped byte, a truncation, one of `tokens` inserted, or a deletion.
+pub(crate) fn mutation_of(tokens: &[&'static str]) -> impl Strategy<Value = Mutation> + use<> {
+    let token = proptest::sample::select(tokens.to_vec());
     prop_oneof![
         (any::<usize>(), 1u8..=255).prop_map(|(at, bits)| Mutation::Flip { at, bits }),
         any::<usize>().prop_map(|at| Mutation::Truncate { at }),
@@ -180,7 +184,12 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     ]
 }
 
-fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
+fn mutation() -> impl Strategy<Value = Mutation> {
+    mutation_of(&PRESET_TOKENS)
+}
+
+/// Applies an edit (positions taken modulo the length, so every edit applies).
+pub(crate) fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
     let n = bytes.len();
     match *m {
         Mutation::Flip { at, bits } => {

@@ -1,0 +1,498 @@
+//! Signal processing shared by the vibration metrics (`analysis::metrics`) and the
+//! identification (`identify::replay`): the RMS, second-order IIR sections (biquads)
+//! and their design from analogue prototypes, Butterworth low-passes, and zero-phase
+//! (forward–backward) filtering of whole records.
+//!
+//! A [`Biquad`] holds the coefficients of `H(z) = (b0 + b1·z⁻¹ + b2·z⁻²) / (1 + a1·z⁻¹ +
+//! a2·z⁻²)`. It runs in two ways, each where it fits:
+//!
+//! * [`BiquadState`], sample by sample from rest, in transposed direct form II: streaming
+//!   filters that start at rest (the ISO 2631 Wk weighting of a live signal);
+//! * [`Biquad::pass`], over a whole slice in place, forward or backward, started in steady
+//!   state at the slice's first (or last) value, in direct form I: the building block of the
+//!   zero-phase filters, whose ends then carry no start-up transient.
+//!
+//! Butterworth low-pass sections come from the bilinear transform with the corner pre-warped
+//! (`k = tan(π·fc·dt)`), so the digital corner is exactly at `fc`. A zero-phase filter runs a
+//! cascade forward and then backward: its gain is `|H|²` and its phase is zero at every
+//! frequency.
+//!
+//! [`noise_rms`] estimates a channel's sensor noise from the top of its spectrum, [`spectrum`]
+//! gives a Hann-windowed amplitude spectrum.
+//!
+//! All functions are pure; none panics on empty input.
+
+use num_complex::Complex64;
+use realfft::RealFftPlanner;
+use std::f64::consts::PI;
+
+/// Root mean square of `x` (0 for an empty slice) [same unit as `x`].
+pub fn rms(x: &[f64]) -> f64 {
+    if x.is_empty() {
+        return 0.0;
+    }
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
+}
+
+/// Coefficients of a second-order IIR section, `a0 = 1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Biquad {
+    /// Numerator `b0, b1, b2`.
+    pub b: [f64; 3],
+    /// Denominator `a1, a2`.
+    pub a: [f64; 2],
+}
+
+impl Biquad {
+    /// Second-order Butterworth-type low-pass with quality factor `q` at the corner `fc` [Hz]
+    /// for the sample step `dt` [s] (bilinear transform, corner pre-warped). `q = 1/√2` is the
+    /// second-order Butterworth filter; the sections of a higher-order Butterworth filter use
+    /// `q = 1/(2·cos θᵢ)` ([`butterworth_sections`]).
+    pub fn lowpass(dt: f64, fc: f64, q: f64) -> Self {
+        let k = (PI * fc * dt).tan();
+        let norm = 1.0 / (1.0 + k / q + k * k);
+        let b0 = k * k * norm;
+        Self {
+            b: [b0, 2.0 * b0, b0],
+            a: [2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm],
+        }
+    }
+
+    /// Frequency response `H(e^{jθ})` at the normalised angular frequency `theta` =
+    /// `2π·f·dt` [rad/sample].
+    pub fn response(&self, theta: f64) -> Complex64 {
+        let z1 = Complex64::from_polar(1.0, -theta);
+        let z2 = z1 * z1;
+        (self.b[0] + self.b[1] * z1 + self.b[2] * z2) / (1.0 + self.a[0] * z1 + self.a[1] * z2)
+    }
+
+    /// `|H(e^{jθ})|` at the normalised angular frequency `theta` [rad/sample].
+    pub fn gain(&self, theta: f64) -> f64 {
+        // Evaluate c0 + c1·e^{-jθ} + c2·e^{-2jθ} as magnitudes (as accurate as the complex
+        // quotient, and what the Wk filter's accuracy table was measured with).
+        let eval = |c0: f64, c1: f64, c2: f64| {
+            let re = c0 + c1 * theta.cos() + c2 * (2.0 * theta).cos();
+            let im = -c1 * theta.sin() - c2 * (2.0 * theta).sin();
+            re.hypot(im)
+        };
+        eval(self.b[0], self.b[1], self.b[2]) / eval(1.0, self.a[0], self.a[1])
+    }
+
+    /// Filters `x` in place, forward or (`reverse`) backward, started in steady state at the
+    /// first value it meets (so a constant passes unchanged through a section of unit DC
+    /// gain). Direct form I.
+    pub fn pass(&self, x: &mut [f64], reverse: bool) {
+        let n = x.len();
+        if n == 0 {
+            return;
+        }
+        let [b0, b1, b2] = self.b;
+        let [a1, a2] = self.a;
+        let first = if reverse { x[n - 1] } else { x[0] };
+        let (mut x1, mut x2, mut y1, mut y2) = (first, first, first, first);
+        let mut step = |v: &mut f64| {
+            let x0 = *v;
+            let y0 = b0 * x0 + b1 * x1 + b2 * x2 - a1 * y1 - a2 * y2;
+            x2 = x1;
+            x1 = x0;
+            y2 = y1;
+            y1 = y0;
+            *v = y0;
+        };
+        if reverse {
+            x.iter_mut().rev().for_each(&mut step);
+        } else {
+            x.iter_mut().for_each(&mut step);
+        }
+    }
+}
+
+/// A [`Biquad`] running sample by sample from rest (transposed direct form II).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BiquadState {
+    /// The section's coefficients.
+    pub coeffs: Biquad,
+    s: [f64; 2],
+}
+
+impl BiquadState {
+    /// The section at rest.
+    pub fn new(coeffs: Biquad) -> Self {
+        Self {
+            coeffs,
+            s: [0.0; 2],
+        }
+    }
+
+    /// Filters one sample.
+    pub fn step(&mut self, x: f64) -> f64 {
+        let Biquad { b, a } = self.coeffs;
+        let y = b[0] * x + self.s[0];
+        self.s[0] = b[1] * x - a[0] * y + self.s[1];
+        self.s[1] = b[2] * x - a[1] * y;
+        y
+    }
+
+    /// Returns the section to rest.
+    pub fn reset(&mut self) {
+        self.s = [0.0; 2];
+    }
+}
+
+/// One second-order analogue section `(n0 + n1·s + n2·s²) / (d0 + d1·s + d2·s²)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnalogSection {
+    /// Numerator `n0, n1, n2`.
+    pub num: [f64; 3],
+    /// Denominator `d0, d1, d2`.
+    pub den: [f64; 3],
+}
+
+impl AnalogSection {
+    /// Magnitude [-] and phase [rad] at the angular frequency `w` [rad/s].
+    pub fn response(&self, w: f64) -> (f64, f64) {
+        let eval = |c: &[f64; 3]| (c[0] - c[2] * w * w, c[1] * w);
+        let (nr, ni) = eval(&self.num);
+        let (dr, di) = eval(&self.den);
+        (nr.hypot(ni) / dr.hypot(di), ni.atan2(nr) - di.atan2(dr))
+    }
+
+    /// Digital section by the bilinear transform `s = k·(1 − z⁻¹)/(1 + z⁻¹)` (`k = 2·fs`;
+    /// pre-warp the section's frequencies beforehand to place them exactly).
+    pub fn bilinear(&self, k: f64) -> Biquad {
+        let map = |c: &[f64; 3]| {
+            [
+                c[0] + c[1] * k + c[2] * k * k,
+                2.0 * (c[0] - c[2] * k * k),
+                c[0] - c[1] * k + c[2] * k * k,
+            ]
+        };
+        let b = map(&self.num);
+        let a = map(&self.den);
+        Biquad {
+            b: [b[0] / a[0], b[1] / a[0], b[2] / a[0]],
+            a: [a[1] / a[0], a[2] / a[0]],
+        }
+    }
+}
+
+/// The second-order sections of a Butterworth low-pass of even order `order` at `fc` [Hz]
+/// for the step `dt` [s]: `|H|² = 1/(1 + (f/fc)^(2·order))`.
+pub fn butterworth_sections(dt: f64, fc: f64, order: usize) -> Vec<Biquad> {
+    (1..=order / 2)
+        .map(|i| {
+            let theta = (2 * i - 1) as f64 * PI / (2 * order) as f64;
+            Biquad::lowpass(dt, fc, 1.0 / (2.0 * theta.cos()))
+        })
+        .collect()
+}
+
+/// Runs `sections` over `x` forward, then backward ([`Biquad::pass`]): gain `|H|²`, zero
+/// phase.
+pub fn zero_phase(x: &[f64], sections: &[Biquad]) -> Vec<f64> {
+    let mut y = x.to_vec();
+    for c in sections {
+        c.pass(&mut y, false);
+    }
+    for c in sections {
+        c.pass(&mut y, true);
+    }
+    y
+}
+
+/// Zero-phase Butterworth low-pass of order `order` (even), run forward and backward:
+/// `|H|² = 1/(1 + (f/fc)^(2·order))`, no phase shift. Each pass starts in steady state at the
+/// end value it starts from.
+pub fn butterworth_zero_phase(x: &[f64], dt: f64, fc: f64, order: usize) -> Vec<f64> {
+    zero_phase(x, &butterworth_sections(dt, fc, order))
+}
+
+/// Zero-phase low-pass of the error metric: a second-order Butterworth run forward and
+/// backward twice (`|H|⁴` of the section: −12 dB at `fc`, about −49 dB at `2·fc`).
+pub fn lowpass(x: &[f64], dt: f64, fc: f64) -> Vec<f64> {
+    let c = Biquad::lowpass(dt, fc, std::f64::consts::FRAC_1_SQRT_2);
+    let mut y = x.to_vec();
+    for _ in 0..2 {
+        c.pass(&mut y, false);
+        c.pass(&mut y, true);
+    }
+    y
+}
+
+/// Zero-phase low-pass ([`lowpass`]) followed by a central difference (one-sided at the
+/// ends): a smoothed derivative [unit of `x` per s].
+pub fn filtered_derivative(x: &[f64], dt: f64, fc: f64) -> Vec<f64> {
+    let y = lowpass(x, dt, fc);
+    let n = y.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(1), (i + 1).min(n.saturating_sub(1)));
+            if b > a {
+                (y[b] - y[a]) / ((b - a) as f64 * dt)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// RMS gain of a linear operator on white noise of unit variance: `√Σh²` of its impulse
+/// response at the middle of a record of `len` samples (at most 4096).
+pub fn noise_gain(len: usize, op: impl Fn(&[f64]) -> Vec<f64>) -> f64 {
+    let n = len.clamp(16, 4096);
+    let mut x = vec![0.0; n];
+    x[n / 2] = 1.0;
+    op(&x).iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// Noise RMS of a raw channel, estimated from the top of its spectrum: the power in
+/// `[0.3, 0.5]·fs` (where the rig's motion has almost nothing) extrapolated to the whole band
+/// as white noise. Includes quantisation (which is white at these levels).
+pub fn noise_rms(x: &[f64], dt: f64) -> f64 {
+    let _ = dt;
+    let n = x.len();
+    if n < 32 {
+        return 0.0;
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let mut buf: Vec<f64> = x.iter().map(|v| v - mean).collect();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    let mut spec = fft.make_output_vec();
+    if fft.process(&mut buf, &mut spec).is_err() {
+        return 0.0;
+    }
+    let m = spec.len();
+    let lo = (0.6 * (m as f64)) as usize;
+    let band: f64 = spec[lo..m].iter().map(|c| c.norm_sqr()).sum();
+    let fraction = (m - lo) as f64 / m as f64;
+    // Parseval for a real FFT: Σx² ≈ (2/n)·Σ_k |X_k|² over the half spectrum.
+    let power = 2.0 * band / (n as f64 * n as f64);
+    (power / fraction).sqrt()
+}
+
+/// Amplitude spectrum of a signal: `(frequency [Hz], RMS amplitude density)` on a Hann window.
+pub fn spectrum(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = x.len();
+    if n < 8 {
+        return (Vec::new(), Vec::new());
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let mut buf: Vec<f64> = x
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64).cos();
+            (v - mean) * w
+        })
+        .collect();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    let mut spec = fft.make_output_vec();
+    if fft.process(&mut buf, &mut spec).is_err() {
+        return (Vec::new(), Vec::new());
+    }
+    let df = 1.0 / (n as f64 * dt);
+    let scale = (2.0 * dt / (0.375 * n as f64)).sqrt();
+    let f = (0..spec.len()).map(|k| k as f64 * df).collect();
+    let a = spec.iter().map(|c| c.norm() * scale).collect();
+    (f, a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sine(a: f64, f: f64, dt: f64, n: usize, phase: f64) -> Vec<f64> {
+        (0..n)
+            .map(|i| a * (2.0 * PI * f * i as f64 * dt + phase).sin())
+            .collect()
+    }
+
+    /// RMS of a sine of amplitude A over whole periods is A/√2; of a constant, its magnitude.
+    #[test]
+    fn rms_of_a_sine_is_amplitude_over_root_two() {
+        let (a, f, dt) = (3.7, 5.0, 1e-3);
+        // 2 s = 10 whole periods.
+        let x = sine(a, f, dt, 2000, 0.3);
+        assert!((rms(&x) - a / 2f64.sqrt()).abs() < 1e-12 * a, "{}", rms(&x));
+        assert_eq!(rms(&[-2.0; 7]), 2.0);
+        assert_eq!(rms(&[]), 0.0);
+    }
+
+    /// The designed section's response equals the analogue Butterworth prototype at the
+    /// pre-warped frequency: `H(jΩ) = 1/(1 − Ω² + jΩ/q)` with `Ω = tan(πf·dt)/tan(πfc·dt)`,
+    /// in gain and in phase; and it is what the section does to a sine in steady state.
+    #[test]
+    fn biquad_response_matches_its_transfer_function() {
+        let (dt, fc) = (1e-3, 40.0);
+        for q in [std::f64::consts::FRAC_1_SQRT_2, 0.54, 1.3] {
+            let c = Biquad::lowpass(dt, fc, q);
+            for f in [1.0, 10.0, 40.0, 120.0, 400.0] {
+                let omega = (PI * f * dt).tan() / (PI * fc * dt).tan();
+                let h_ref = 1.0 / Complex64::new(1.0 - omega * omega, omega / q);
+                let h = c.response(2.0 * PI * f * dt);
+                assert!((h - h_ref).norm() < 1e-12, "q {q} f {f}: {h} vs {h_ref}");
+                assert!((c.gain(2.0 * PI * f * dt) - h_ref.norm()).abs() < 1e-12);
+            }
+            // Exactly −3 dB at the corner only for q = 1/√2 (the Butterworth case).
+            if q == std::f64::consts::FRAC_1_SQRT_2 {
+                assert!((c.gain(2.0 * PI * fc * dt) - 0.5f64.sqrt()).abs() < 1e-12);
+            }
+        }
+        // Steady state of a 10 Hz sine streamed from rest: amplitude |H| and phase arg H.
+        let c = Biquad::lowpass(dt, fc, 0.9);
+        let f = 10.0;
+        let n = 4000;
+        let x = sine(1.0, f, dt, n, 0.0);
+        let mut st = BiquadState::new(c);
+        let y: Vec<f64> = x.iter().map(|&v| st.step(v)).collect();
+        let h = c.response(2.0 * PI * f * dt);
+        let expect = sine(h.norm(), f, dt, n, h.arg());
+        for i in n / 2..n {
+            assert!(
+                (y[i] - expect[i]).abs() < 1e-9,
+                "{i}: {} vs {}",
+                y[i],
+                expect[i]
+            );
+        }
+        // The in-place pass (other form, steady-state start) gives the same steady state.
+        let mut z = x.clone();
+        c.pass(&mut z, false);
+        for i in n / 2..n {
+            assert!((z[i] - expect[i]).abs() < 1e-9);
+        }
+        // Reset returns to rest: the same output again.
+        st.reset();
+        assert_eq!(st.step(x[0]), y[0]);
+    }
+
+    /// The bilinear transform of an analogue second-order low-pass with its corner pre-warped
+    /// is the same section as [`Biquad::lowpass`].
+    #[test]
+    fn bilinear_of_prewarped_prototype_equals_the_direct_design() {
+        let (dt, fc, q) = (5e-4, 25.0, 0.8);
+        let k = 2.0 / dt;
+        let w = k * (PI * fc * dt).tan();
+        let analog = AnalogSection {
+            num: [1.0, 0.0, 0.0],
+            den: [1.0, 1.0 / (w * q), 1.0 / (w * w)],
+        };
+        let d = analog.bilinear(k);
+        let l = Biquad::lowpass(dt, fc, q);
+        for i in 0..3 {
+            assert!((d.b[i] - l.b[i]).abs() < 1e-12, "{d:?} vs {l:?}");
+        }
+        for i in 0..2 {
+            assert!((d.a[i] - l.a[i]).abs() < 1e-12, "{d:?} vs {l:?}");
+        }
+        // Analogue response at the corner: |H| = q, phase −π/2.
+        let (m, p) = analog.response(w);
+        assert!((m - q).abs() < 1e-12 && (p + PI / 2.0).abs() < 1e-12);
+    }
+
+    /// A sine in the passband comes through a zero-phase filter unchanged in amplitude and
+    /// with zero lag (its cross-correlation peaks at lag 0 and the residual is tiny); a sine
+    /// far in the stopband is removed.
+    #[test]
+    fn zero_phase_filters_keep_passband_sines_without_lag() {
+        let (dt, n) = (1e-3, 8000);
+        let x = sine(1.5, 4.0, dt, n, 0.7);
+        let mid = n / 4..3 * n / 4;
+        let lag_of = |y: &[f64]| {
+            (-20i64..=20)
+                .max_by(|&a, &b| {
+                    let c = |l: i64| -> f64 {
+                        mid.clone().map(|i| x[i] * y[(i as i64 + l) as usize]).sum()
+                    };
+                    c(a).total_cmp(&c(b))
+                })
+                .unwrap_or(99)
+        };
+        for (name, y, tol) in [
+            (
+                "butterworth 6th order, 30 Hz",
+                butterworth_zero_phase(&x, dt, 30.0, 6),
+                1e-6,
+            ),
+            ("metric low-pass, 25 Hz", lowpass(&x, dt, 25.0), 2e-3),
+        ] {
+            let e: Vec<f64> = mid.clone().map(|i| y[i] - x[i]).collect();
+            assert!(rms(&e) < tol * 1.5, "{name}: residual {}", rms(&e));
+            assert_eq!(lag_of(&y), 0, "{name}");
+        }
+        // |H|² of the digital 6th-order Butterworth at 60 Hz = 2·fc: 1/(1 + Ω¹²) with the
+        // bilinear transform's warped frequency Ω = tan(πf·dt)/tan(πfc·dt).
+        let fast = sine(1.0, 60.0, dt, n, 0.0);
+        let g = rms(&butterworth_zero_phase(&fast, dt, 30.0, 6)[mid.clone()]) / rms(&fast[mid]);
+        let omega = (PI * 60.0 * dt).tan() / (PI * 30.0 * dt).tan();
+        let expect = 1.0 / (1.0 + omega.powi(12));
+        assert!((g - expect).abs() < 0.01 * expect, "{g} vs {expect}");
+        // A constant passes unchanged (steady-state start, unit DC gain).
+        let c = vec![2.5; 100];
+        assert!(
+            lowpass(&c, dt, 25.0)
+                .iter()
+                .all(|v| (v - 2.5).abs() < 1e-12)
+        );
+        assert!(zero_phase(&[], &butterworth_sections(dt, 30.0, 6)).is_empty());
+    }
+
+    #[test]
+    fn filtered_derivative_of_a_ramp_is_its_slope() {
+        let dt = 1e-3;
+        let x: Vec<f64> = (0..2000).map(|i| 0.3 * i as f64 * dt).collect();
+        let d = filtered_derivative(&x, dt, 40.0);
+        for v in &d[300..1700] {
+            assert!((v - 0.3).abs() < 1e-6, "{v}");
+        }
+        assert!(filtered_derivative(&[1.0], dt, 40.0) == vec![0.0]);
+    }
+
+    /// White-noise gain: 1 for the identity; for a moving average of m samples, 1/√m.
+    #[test]
+    fn noise_gain_of_known_operators() {
+        assert!((noise_gain(100, |x| x.to_vec()) - 1.0).abs() < 1e-12);
+        let avg4 = |x: &[f64]| -> Vec<f64> {
+            (0..x.len())
+                .map(|i| x[i.saturating_sub(3)..=i].iter().sum::<f64>() / 4.0)
+                .collect()
+        };
+        assert!((noise_gain(100, avg4) - 0.5).abs() < 1e-12);
+    }
+
+    /// The spectrum of a sine peaks at its frequency; the noise estimate of white noise of
+    /// σ under a slow sine is σ (the sine's power lies far below the band it looks at).
+    #[test]
+    fn spectrum_peak_and_noise_estimate() {
+        let (dt, n) = (1e-3, 4000);
+        let x = sine(2.0, 50.0, dt, n, 0.0);
+        let (f, a) = spectrum(&x, dt);
+        let k = (0..a.len()).max_by(|&i, &j| a[i].total_cmp(&a[j])).unwrap();
+        assert!((f[k] - 50.0).abs() < 0.5, "{}", f[k]);
+        // A deterministic white sequence (xorshift), σ = 0.1, over a 2 Hz sine of amplitude 5.
+        let mut s: u64 = 0x9e37_79b9_7f4a_7c15;
+        let noise: Vec<f64> = (0..n)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                // Uniform on [−√3, √3]·σ has standard deviation σ.
+                0.1 * 3f64.sqrt() * (2.0 * (s >> 11) as f64 / (1u64 << 53) as f64 - 1.0)
+            })
+            .collect();
+        let y: Vec<f64> = sine(5.0, 2.0, dt, n, 0.0)
+            .iter()
+            .zip(&noise)
+            .map(|(a, b)| a + b)
+            .collect();
+        let est = noise_rms(&y, dt);
+        assert!(
+            (est / rms(&noise) - 1.0).abs() < 0.1,
+            "{est} vs {}",
+            rms(&noise)
+        );
+        assert_eq!(noise_rms(&[1.0; 10], dt), 0.0);
+    }
+}

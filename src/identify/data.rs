@@ -1,0 +1,206 @@
+//! The data stage: which records can be replayed, whether they can determine the twin at all
+//! (`insufficient_data` otherwise), and the split into fitted and held-out parts.
+
+use super::evaluate::{insufficient_report, part_name, replay_all};
+use super::replay::{PreparedRecord, rms};
+use super::result::CalibrationReport;
+use super::result::Split;
+use super::{CalibrationOptions, IdentifyError};
+use crate::dataset::Record;
+use crate::params::Params;
+use rayon::prelude::*;
+
+/// Least number of records for a split by records (below it, each record is split in time).
+pub const MIN_RECORDS_FOR_RECORD_SPLIT: usize = 6;
+
+/// The fit/validation split: with [`MIN_RECORDS_FOR_RECORD_SPLIT`] records or more every third
+/// one (the 3rd, 6th, … in the order given) is held out; with fewer, holding out whole records
+/// would take away too much of what the effects show in (one of five tests may be the only
+/// one that excites an effect), so the last third of each record is held out instead.
+pub fn split_rule(recs: &[PreparedRecord]) -> (Vec<PreparedRecord>, Vec<PreparedRecord>, String) {
+    if recs.len() >= MIN_RECORDS_FOR_RECORD_SPLIT {
+        let (mut fit, mut val) = (Vec::new(), Vec::new());
+        for (i, r) in recs.iter().enumerate() {
+            if i % 3 == 2 {
+                val.push(r.clone());
+            } else {
+                fit.push(r.clone());
+            }
+        }
+        (
+            fit,
+            val,
+            "every third record in the order given (3rd, 6th, …) is held out: it is never \
+             used by any fit, the paper's method included, and serves only to validate"
+                .into(),
+        )
+    } else {
+        let fit = recs
+            .iter()
+            .map(|r| r.windowed(0..(2 * r.len) / 3))
+            .collect();
+        let val = recs
+            .iter()
+            .map(|r| r.windowed((2 * r.len) / 3..r.len))
+            .collect();
+        (
+            fit,
+            val,
+            "fewer than six records: the first two thirds of each record are fitted, the last \
+             third is held out for validation (the replay runs through the whole record)"
+                .into(),
+        )
+    }
+}
+
+/// What the data lack for a calibration, one sentence each (empty: enough).
+pub(super) fn missing_data(records: &[Record], recs: &[PreparedRecord]) -> Vec<String> {
+    let mut missing = Vec::new();
+    let total: f64 = recs.iter().map(|r| r.duration_s()).sum();
+    if total < MIN_TOTAL_DURATION_S {
+        missing.push(format!(
+            "duration: {total:.3} s of usable records in total, at least {MIN_TOTAL_DURATION_S} s \
+             needed (a few periods of the slowest dynamics: valve delay, oil column, position loop)"
+        ));
+    }
+    if let Some(r) = recs.iter().find(|r| r.dt > 1.0 / MIN_SAMPLE_RATE_HZ) {
+        missing.push(format!(
+            "sample rate: {} is sampled at {:.1} Hz, at least {MIN_SAMPLE_RATE_HZ} Hz needed \
+             (the metric compares the band up to 25 Hz)",
+            r.name,
+            1.0 / r.dt
+        ));
+    }
+    if !recs.is_empty() {
+        let v_var = recs
+            .iter()
+            .map(|r| {
+                let m = r.v_in.iter().sum::<f64>() / r.len.max(1) as f64;
+                rms(&r.v_in.iter().map(|v| v - m).collect::<Vec<_>>())
+            })
+            .fold(0.0f64, f64::max);
+        if v_var < MIN_COMMAND_RMS_V {
+            missing.push(format!(
+                "excitation: the command v_in varies by at most {v_var:.3} V RMS in any record \
+                 (at least {MIN_COMMAND_RMS_V} V needed to see the valve's gain and delay)"
+            ));
+        }
+        let u_moves = recs.iter().any(|r| {
+            let m = r.u.iter().sum::<f64>() / r.len.max(1) as f64;
+            let dev = rms(&r.u.iter().map(|v| v - m).collect::<Vec<_>>());
+            dev > 5.0 * r.noise_u.max(1e-7)
+        });
+        if !u_moves {
+            missing.push(
+                "excitation: the stroke u never moves above five times its sensor noise".into(),
+            );
+        }
+    }
+    if recs.is_empty() && !records.is_empty() {
+        missing.push("channels: no record has both `v_in` and `u`".into());
+    }
+    missing
+}
+
+/// Least total duration of the records [s].
+pub const MIN_TOTAL_DURATION_S: f64 = 2.0;
+/// Least sample rate [Hz].
+pub const MIN_SAMPLE_RATE_HZ: f64 = 100.0;
+/// Least RMS variation of `v_in` in at least one record [V].
+pub const MIN_COMMAND_RMS_V: f64 = 0.02;
+
+/// The records that can be replayed, prepared, and what keeps a calibration from them.
+#[derive(Debug, Clone)]
+pub struct DataCheck {
+    /// The records with `v_in` and `u` and two samples or more, prepared.
+    pub records: Vec<PreparedRecord>,
+    /// Notes for the report (records left out for a missing column).
+    pub notes: Vec<String>,
+    /// What the data lack, one sentence each; empty when a calibration can run.
+    pub missing: Vec<String>,
+}
+
+/// Prepares the records that can be replayed and checks that together they can determine the
+/// twin: long enough, sampled fast enough, excited, with the `v_in` and `u` channels
+/// ([`MIN_TOTAL_DURATION_S`], [`MIN_SAMPLE_RATE_HZ`], [`MIN_COMMAND_RMS_V`]).
+pub fn check(records: &[Record], options: &CalibrationOptions) -> Result<DataCheck, IdentifyError> {
+    let mut notes = Vec::new();
+    let mut column_notes = Vec::new();
+    let usable: Vec<&Record> = records
+        .iter()
+        .filter(|r| {
+            let lacks: Vec<&str> = [("v_in", r.v_in.is_some()), ("u", r.u.is_some())]
+                .into_iter()
+                .filter(|(_, have)| !have)
+                .map(|(c, _)| c)
+                .collect();
+            if !lacks.is_empty() {
+                column_notes.push(format!(
+                    "channels: {} has no `{}` column (needed to replay it); the record was left \
+                     out",
+                    r.path.display(),
+                    lacks.join("`, `")
+                ));
+            }
+            lacks.is_empty() && r.len() >= 2
+        })
+        .collect();
+    let prepared: Vec<PreparedRecord> = usable
+        .par_iter()
+        .map(|r| PreparedRecord::new(r, &options.metric))
+        .collect::<Result<_, _>>()?;
+    let mut missing = missing_data(records, &prepared);
+    if prepared.is_empty() {
+        missing.extend(column_notes);
+    } else {
+        notes.extend(column_notes);
+    }
+    Ok(DataCheck {
+        records: prepared,
+        notes,
+        missing,
+    })
+}
+
+/// The prepared records, split into the part every fit sees and the part held out.
+#[derive(Debug, Clone)]
+pub struct Campaign {
+    /// Every record, whole.
+    pub all: Vec<PreparedRecord>,
+    /// What the fits see.
+    pub fit: Vec<PreparedRecord>,
+    /// What validates (never fitted).
+    pub validation: Vec<PreparedRecord>,
+    /// The rule and the names of both parts.
+    pub split: Split,
+}
+
+/// Splits the records into fit and validation parts (see [`split_rule`]).
+pub fn split(all: Vec<PreparedRecord>) -> Campaign {
+    let (fit, validation, rule) = split_rule(&all);
+    let split = Split {
+        rule,
+        fit: fit.iter().map(part_name).collect(),
+        validation: validation.iter().map(part_name).collect(),
+    };
+    Campaign {
+        all,
+        fit,
+        validation,
+        split,
+    }
+}
+
+/// The report for data the check found insufficient: the nominal replay of the usable
+/// records when every one of them replays, else nothing replayed.
+pub fn insufficient_data(params: &Params, checked: DataCheck) -> CalibrationReport {
+    let all = checked.records;
+    let nominal = replay_all(params, &all).unwrap_or_default();
+    let nominal = if nominal.len() == all.len() {
+        nominal
+    } else {
+        Vec::new()
+    };
+    let all = if nominal.is_empty() { Vec::new() } else { all };
+    insufficient_report(params, all, nominal, checked.missing, checked.notes)
+}

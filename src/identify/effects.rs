@@ -1,0 +1,327 @@
+//! The effect search: each round fits every remaining candidate effect on top of the current
+//! model and ranks them by ΔBIC ([`rank_candidates`]); the best is re-fitted with all
+//! parameters and kept only if it lowers the held-out error ([`try_effect`]); [`search`] runs
+//! the rounds.
+
+use super::data::Campaign;
+use super::evaluate::{replay_all, weighted_of};
+use super::fit::{self, Bic, Evaluator, FitResult, Knob};
+use super::progress::Stage;
+use super::replay::{PreparedRecord, rms};
+use super::result::CandidateScore;
+use super::{CalibrationOptions, EffectId, IdentifyError};
+use crate::params::Params;
+use rayon::prelude::*;
+
+/// Why two effects can be confounded, when the physics says so (for the ambiguity note).
+fn confounding_hint(a: EffectId, b: EffectId, recs: &[PreparedRecord]) -> &'static str {
+    let pair = |x, y| (a == x && b == y) || (a == y && b == x);
+    let pressures = recs.iter().any(|r| r.p_meas_f.iter().any(|p| p.is_some()));
+    if pair(EffectId::Friction, EffectId::SupplySag) && !pressures {
+        " At steady flow a supply droop r and a viscous friction b reduce the velocity alike \
+         (r ≈ b/A²); the chamber pressures p1, p2 separate them (sag lowers (p1 + p2)/2, \
+         friction shifts p1 − p2): record them to decide."
+    } else {
+        ""
+    }
+}
+
+/// Coarse start for a candidate effect: its first parameter on a log grid (both signs for a
+/// signed one), the others at 0; returns the best of the grid and "off".
+pub fn multi_start(
+    ev: &Evaluator<'_>,
+    current: &Params,
+    e: EffectId,
+) -> Result<Params, IdentifyError> {
+    let mut off = *current;
+    for k in e.knobs() {
+        k.set(&mut off, 0.0);
+    }
+    let signed = matches!(e, EffectId::ValveOffset);
+    let mut grid = vec![0.0];
+    for g in [0.1, 0.3, 1.0, 3.0, 10.0] {
+        grid.push(g);
+        if signed {
+            grid.push(-g);
+        }
+    }
+    let costs: Vec<Option<(f64, Params)>> = grid
+        .par_iter()
+        .map(|&g| {
+            let mut p = off;
+            e.knobs()[0].set(&mut p, g);
+            ev.residuals(&p)
+                .map(|r| (r.iter().map(|v| v * v).sum::<f64>(), p))
+        })
+        .collect();
+    let mut best: Option<(f64, Params)> = None;
+    for c in costs {
+        let (cost, p) = c.ok_or(IdentifyError::Cancelled)?;
+        if best.as_ref().is_none_or(|(b, _)| cost < *b) {
+            best = Some((cost, p));
+        }
+    }
+    Ok(best.map(|b| b.1).unwrap_or(off))
+}
+
+/// A candidate effect fitted on top of the current model in one round.
+#[derive(Debug, Clone)]
+pub struct Ranked {
+    /// The effect.
+    pub effect: EffectId,
+    /// Its screening fit (current knobs but the mass, and the effect's).
+    pub fit: FitResult,
+    /// ΔBIC against the current model (negative = better).
+    pub score: f64,
+    /// Share of the current residual sum of squares it removes [-].
+    pub gain: f64,
+}
+
+/// What every round of the search works with.
+pub struct SearchContext<'a> {
+    /// Replays of the fit records.
+    pub ev: &'a Evaluator<'a>,
+    /// BIC counts of the declared fit.
+    pub bic: Bic,
+    /// The held-out records.
+    pub validation: &'a [PreparedRecord],
+    /// The options.
+    pub options: &'a CalibrationOptions,
+}
+
+/// Fits every effect of `remaining` on top of `current` (in parallel; the mass stays fixed)
+/// with [`CalibrationOptions::screen_iterations`] Jacobians, and ranks them by ΔBIC, best
+/// first.
+pub fn rank_candidates(
+    cx: &SearchContext<'_>,
+    current: &FitResult,
+    knobs: &[Knob],
+    remaining: &[EffectId],
+    round: usize,
+) -> Result<Vec<Ranked>, IdentifyError> {
+    let (ev, bic, options) = (cx.ev, &cx.bic, cx.options);
+    ev.monitor
+        .enter(Stage::Candidates { round }, remaining.len());
+    let screen_knobs: Vec<Knob> = knobs.iter().copied().filter(|k| *k != Knob::Mass).collect();
+    let results: Vec<Result<(EffectId, FitResult), IdentifyError>> = remaining
+        .par_iter()
+        .map(|&e| {
+            let mut ks = screen_knobs.clone();
+            ks.extend_from_slice(e.knobs());
+            let p0 = multi_start(ev, &current.params, e)?;
+            let f = fit::fit(ev, &p0, &ks, options.screen_iterations, bic.ratio())?;
+            ev.monitor.advance();
+            Ok((e, f))
+        })
+        .collect();
+    ev.monitor.check()?;
+    let mut ranked = Vec::with_capacity(results.len());
+    for r in results {
+        let (effect, fit) = r?;
+        let k = effect.knobs().len();
+        let score = bic.value(fit.rss, knobs.len() + k) - bic.value(current.rss, knobs.len());
+        let gain = 1.0 - fit.rss / current.rss;
+        ranked.push(Ranked {
+            effect,
+            fit,
+            score,
+            gain,
+        });
+    }
+    ranked.sort_by(|a, b| a.score.total_cmp(&b.score));
+    Ok(ranked)
+}
+
+/// Weighted RMS error of `p` on the held-out records.
+fn validation_rms(p: &Params, validation: &[PreparedRecord]) -> Result<f64, IdentifyError> {
+    let reps = replay_all(p, validation)?;
+    Ok(rms(&weighted_of(validation, &reps)))
+}
+
+/// An effect re-fitted with all parameters, and its validation.
+#[derive(Debug, Clone)]
+pub struct Trial {
+    /// The re-fit (the current knobs and the effect's).
+    pub refit: FitResult,
+    /// The knobs of the re-fit.
+    pub knobs: Vec<Knob>,
+    /// Weighted RMS on the held-out records with the re-fit.
+    pub validation_rms: f64,
+    /// Whether it lowers the held-out error by at least
+    /// [`CalibrationOptions::min_validation_gain`] (a NaN error does not).
+    pub improves: bool,
+}
+
+/// Re-fits all of `knobs` and the effect of `best` from its screening fit, with
+/// [`CalibrationOptions::max_iterations`] Jacobians, and validates the result on the
+/// held-out records against `current_val`.
+pub fn try_effect(
+    cx: &SearchContext<'_>,
+    best: &Ranked,
+    knobs: &[Knob],
+    round: usize,
+    current_val: f64,
+) -> Result<Trial, IdentifyError> {
+    let (ev, options) = (cx.ev, cx.options);
+    ev.monitor.enter(
+        Stage::Refit {
+            round,
+            effect: best.effect,
+        },
+        options.max_iterations + 1,
+    );
+    let mut trial_knobs = knobs.to_vec();
+    trial_knobs.extend_from_slice(best.effect.knobs());
+    let refit = fit::fit(
+        ev,
+        &best.fit.params,
+        &trial_knobs,
+        options.max_iterations,
+        cx.bic.ratio(),
+    )?;
+    let validation_rms = validation_rms(&refit.params, cx.validation)?;
+    ev.monitor.advance();
+    Ok(Trial {
+        improves: validation_rms < (1.0 - options.min_validation_gain) * current_val,
+        refit,
+        knobs: trial_knobs,
+        validation_rms,
+    })
+}
+
+/// An effect the search added.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Added {
+    /// The effect.
+    pub effect: EffectId,
+    /// Its ΔBIC when added.
+    pub score: f64,
+    /// Share of the residual it removed [-].
+    pub gain: f64,
+    /// Held-out weighted RMS `[before, after]` adding it.
+    pub validation: [f64; 2],
+}
+
+/// What the effect search found.
+#[derive(Debug, Clone)]
+pub struct EffectSearch {
+    /// The final fit (the declared fit if nothing was added), at the fit step.
+    pub current: FitResult,
+    /// Its knobs.
+    pub knobs: Vec<Knob>,
+    /// The effects added, in order.
+    pub added: Vec<Added>,
+    /// Every candidate's score, per round.
+    pub candidates: Vec<CandidateScore>,
+    /// Notes (rejected effects, ambiguous rounds).
+    pub notes: Vec<String>,
+}
+
+/// Rounds of [`rank_candidates`] and [`try_effect`] from the declared fit `start` (of
+/// `knobs`): the best candidate
+/// is tried when its ΔBIC < 0 and it removes at least
+/// [`CalibrationOptions::min_relative_gain`] of the residual
+/// ([`CalibrationOptions::min_relative_gain_later`] after the first effect), and added when it
+/// improves the held-out error. Stops when a round's best does not qualify, after
+/// [`CalibrationOptions::max_effects`] effects or twice as many rounds, or when no candidate
+/// is left.
+pub fn search(
+    cx: &SearchContext<'_>,
+    campaign: &Campaign,
+    params: &Params,
+    start: &FitResult,
+    knobs: &[Knob],
+) -> Result<EffectSearch, IdentifyError> {
+    let options = cx.options;
+    let mut current = start.clone();
+    let mut current_val = validation_rms(&current.params, &campaign.validation)?;
+    let mut knobs = knobs.to_vec();
+    let mut added: Vec<Added> = Vec::new();
+    let mut candidates = Vec::new();
+    let mut notes = Vec::new();
+    let mut remaining: Vec<EffectId> = options
+        .candidates
+        .iter()
+        .copied()
+        .filter(|e| !e.enabled(params))
+        .collect();
+    let mut round = 0;
+    while !remaining.is_empty()
+        && added.len() < options.max_effects
+        && round < 2 * options.max_effects
+    {
+        round += 1;
+        let ranked = rank_candidates(cx, &current, &knobs, &remaining, round)?;
+        for r in &ranked {
+            candidates.push(CandidateScore {
+                effect: r.effect,
+                round,
+                score: r.score,
+                relative_gain: r.gain,
+                params: r
+                    .effect
+                    .knobs()
+                    .iter()
+                    .map(|k| (k.name().to_string(), k.value(&r.fit.params)))
+                    .collect(),
+            });
+        }
+        let runner_up = ranked.get(1).map(|r| (r.effect, r.score));
+        let Some(best) = ranked.into_iter().next() else {
+            break;
+        };
+        let min_gain = if added.is_empty() {
+            options.min_relative_gain
+        } else {
+            options.min_relative_gain_later
+        };
+        if !(best.score < 0.0 && best.gain >= min_gain) {
+            break;
+        }
+        let trial = try_effect(cx, &best, &knobs, round, current_val)?;
+        remaining.retain(|e| *e != best.effect);
+        let (score, trial_val) = (best.score, trial.validation_rms);
+        if !trial.improves {
+            notes.push(format!(
+                "round {round}: `{}` improved the fit records (ΔBIC {score:.1}, {:.1} % of the \
+                 residual) but not the held-out ones (validation weighted RMS {current_val:.3} → \
+                 {trial_val:.3}): rejected",
+                best.effect.name(),
+                100.0 * best.gain
+            ));
+            continue;
+        }
+        if let Some((other, other_score)) = runner_up
+            && other_score < 0.0
+            && other_score - score < options.ambiguity_margin
+        {
+            notes.push(format!(
+                "round {round}: `{}` (ΔBIC {score:.1}) and `{}` (ΔBIC {other_score:.1}) explain \
+                 the residual about equally (difference {:.1} < {:.0}): the data cannot tell \
+                 them apart, `{}` was added by a narrow margin.{}",
+                best.effect.name(),
+                other.name(),
+                other_score - score,
+                options.ambiguity_margin,
+                best.effect.name(),
+                confounding_hint(best.effect, other, &campaign.all),
+            ));
+        }
+        knobs = trial.knobs;
+        added.push(Added {
+            effect: best.effect,
+            score,
+            gain: best.gain,
+            validation: [current_val, trial_val],
+        });
+        current = trial.refit;
+        current_val = trial_val;
+    }
+    Ok(EffectSearch {
+        current,
+        knobs,
+        added,
+        candidates,
+        notes,
+    })
+}

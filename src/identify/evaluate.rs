@@ -1,0 +1,265 @@
+//! Errors, diagnostics and replays of a stage, pooled over records: the numbers every stage
+//! of the calibration reports.
+
+use super::IdentifyError;
+use super::diagnose;
+use super::replay::{ChannelErrors, PreparedRecord, Replay, replay_prepared, rms};
+use super::result::{
+    CalibrationReport, Diagnostics, ErrorSummary, METRIC, RAW_NRMSE, RawNrmse, Split, StageErrors,
+    Verdict,
+};
+use crate::params::Params;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+
+/// Replays every record with `params` (in parallel).
+pub(super) fn replay_all(
+    params: &Params,
+    recs: &[PreparedRecord],
+) -> Result<Vec<Replay>, IdentifyError> {
+    recs.par_iter()
+        .map(|r| replay_prepared(params, r))
+        .collect()
+}
+
+/// Pooled raw NRMSE per channel over `replays`.
+pub(super) fn raw_pooled(replays: &[Replay]) -> BTreeMap<String, f64> {
+    let mut acc: BTreeMap<&str, (f64, f64)> = BTreeMap::new();
+    for r in replays {
+        let n = r.errors.samples as f64;
+        let raw = &r.errors.raw;
+        for (name, c) in [
+            ("u", Some(raw.u)),
+            ("ydd", raw.ydd),
+            ("p1", raw.p1),
+            ("p2", raw.p2),
+        ] {
+            if let Some(c) = c {
+                let e = acc.entry(name).or_insert((0.0, 0.0));
+                e.0 += n * c.rms_error * c.rms_error;
+                e.1 += n * c.measured_std * c.measured_std;
+            }
+        }
+    }
+    acc.into_iter()
+        .filter(|(_, (_, d))| *d > 0.0)
+        .map(|(k, (e, d))| (k.to_string(), (e / d).sqrt()))
+        .collect()
+}
+
+/// Weighted RMS per channel (`du`, `ydd`, `p1`, `p2`) pooled over the replays.
+pub(super) fn weighted_channels(replays: &[Replay]) -> BTreeMap<String, f64> {
+    let mut acc: BTreeMap<&str, (f64, f64)> = BTreeMap::new();
+    for r in replays {
+        let e = &r.errors;
+        let n = e.samples as f64;
+        for (name, v) in [
+            ("du", Some(e.weighted_du)),
+            ("ydd", e.weighted_ydd),
+            ("p1", e.weighted_p1),
+            ("p2", e.weighted_p2),
+        ] {
+            if let Some(v) = v {
+                let a = acc.entry(name).or_insert((0.0, 0.0));
+                a.0 += n * v * v;
+                a.1 += n;
+            }
+        }
+    }
+    acc.into_iter()
+        .filter(|(_, (_, n))| *n > 0.0)
+        .map(|(k, (s, n))| (k.to_string(), (s / n).sqrt()))
+        .collect()
+}
+
+/// Weighted error before and after, pooled and per channel, on `recs`.
+pub(super) fn stage_errors(
+    recs: &[PreparedRecord],
+    before: &[Replay],
+    after: &[Replay],
+) -> StageErrors {
+    let (cb, ca) = (weighted_channels(before), weighted_channels(after));
+    StageErrors {
+        before: rms(&weighted_of(recs, before)),
+        after: rms(&weighted_of(recs, after)),
+        metric: METRIC.to_string(),
+        channels: cb
+            .iter()
+            .map(|(k, b)| (k.clone(), [*b, ca.get(k).copied().unwrap_or(*b)]))
+            .collect(),
+        files: recs.iter().map(part_name).collect(),
+    }
+}
+
+/// A record's name, with the part when it is windowed.
+pub(super) fn part_name(r: &PreparedRecord) -> String {
+    if r.window.len() == r.len {
+        r.name.clone()
+    } else {
+        format!(
+            "{} [{:.3}–{:.3} s]",
+            r.name,
+            r.window.start as f64 * r.dt,
+            r.window.end.saturating_sub(1) as f64 * r.dt
+        )
+    }
+}
+
+/// Diagnostics of a stage that was not reached.
+pub(super) fn empty_diagnostics() -> Diagnostics {
+    Diagnostics {
+        whiteness: diagnose::Whiteness {
+            lag1: 0.0,
+            share_outside: 0.0,
+            ljung_box: 0.0,
+            max_lag: 0,
+        },
+        correlations: Vec::new(),
+        high_frequency_share: 0.0,
+    }
+}
+
+/// The error summary of a stage: weighted RMS, pooled channel errors, per-file errors.
+pub(super) fn summary(
+    recs: &[PreparedRecord],
+    replays: &[Replay],
+    weighted: &[f64],
+) -> ErrorSummary {
+    let mut channels = BTreeMap::new();
+    let pooled = |f: &dyn Fn(&Replay) -> Option<f64>| -> Option<f64> {
+        let (mut s, mut n) = (0.0, 0usize);
+        for r in replays {
+            if let Some(v) = f(r) {
+                s += v * v * r.errors.samples as f64;
+                n += r.errors.samples;
+            }
+        }
+        (n > 0).then(|| (s / n as f64).sqrt())
+    };
+    for (name, f) in [
+        (
+            "du",
+            &(|r: &Replay| Some(r.errors.du)) as &dyn Fn(&Replay) -> Option<f64>,
+        ),
+        ("du_nrmse", &|r: &Replay| Some(r.errors.du_nrmse)),
+        ("ydd", &|r: &Replay| r.errors.ydd),
+        ("ydd_nrmse", &|r: &Replay| r.errors.ydd_nrmse),
+        ("u", &|r: &Replay| Some(r.errors.u)),
+        ("p1", &|r: &Replay| r.errors.p1),
+        ("p2", &|r: &Replay| r.errors.p2),
+    ] {
+        if let Some(v) = pooled(f) {
+            channels.insert(name.to_string(), v);
+        }
+    }
+    ErrorSummary {
+        metric: METRIC.to_string(),
+        value: rms(weighted),
+        channels,
+        files: recs
+            .iter()
+            .zip(replays)
+            .map(|(p, r)| (p.name.clone(), r.errors))
+            .collect(),
+    }
+}
+
+/// The weighted residuals of every record, concatenated.
+pub(super) fn weighted_of(recs: &[PreparedRecord], replays: &[Replay]) -> Vec<f64> {
+    let mut w = Vec::new();
+    for (p, r) in recs.iter().zip(replays) {
+        p.weighted_residuals(&r.sim, &mut w);
+    }
+    w
+}
+
+/// Whiteness, signature correlations and high-frequency share of a stage's residual.
+pub(super) fn diagnostics(
+    recs: &[PreparedRecord],
+    replays: &[Replay],
+    weighted: &[f64],
+) -> Diagnostics {
+    Diagnostics {
+        whiteness: diagnose::whiteness(weighted, 20),
+        correlations: diagnose::feature_correlations(recs, replays),
+        high_frequency_share: diagnose::high_frequency_share(recs, replays, 30.0),
+    }
+}
+
+/// A report for data that cannot be calibrated: the nominal replay (when possible), no
+/// effect, nothing fitted.
+pub(super) fn insufficient_report(
+    params: &Params,
+    all: Vec<PreparedRecord>,
+    nominal_replays: Vec<Replay>,
+    missing: Vec<String>,
+    notes: Vec<String>,
+) -> CalibrationReport {
+    let w = weighted_of(&all, &nominal_replays);
+    let mut error_nominal = summary(&all, &nominal_replays, &w);
+    if w.is_empty() {
+        // Nothing could be replayed: no error to report (null in report.json, — in report.md).
+        error_nominal.value = f64::NAN;
+    }
+    let raw = raw_pooled(&nominal_replays);
+    CalibrationReport {
+        nominal: *params,
+        params: *params,
+        verdict: Verdict::InsufficientData,
+        effects: Vec::new(),
+        candidates: Vec::new(),
+        calibrated: Vec::new(),
+        mass_fitted: false,
+        correlation: (Vec::new(), Vec::new()),
+        baseline: None,
+        error_before: error_nominal.clone(),
+        error_after: error_nominal.clone(),
+        error_nominal,
+        error_baseline: None,
+        diagnostics_before: empty_diagnostics(),
+        diagnostics_after: empty_diagnostics(),
+        n: w.len(),
+        n_eff: 0.0,
+        evaluations: 0,
+        files: all.iter().map(|r| r.name.clone()).collect(),
+        replays_before: nominal_replays.clone(),
+        replays_after: nominal_replays.clone(),
+        replays_nominal: nominal_replays,
+        records: all,
+        notes,
+        missing,
+        split: Split::default(),
+        error_training: None,
+        error_validation: None,
+        raw_nrmse: RawNrmse {
+            definition: RAW_NRMSE.into(),
+            nominal: raw.clone(),
+            before: raw.clone(),
+            after: raw,
+            validation: BTreeMap::new(),
+        },
+        residual_left: None,
+    }
+}
+
+/// Largest weighted RMS of any channel of a record.
+pub(super) fn worst_channel(c: &ChannelErrors) -> f64 {
+    [
+        Some(c.weighted_du),
+        c.weighted_ydd,
+        c.weighted_p1,
+        c.weighted_p2,
+    ]
+    .into_iter()
+    .flatten()
+    .fold(0.0, f64::max)
+}
+
+/// `+0.123`, or `—` when not defined.
+pub(super) fn fmt_signed(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:+.3}")
+    } else {
+        "—".into()
+    }
+}

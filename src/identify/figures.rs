@@ -1,0 +1,182 @@
+//! The calibration's figures: measured against the twin before and after, the residuals,
+//! their spectra and the signature correlations (PNG + SVG each, SI converted to display
+//! units here).
+
+use super::CalibrationReport;
+use crate::output::OutputError;
+use crate::plot::{Figure, Panel, Scale, Series, palette, save_figure};
+use std::path::Path;
+
+/// Sample indices that keep at most `max` points of `x`, and their step.
+fn thin(x: &[f64], max: usize) -> (Vec<usize>, usize) {
+    let step = x.len().div_ceil(max.max(1)).max(1);
+    ((0..x.len()).step_by(step).collect(), step)
+}
+
+/// Records shown in the time plots: up to four, the longest first, then the largest residual.
+fn shown(r: &CalibrationReport) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..r.records.len()).collect();
+    idx.sort_by(|&a, &b| {
+        r.error_before.files[b]
+            .1
+            .du_nrmse
+            .total_cmp(&r.error_before.files[a].1.du_nrmse)
+    });
+    idx.truncate(4);
+    idx
+}
+
+/// Writes the four figures into `dir` (PNG + SVG each).
+pub fn write_plots(r: &CalibrationReport, dir: &Path) -> Result<(), OutputError> {
+    let (c_meas, c_before, c_after) = (palette(0), palette(1), palette(2));
+    let mut fit_panels = Vec::new();
+    let mut res_panels = Vec::new();
+    for i in shown(r) {
+        let rec = &r.records[i];
+        let (ix, _) = thin(&rec.t, 3000);
+        let pick = |v: &[f64], k: f64| ix.iter().map(|&j| k * v[j]).collect::<Vec<f64>>();
+        let t = pick(&rec.t, 1.0);
+        let mut p = Panel::new(
+            format!("{}: relative velocity", rec.name),
+            "time [s]",
+            "u̇ [mm/s]",
+        );
+        p.series = vec![
+            Series::line("measured", t.clone(), pick(&rec.du_meas_f, 1e3), c_meas),
+            Series::line(
+                "twin before",
+                t.clone(),
+                pick(&r.replays_before[i].twin_du, 1e3),
+                c_before,
+            ),
+            Series::line(
+                "twin after",
+                t.clone(),
+                pick(&r.replays_after[i].twin_du, 1e3),
+                c_after,
+            ),
+        ];
+        fit_panels.push(p);
+        let mut q = Panel::new(
+            format!("{}: velocity residual (twin − measured)", rec.name),
+            "time [s]",
+            "Δu̇ [mm/s]",
+        );
+        q.series = vec![
+            Series::line(
+                "before",
+                t.clone(),
+                pick(&r.replays_before[i].residual_du, 1e3),
+                c_before,
+            ),
+            Series::line(
+                "after",
+                t.clone(),
+                pick(&r.replays_after[i].residual_du, 1e3),
+                c_after,
+            ),
+        ];
+        if let (Some(b), Some(a)) = (
+            &r.replays_before[i].residual_ydd,
+            &r.replays_after[i].residual_ydd,
+        ) {
+            let mut qa = Panel::new(
+                format!("{}: acceleration residual", rec.name),
+                "time [s]",
+                "Δÿ [m/s²]",
+            );
+            qa.series = vec![
+                Series::line("before", t.clone(), pick(b, 1.0), c_before),
+                Series::line("after", t.clone(), pick(a, 1.0), c_after),
+            ];
+            res_panels.push(q);
+            res_panels.push(qa);
+        } else {
+            res_panels.push(q);
+        }
+    }
+    let h = |n: usize| (260 * n as u32).clamp(400, 2400);
+    let mut fig = Figure::new("Measured vs twin, before and after", fit_panels);
+    fig.height = h(fig.panels.len());
+    save_figure(&fig, &dir.join("measured_vs_twin"))?;
+    let mut fig = Figure::new("Residual before and after", res_panels);
+    fig.height = h(fig.panels.len());
+    save_figure(&fig, &dir.join("residual"))?;
+
+    // Spectrum of the raw acceleration residual (else velocity), the longest record.
+    let longest = (0..r.records.len()).max_by_key(|&i| r.records[i].len);
+    let mut sp = Panel::new("", "frequency [Hz]", "amplitude density");
+    sp.x_scale = Scale::Log10;
+    sp.y_scale = Scale::Log10;
+    if let Some(i) = longest {
+        let rec = &r.records[i];
+        let res = |rep: &super::Replay| -> Vec<f64> {
+            match &rec.ydd {
+                Some(y) => rep.sim.ydd.iter().zip(y).map(|(a, b)| a - b).collect(),
+                None => rep.residual_du.clone(),
+            }
+        };
+        sp.title = format!(
+            "{}: spectrum of the {} residual",
+            rec.name,
+            if rec.ydd.is_some() {
+                "ÿ [m/s²/√Hz]"
+            } else {
+                "u̇ [m/s/√Hz]"
+            }
+        );
+        for (label, rep, c) in [
+            ("before", &r.replays_before[i], c_before),
+            ("after", &r.replays_after[i], c_after),
+        ] {
+            let (f, a) = super::diagnose::spectrum(&res(rep), rec.dt);
+            let (ix, _) = thin(&f, 4000);
+            sp.series.push(Series::line(
+                label,
+                ix.iter().map(|&j| f[j]).collect(),
+                ix.iter().map(|&j| a[j]).collect(),
+                c,
+            ));
+        }
+    }
+    save_figure(
+        &Figure::new("Residual spectrum", vec![sp]),
+        &dir.join("residual_spectrum"),
+    )?;
+
+    // Correlation with the signature features.
+    let mut cp = Panel::new(
+        "1 sign_velocity (friction) · 2 small_command (overlap) · 3 load_pressure (leakage) · \
+         4 flow_magnitude (supply sag) · 5 constant (offset) · 6 HF share (compliance)",
+        "feature",
+        "correlation [-]",
+    );
+    for (label, d, c) in [
+        ("u̇ residual before", &r.diagnostics_before, c_before),
+        ("u̇ residual after", &r.diagnostics_after, c_after),
+    ] {
+        let mut x: Vec<f64> = (1..=d.correlations.len()).map(|k| k as f64).collect();
+        let mut y: Vec<f64> = d.correlations.iter().map(|c| c.velocity).collect();
+        x.push(6.0);
+        y.push(d.high_frequency_share);
+        cp.series.push(Series::markers(label, x, y, c));
+    }
+    for (label, d, c) in [
+        ("ÿ residual before", &r.diagnostics_before, palette(3)),
+        ("ÿ residual after", &r.diagnostics_after, palette(4)),
+    ] {
+        let x: Vec<f64> = (1..=d.correlations.len())
+            .map(|k| k as f64 + 0.15)
+            .collect();
+        let y: Vec<f64> = d.correlations.iter().map(|c| c.acceleration).collect();
+        cp.series.push(Series::markers(label, x, y, c));
+    }
+    cp.y_range = Some((-1.0, 1.0));
+    cp.x_range = Some((0.5, 6.5));
+    cp.hlines = vec![(0.0, String::new())];
+    save_figure(
+        &Figure::new("Residual vs signature features", vec![cp]),
+        &dir.join("signature_correlation"),
+    )?;
+    Ok(())
+}

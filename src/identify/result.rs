@@ -1,0 +1,221 @@
+//! What a calibration found: the [`CalibrationReport`] and its parts (errors per stage,
+//! candidate scores, added effects, the verdict, the split, raw-signal NRMSE).
+
+use super::EffectId;
+use super::diagnose;
+use super::fit::FittedValue;
+use super::replay::{ChannelErrors, PreparedRecord, Replay};
+use crate::params::Params;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Error of the twin against the records at one stage.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ErrorSummary {
+    /// What the value means.
+    pub metric: String,
+    /// RMS of the weighted residual (1 = sensor-noise level).
+    pub value: f64,
+    /// Pooled RMS errors per channel, SI: `du` [m/s], `ydd` [m/s²], `u` [m], `p1`, `p2` [Pa]
+    /// (records with pressures only), and the normalised ones `du_nrmse`, `ydd_nrmse` [-].
+    pub channels: BTreeMap<String, f64>,
+    /// Per file.
+    pub files: Vec<(String, ChannelErrors)>,
+}
+
+/// The text of the metric, as reported.
+pub const METRIC: &str = "RMS of the noise-weighted residual of relative velocity du/dt \
+(measured and twin u through the same zero-phase 25 Hz low-pass and central difference) and of \
+body acceleration ydd (same low-pass), decimated to 250 Hz; each file and channel divided by \
+max(estimated sensor noise, 1 % of the signal RMS); chamber pressures p1, p2 (same low-pass, \
+floor on 1 % of their swing) are included for the records that have them; 1.0 = noise level";
+
+/// A candidate effect's score in one round.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CandidateScore {
+    /// The effect.
+    pub effect: EffectId,
+    /// Round (1 = first).
+    pub round: usize,
+    /// ΔBIC against the current model (negative = better).
+    pub score: f64,
+    /// Share of the residual sum of squares removed [-].
+    pub relative_gain: f64,
+    /// Fitted effect parameters (SI), by name with unit.
+    pub params: BTreeMap<String, f64>,
+}
+
+/// An effect added to the twin.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AddedEffect {
+    /// The effect.
+    pub effect: EffectId,
+    /// Final fitted parameters (SI), by name with unit.
+    pub params: BTreeMap<String, f64>,
+    /// Their 1-σ uncertainties (SI).
+    pub uncertainties: BTreeMap<String, f64>,
+    /// Why it was added.
+    pub evidence: String,
+}
+
+/// Verdict of a calibration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Effects were added and explain the residual.
+    Explained,
+    /// The twin with re-fitted declared parameters already matches to the noise level.
+    NoMissingEffect,
+    /// A residual above the noise remains that no library effect explains.
+    Unexplained,
+    /// The records cannot determine the parameters (too short, no excitation, channels
+    /// missing): nothing is calibrated.
+    InsufficientData,
+}
+
+impl Verdict {
+    /// As in `report.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Explained => "explained",
+            Verdict::NoMissingEffect => "no_missing_effect",
+            Verdict::Unexplained => "unexplained",
+            Verdict::InsufficientData => "insufficient_data",
+        }
+    }
+}
+
+/// The paper's own calibration (section 4), the baseline to beat.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PaperBaseline {
+    /// Sine tests used.
+    pub files: Vec<String>,
+    /// Cd from the gain ratio [-].
+    pub cd: f64,
+    /// τ from the phase slope [s].
+    pub tau_s: f64,
+}
+
+/// Residual diagnostics at one stage.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnostics {
+    /// Whiteness of the weighted residual.
+    pub whiteness: diagnose::Whiteness,
+    /// Correlations with the signature features.
+    pub correlations: Vec<diagnose::FeatureCorrelation>,
+    /// Share of the raw acceleration residual's power above 30 Hz [-].
+    pub high_frequency_share: f64,
+}
+
+/// Everything a calibration found.
+#[derive(Debug, Clone)]
+pub struct CalibrationReport {
+    /// The starting (nominal) parameters.
+    pub nominal: Params,
+    /// The calibrated parameters, with the added effects enabled.
+    pub params: Params,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// Effects added, most important first.
+    pub effects: Vec<AddedEffect>,
+    /// Every candidate's score, per round (round 1 first).
+    pub candidates: Vec<CandidateScore>,
+    /// Final declared parameters (Cd, τ, mass if identifiable) with uncertainties.
+    pub calibrated: Vec<FittedValue>,
+    /// Whether the mass was identifiable and fitted.
+    pub mass_fitted: bool,
+    /// Correlation matrix of the final fit, with its knob names.
+    pub correlation: (Vec<String>, Vec<Vec<f64>>),
+    /// The paper's section-4 calibration.
+    pub baseline: Option<PaperBaseline>,
+    /// Error with the nominal parameters.
+    pub error_nominal: ErrorSummary,
+    /// Error after the paper's method (if sine tests were present).
+    pub error_baseline: Option<ErrorSummary>,
+    /// Error with re-fitted declared parameters, no effect.
+    pub error_before: ErrorSummary,
+    /// Error with the added effects.
+    pub error_after: ErrorSummary,
+    /// Diagnostics before adding effects.
+    pub diagnostics_before: Diagnostics,
+    /// Diagnostics after.
+    pub diagnostics_after: Diagnostics,
+    /// Residual count and its effective (decorrelated) count.
+    pub n: usize,
+    /// Effective count used by the BIC.
+    pub n_eff: f64,
+    /// Replays of the whole campaign.
+    pub evaluations: usize,
+    /// Record names.
+    pub files: Vec<String>,
+    /// Replays before (declared parameters re-fitted), per record.
+    pub replays_before: Vec<Replay>,
+    /// Replays after, per record.
+    pub replays_after: Vec<Replay>,
+    /// Replays nominal, per record.
+    pub replays_nominal: Vec<Replay>,
+    /// The prepared records (measured channels for plots).
+    pub records: Vec<PreparedRecord>,
+    /// Notes (mass identifiability, termination reasons, warnings).
+    pub notes: Vec<String>,
+    /// What the data lack (verdict `insufficient_data`), one sentence each.
+    pub missing: Vec<String>,
+    /// How records were split into fit and validation.
+    pub split: Split,
+    /// Error on the records (or parts) used for the fit, before and after the effects.
+    pub error_training: Option<StageErrors>,
+    /// Error on the held-out records (or parts), before and after the effects.
+    pub error_validation: Option<StageErrors>,
+    /// Raw-signal NRMSE per channel, as `seat-twin replay` replays each stage.
+    pub raw_nrmse: RawNrmse,
+    /// What the twin still misses after the effects (when not at the noise level).
+    pub residual_left: Option<diagnose::ResidualLeft>,
+}
+
+/// How the records were split into the part that is fitted and the part held out.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+pub struct Split {
+    /// The rule, in words.
+    pub rule: String,
+    /// Records (or record parts) the fit used.
+    pub fit: Vec<String>,
+    /// Records (or record parts) held out for validation.
+    pub validation: Vec<String>,
+}
+
+/// Weighted error before and after the effects, on one set of records.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StageErrors {
+    /// Weighted RMS before (declared parameters re-fitted, no effect); 1 = noise level.
+    pub before: f64,
+    /// Weighted RMS after (with the added effects).
+    pub after: f64,
+    /// The metric ([`METRIC`]).
+    pub metric: String,
+    /// Per channel: `[before, after]` (weighted RMS of that channel alone).
+    pub channels: BTreeMap<String, [f64; 2]>,
+    /// The records (or parts) it covers.
+    pub files: Vec<String>,
+}
+
+/// Raw-signal NRMSE (RMS of twin − measured over the measured channel's standard deviation,
+/// pooled over records) per channel `u`, `ydd`, `p1`, `p2`, for each stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+pub struct RawNrmse {
+    /// Definition, in words.
+    pub definition: String,
+    /// All records: nominal parameters.
+    pub nominal: BTreeMap<String, f64>,
+    /// All records: declared parameters re-fitted, no effect.
+    pub before: BTreeMap<String, f64>,
+    /// All records: calibrated (the `calibrated.toml`).
+    pub after: BTreeMap<String, f64>,
+    /// Held-out records only: `{nominal, before, after}` the same way.
+    pub validation: BTreeMap<String, BTreeMap<String, f64>>,
+}
+
+/// Definition of [`RawNrmse`].
+pub const RAW_NRMSE: &str = "sqrt(sum over records of Σ(twin − measured)²) / sqrt(sum over \
+records of Σ(measured − its record mean)²), raw samples on each record's own grid, the twin \
+replayed exactly as `seat-twin replay --preset <that stage's parameters>` replays it (preset \
+step, conditioned excitation)";

@@ -1,0 +1,452 @@
+//! The independent true rig, its campaigns, and helpers to run and judge a calibration.
+
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use seat_twin::dataset::Record;
+use seat_twin::identify::{self, CalibrationOptions, CalibrationReport, EffectId, Verdict};
+use seat_twin::params::Params;
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Default)]
+pub(super) struct RigEffects {
+    /// (Coulomb N, Stribeck extra N, Stribeck velocity m/s, viscous N·s/m)
+    pub(super) friction: Option<(f64, f64, f64, f64)>,
+    /// overlap m (smooth edge)
+    pub(super) overlap: Option<f64>,
+    /// spool null offset m
+    pub(super) offset: Option<f64>,
+    /// leakage coefficient m³/(s·Pa), grows with |Δp|
+    pub(super) leakage: Option<f64>,
+    /// (β hose, β chamber) Pa
+    pub(super) compliance: Option<(f64, f64)>,
+    /// droop Pa/(m³/s), linear in the drawn flow (solved by fixed-point iteration here)
+    pub(super) sag: Option<f64>,
+    /// Outside the library: a discharge coefficient that depends on the spool position,
+    /// `Cd·(1 + a·tanh(x/0.1 mm))` — larger on one side of null than on the other, more so
+    /// with the opening (asymmetric metering edges). No library effect has this form: an
+    /// offset shifts null but keeps the gain, overlap and sag are symmetric.
+    pub(super) cd_spool: Option<f64>,
+}
+
+pub(super) struct Rig {
+    pub(super) cd: f64,
+    pub(super) tau: f64,
+    pub(super) fx: RigEffects,
+}
+
+pub(super) enum Test {
+    Sine { f: f64, a: f64, dur: f64 },
+    Ride { dur: f64 },
+}
+
+pub(super) fn ssqrt(dp: f64) -> f64 {
+    const D: f64 = 1.0e4;
+    if dp.abs() < D {
+        dp / D.sqrt()
+    } else {
+        dp.signum() * dp.abs().sqrt()
+    }
+}
+
+/// Platform of the ride: three cosines in position, from rest in position and velocity.
+pub(super) fn platform(t: f64) -> (f64, f64, f64) {
+    let comps = [(1.3, 0.35), (2.7, 0.3), (4.1, 0.25)];
+    let (mut x, mut xd, mut xdd) = (0.0, 0.0, 0.0);
+    for (f, acc) in comps {
+        let w: f64 = 2.0 * PI * f;
+        let a = 2.0 * acc / (w * w);
+        x += 0.5 * a * (1.0 - (w * t).cos());
+        xd += 0.5 * a * w * (w * t).sin();
+        xdd += 0.5 * a * w * w * (w * t).cos();
+    }
+    (x, xd, xdd)
+}
+
+impl Rig {
+    pub(super) fn rhs(&self, y: &[f64; 10], v_valve: f64, xdd: f64) -> [f64; 10] {
+        let (m, k) = (11.7, 3680.0);
+        let area = PI * (0.025f64.powi(2) - 0.018f64.powi(2)) / 4.0;
+        let (l, dh): (f64, f64) = (0.5, 0.010);
+        let (rho, mu) = (840.0, 0.02);
+        let (beta_h, beta_c) = self.fx.compliance.unwrap_or((1.2e9, 1.2e9));
+        let r = 128.0 * mu * l / (PI * dh.powi(4));
+        let inert = 4.0 * rho * l / (PI * dh * dh);
+        let ch = PI * l * dh * dh / (4.0 * beta_h);
+        let cc = area * 0.035 / beta_c;
+        let (pa, p0) = (100e5, 10e5);
+        let [u, du, p1, p2, q1, q2, p1v, p2v, xv, dxv] = *y;
+        // Friction.
+        let ff = match self.fx.friction {
+            Some((fc, fs, vs, b)) => {
+                (fc + fs * (-(du / vs).powi(2)).exp()) * (du / 2e-3).tanh() + b * du
+            }
+            None => 0.0,
+        };
+        let half = 0.035;
+        let pen = u.abs() - half;
+        let stop = if pen > 0.0 {
+            -u.signum() * (5e6 * pen + 5e3 * du * u.signum()).max(0.0)
+        } else {
+            0.0
+        };
+        let ydd = (-k * u - p1 * area + p2 * area - ff + stop) / m;
+        // Valve opening.
+        let mut x = xv.clamp(-0.8e-3, 0.8e-3) - self.fx.offset.unwrap_or(0.0);
+        if let Some(ov) = self.fx.overlap {
+            let d = x.abs() - ov;
+            let e = 1e-6;
+            let open =
+                0.5 * (d + (d * d + e * e).sqrt()) - 0.5 * (ov * ov + e * e).sqrt() + 0.5 * ov;
+            x = x.signum() * open.max(0.0);
+        }
+        let cd = match self.fx.cd_spool {
+            Some(a) => self.cd * (1.0 + a * (x / 1e-4).tanh()),
+            None => self.cd,
+        };
+        let g = cd * 0.0251 * (2.0 / rho).sqrt() * x;
+        let supply = |p_line: f64| -> f64 {
+            match self.fx.sag {
+                None => pa,
+                Some(r2) => {
+                    let mut ps = pa;
+                    for _ in 0..12 {
+                        let q = g.abs() * ssqrt(ps - p_line).max(0.0);
+                        ps = pa - r2 * q;
+                    }
+                    ps
+                }
+            }
+        };
+        let (q1v, q2v) = if x > 0.0 {
+            (g * ssqrt(p1v - p0), g * ssqrt(supply(p2v) - p2v))
+        } else {
+            (g * ssqrt(supply(p1v) - p1v), g * ssqrt(p2v - p0))
+        };
+        let ql = match self.fx.leakage {
+            Some(cl) => cl * (p1 - p2) * (1.0 + (p1 - p2).abs() / 2e7),
+            None => 0.0,
+        };
+        let wn = 691.0;
+        let target = 8e-5 * v_valve;
+        [
+            du,
+            ydd - xdd,
+            (du * area - q1 - ql) / cc,
+            (q2 - du * area + ql) / cc,
+            (p1 - p1v - r * q1) / inert,
+            (p2v - p2 - r * q2) / inert,
+            (q1 - q1v) / ch,
+            (q2v - q2) / ch,
+            dxv,
+            wn * wn * (target - xv) - 2.0 * 1.1 * wn * dxv,
+        ]
+    }
+
+    pub(super) fn body_acc(&self, y: &[f64; 10], xdd: f64) -> f64 {
+        self.rhs(y, 0.0, xdd)[1] + xdd
+    }
+
+    /// Simulates one test and returns a measured record (1 kHz, noisy, quantised); with
+    /// `pressures`, the chamber pressures too (Pa gauge, 0.2 bar noise, 12-bit on 250 bar).
+    pub(super) fn record(&self, test: &Test, seed: u64, pressures: bool) -> Record {
+        let h = 5e-5;
+        let per_sample = 20;
+        let dur = match test {
+            Test::Sine { dur, .. } | Test::Ride { dur } => *dur,
+        };
+        let n = (dur * 1000.0).round() as usize + 1;
+        let mut y = [0.0; 10];
+        for i in [2, 3, 6, 7] {
+            y[i] = 55e5;
+        }
+        let mut hist: Vec<f64> = Vec::with_capacity(n * per_sample + 1);
+        let (kp, ki) = (-5.0, -7.5);
+        let cmd = |t: f64, y: &[f64; 10]| -> f64 {
+            match test {
+                Test::Sine { f, a, .. } => a * (2.0 * PI * f * t).cos(),
+                Test::Ride { .. } => (kp * y[0] + ki * platform(t).1).clamp(-10.0, 10.0),
+            }
+        };
+        let plat = |t: f64| match test {
+            Test::Sine { .. } => (0.0, 0.0, 0.0),
+            Test::Ride { .. } => platform(t),
+        };
+        let delayed = |hist: &[f64], t: f64| -> f64 {
+            let s = (t - self.tau) / h;
+            if s < 0.0 {
+                return 0.0;
+            }
+            let i = s.floor() as usize;
+            let f = s - i as f64;
+            match (hist.get(i), hist.get(i + 1)) {
+                (Some(a), Some(b)) => a + f * (b - a),
+                (Some(a), None) => *a,
+                _ => *hist.last().unwrap_or(&0.0),
+            }
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let acc_noise = Normal::new(0.0, 0.08).unwrap();
+        let pos_noise = Normal::new(0.0, 1e-5).unwrap();
+        let lsb = 0.075 / 4096.0;
+        let p_noise = Normal::new(0.0, 2e4).unwrap();
+        let p_lsb = 250e5 / 4096.0;
+        let (mut t_col, mut v_col, mut u_col, mut x_col, mut xdd_col, mut ydd_col) =
+            (vec![], vec![], vec![], vec![], vec![], vec![]);
+        let (mut p1_col, mut p2_col) = (vec![], vec![]);
+        let mut t = 0.0;
+        hist.push(cmd(0.0, &y));
+        for s in 0..n {
+            let (x, _, xdd) = plat(t);
+            t_col.push(s as f64 * 1e-3);
+            v_col.push(hist[hist.len() - 1]);
+            let un = y[0] + pos_noise.sample(&mut rng);
+            u_col.push(lsb * ((un + 0.0375) / lsb).round() - 0.0375);
+            x_col.push(x + pos_noise.sample(&mut rng));
+            xdd_col.push(xdd + acc_noise.sample(&mut rng));
+            ydd_col.push(self.body_acc(&y, xdd) + acc_noise.sample(&mut rng));
+            if pressures {
+                for (col, p) in [(&mut p1_col, y[2]), (&mut p2_col, y[3])] {
+                    col.push(p_lsb * ((p + p_noise.sample(&mut rng)) / p_lsb).round());
+                }
+            }
+            if s + 1 == n {
+                break;
+            }
+            for _ in 0..per_sample {
+                let f = |tt: f64, yy: &[f64; 10]| self.rhs(yy, delayed(&hist, tt), plat(tt).2);
+                let k1 = f(t, &y);
+                let mut tmp = [0.0; 10];
+                for i in 0..10 {
+                    tmp[i] = y[i] + 0.5 * h * k1[i];
+                }
+                let k2 = f(t + 0.5 * h, &tmp);
+                for i in 0..10 {
+                    tmp[i] = y[i] + 0.5 * h * k2[i];
+                }
+                let k3 = f(t + 0.5 * h, &tmp);
+                for i in 0..10 {
+                    tmp[i] = y[i] + h * k3[i];
+                }
+                let k4 = f(t + h, &tmp);
+                for i in 0..10 {
+                    y[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+                }
+                y[8] = y[8].clamp(-0.8e-3, 0.8e-3);
+                t += h;
+                hist.push(cmd(t, &y));
+            }
+        }
+        let ride = matches!(test, Test::Ride { .. });
+        Record {
+            path: PathBuf::from(match test {
+                Test::Sine { f, a, .. } => format!("sine_{f}hz_{a}v.csv"),
+                Test::Ride { .. } => "ride.csv".into(),
+            }),
+            metadata: vec![],
+            dt: 1e-3,
+            t: t_col,
+            v_in: Some(v_col),
+            u: Some(u_col),
+            x: ride.then_some(x_col),
+            xdd: ride.then_some(xdd_col),
+            ydd: Some(ydd_col),
+            p1: pressures.then_some(p1_col),
+            p2: pressures.then_some(p2_col),
+            warnings: vec![],
+        }
+    }
+}
+
+pub(super) fn campaign(fx: RigEffects, seed: u64, pressures: bool) -> Vec<Record> {
+    let rig = Rig {
+        cd: 0.95 * 0.1506,
+        tau: 0.0175 + 0.0015,
+        fx,
+    };
+    let tests = [
+        Test::Sine {
+            f: 2.0,
+            a: 2.1,
+            dur: 2.5,
+        },
+        Test::Sine {
+            f: 5.0,
+            a: 0.72,
+            dur: 2.0,
+        },
+        Test::Sine {
+            f: 10.0,
+            a: 4.0,
+            dur: 2.0,
+        },
+        Test::Sine {
+            f: 20.0,
+            a: 0.72,
+            dur: 1.5,
+        },
+        Test::Ride { dur: 5.0 },
+    ];
+    tests
+        .iter()
+        .enumerate()
+        .map(|(i, t)| rig.record(t, seed * 100 + i as u64, pressures))
+        .collect()
+}
+
+pub(super) fn run(fx: RigEffects, seed: u64) -> CalibrationReport {
+    run_with(fx, seed, false)
+}
+
+pub(super) fn run_with(fx: RigEffects, seed: u64, pressures: bool) -> CalibrationReport {
+    calibrate_paper(&campaign(fx, seed, pressures))
+}
+
+/// Calibrates `recs` from the paper preset with the default options.
+pub(super) fn calibrate_paper(recs: &[Record]) -> CalibrationReport {
+    identify::calibrate(
+        &Params::paper(),
+        recs,
+        &CalibrationOptions::default(),
+        &|_| true,
+    )
+    .expect("calibration runs")
+}
+
+pub(super) fn first_ranked(r: &CalibrationReport) -> EffectId {
+    r.candidates
+        .iter()
+        .filter(|c| c.round == 1)
+        .min_by(|a, b| a.score.total_cmp(&b.score))
+        .expect("candidates scored")
+        .effect
+}
+
+pub(super) fn summary(r: &CalibrationReport) -> String {
+    let c: Vec<String> = r
+        .candidates
+        .iter()
+        .map(|c| {
+            format!(
+                "r{} {} {:.1} ({:.1} %)",
+                c.round,
+                c.effect.name(),
+                c.score,
+                100.0 * c.relative_gain
+            )
+        })
+        .collect();
+    let worst = r
+        .error_after
+        .files
+        .iter()
+        .map(|(f, e)| {
+            let w = [
+                Some(e.weighted_du),
+                e.weighted_ydd,
+                e.weighted_p1,
+                e.weighted_p2,
+            ]
+            .into_iter()
+            .flatten()
+            .fold(0.0, f64::max);
+            (f.clone(), w)
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    format!(
+        "verdict {:?}, worst record channel after {worst:?}, effects {:?}, errors nominal {:.3} before {:.3} after {:.3}, cd {:.5} tau {:.5}; {}",
+        r.verdict,
+        r.effects
+            .iter()
+            .map(|e| e.effect.name())
+            .collect::<Vec<_>>(),
+        r.error_nominal.value,
+        r.error_before.value,
+        r.error_after.value,
+        r.params.plant.valve.cd,
+        r.params.plant.valve.tau_s,
+        c.join("; ")
+    )
+}
+
+/// Weighted error of a correct model on these records: the null case (no hidden effect) ends
+/// at 0.715, i.e. the sensor noise and quantisation alone.
+pub(super) const NOISE_FLOOR: f64 = 0.70;
+
+/// The effect removes at least 30 % of the error, or — for a weak effect whose error before is
+/// already within 50 % of the noise floor (leakage: 0.985) — brings it down to that floor.
+pub(super) fn assert_reduced_to_noise(r: &CalibrationReport, s: &str) {
+    let (before, after) = (r.error_before.value, r.error_after.value);
+    assert!(
+        after < 0.7 * before || (before < 1.5 * NOISE_FLOOR && after < 1.02 * NOISE_FLOOR),
+        "{s}"
+    );
+}
+
+pub(super) fn check_single(fx: RigEffects, expected: EffectId, seed: u64) -> CalibrationReport {
+    check_single_with(fx, expected, seed, false)
+}
+
+pub(super) fn check_single_with(
+    fx: RigEffects,
+    expected: EffectId,
+    seed: u64,
+    pressures: bool,
+) -> CalibrationReport {
+    let r = run_with(fx, seed, pressures);
+    let s = summary(&r);
+    eprintln!("{}: {s}", expected.name());
+    assert_eq!(first_ranked(&r), expected, "{s}");
+    assert_eq!(r.verdict, Verdict::Explained, "{s}");
+    assert_eq!(r.effects[0].effect, expected, "{s}");
+    assert_reduced_to_noise(&r, &s);
+    // The declared mismatch is found: Cd −5 %, τ +1.5 ms.
+    assert!(
+        (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
+        "{s}"
+    );
+    assert!((r.params.plant.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
+    r
+}
+
+/// The rig's true declared parameters (Cd −5 %, τ +1.5 ms) on the paper preset: with no
+/// hidden effect, this is the right model of the rig.
+pub(super) fn true_params() -> Params {
+    let mut p = Params::paper();
+    p.plant.valve.cd = 0.95 * 0.1506;
+    p.plant.valve.tau_s = 0.0175 + 0.0015;
+    p
+}
+
+pub(super) fn rms_diff(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len()).max(1);
+    (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / n as f64).sqrt()
+}
+
+/// Sensor noise of the rig's records (noise and quantisation, as the rig adds them).
+pub(super) const U_NOISE: f64 = 1.13e-5; // √(10 µm² + (18.3 µm)²/12)
+pub(super) const ACC_NOISE: f64 = 0.08;
+pub(super) const P_NOISE: f64 = 2.0e4; // 0.2 bar; the 6.1 kPa LSB adds 1 %
+
+pub(super) fn check_pair(
+    fx: RigEffects,
+    pair: [EffectId; 2],
+    seed: u64,
+    pressures: bool,
+) -> CalibrationReport {
+    let r = run_with(fx, seed, pressures);
+    let s = summary(&r);
+    eprintln!(
+        "pair {}+{}: {s}; notes {:?}",
+        pair[0].name(),
+        pair[1].name(),
+        r.notes
+    );
+    let found: Vec<EffectId> = r.effects.iter().map(|e| e.effect).collect();
+    assert!(found.contains(&pair[0]) && found.contains(&pair[1]), "{s}");
+    assert_eq!(r.verdict, Verdict::Explained, "{s}");
+    assert!(r.error_after.value < 0.7 * r.error_before.value, "{s}");
+    let v = r.error_validation.as_ref().expect("validation");
+    assert!(v.after < v.before, "{s}");
+    r
+}
