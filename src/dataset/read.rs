@@ -87,15 +87,7 @@ fn check_text(bytes: &[u8], path: &Path, partial: bool) -> Result<(), DatasetErr
             detail: "the file starts with a UTF-16 byte-order mark; save it as UTF-8".into(),
         });
     }
-    let locate = |at: usize| {
-        let before = &bytes[..at];
-        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-        let line_start = before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        (line, at - line_start + 1)
-    };
+    let locate = |at: usize| crate::fsutil::line_column(bytes, at);
     let invalid = match std::str::from_utf8(bytes) {
         Ok(_) => None,
         Err(e) if partial && e.error_len().is_none() => None,
@@ -109,7 +101,7 @@ fn check_text(bytes: &[u8], path: &Path, partial: bool) -> Result<(), DatasetErr
                 file: path.to_path_buf(),
                 line,
                 detail: format!(
-                    "invalid byte 0x{:02x} at byte {col} of the line (byte offset {at} in the file)",
+                    "invalid byte 0x{:02x} at character {col} of the line (byte offset {at} in the file)",
                     bytes[at]
                 ),
             })
@@ -120,7 +112,7 @@ fn check_text(bytes: &[u8], path: &Path, partial: bool) -> Result<(), DatasetErr
                 file: path.to_path_buf(),
                 line,
                 detail: format!(
-                    "a NUL byte (0x00) at byte {col} of the line (byte offset {at} in the file): \
+                    "a NUL byte (0x00) at character {col} of the line (byte offset {at} in the file): \
                      this is not a text file"
                 ),
             })

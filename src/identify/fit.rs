@@ -74,7 +74,8 @@ impl Knob {
             Knob::Offset if e.valve_offset.enabled => e.valve_offset.bias_v / 0.02,
             Knob::Leakage if e.leakage.enabled => e.leakage.coefficient_m3_per_s_pa / 1e-12,
             Knob::Compliance if e.compliance.enabled => {
-                (p.plant.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0).max(0.0)
+                (p.plant.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0)
+                    .max(0.0)
             }
             Knob::SupplySag if e.supply_sag.enabled => e.supply_sag.droop_pa_per_m3_s / 1e10,
             _ => 0.0,
