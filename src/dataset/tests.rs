@@ -356,7 +356,7 @@ fn encoding_errors() {
     assert!(matches!(e, DatasetError::Encoding { line: 3, .. }), "{e:?}");
     assert_eq!(
         e.to_string(),
-        "ride.csv: line 3: not UTF-8 text: invalid byte 0xff at byte 5 of the line \
+        "ride.csv: line 3: not UTF-8 text: invalid byte 0xff at character 5 of the line \
          (byte offset 12 in the file)"
     );
     let e = parse_record_bytes(b"\xff\xfet\x00", p(), RecordKind::Excitation).unwrap_err();
@@ -364,7 +364,7 @@ fn encoding_errors() {
     let e = parse_record_bytes(b"t,x\n0,\x001\n", p(), RecordKind::Excitation).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "ride.csv: line 2: not UTF-8 text: a NUL byte (0x00) at byte 3 of the line \
+        "ride.csv: line 2: not UTF-8 text: a NUL byte (0x00) at character 3 of the line \
          (byte offset 6 in the file): this is not a text file"
     );
     // Through a real file.
