@@ -10,7 +10,7 @@
 use super::IdentifyError;
 use super::progress::{Monitor, StopReason};
 use super::replay::PreparedRecord;
-use crate::params::Params;
+use crate::params::{ParamSpec, Params, spec};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
@@ -45,20 +45,11 @@ pub enum Knob {
 }
 
 impl Knob {
-    /// Name with unit, as in reports (`cd`, `tau_s`, `coulomb_n`, …).
+    /// Name with unit, as in reports (`cd`, `tau_s`, `coulomb_n`, …): the last part of its
+    /// preset key.
     pub fn name(self) -> &'static str {
-        match self {
-            Knob::Cd => "cd",
-            Knob::Tau => "tau_s",
-            Knob::Mass => "mass_kg",
-            Knob::FrictionCoulomb => "coulomb_n",
-            Knob::FrictionViscous => "viscous_n_s_per_m",
-            Knob::Overlap => "overlap_m",
-            Knob::Offset => "bias_v",
-            Knob::Leakage => "coefficient_m3_per_s_pa",
-            Knob::Compliance => "effective_bulk_modulus_pa",
-            Knob::SupplySag => "droop_pa_per_m3_s",
-        }
+        let key = self.spec().key;
+        key.rsplit('.').next().unwrap_or(key)
     }
 
     /// θ of the parameter's current value in `p`.
@@ -82,60 +73,58 @@ impl Knob {
         }
     }
 
-    /// Sets the parameter from θ (clamped into its valid range) and enables its effect.
+    /// Its entry in the parameter table.
+    pub fn spec(self) -> &'static ParamSpec {
+        let key = match self {
+            Knob::Cd => "valve.cd",
+            Knob::Tau => "valve.tau_s",
+            Knob::Mass => "body.mass_kg",
+            Knob::FrictionCoulomb => "effects.friction.coulomb_n",
+            Knob::FrictionViscous => "effects.friction.viscous_n_s_per_m",
+            Knob::Overlap => "effects.valve_overlap.overlap_m",
+            Knob::Offset => "effects.valve_offset.bias_v",
+            Knob::Leakage => "effects.leakage.coefficient_m3_per_s_pa",
+            Knob::Compliance => "effects.compliance.effective_bulk_modulus_pa",
+            Knob::SupplySag => "effects.supply_sag.droop_pa_per_m3_s",
+        };
+        spec(key).expect("every knob is in the parameter table")
+    }
+
+    /// Sets the parameter from θ, clamped into its range in the parameter table (the overlap
+    /// also below 90 % of the spool travel), and enables its effect.
     pub fn set(self, p: &mut Params, theta: f64) {
+        let s = self.spec();
         let a = theta.abs();
+        let value = match self {
+            Knob::Cd => 0.1 * theta,
+            Knob::Tau => 0.01 * theta,
+            Knob::Mass => 10.0 * theta,
+            Knob::FrictionCoulomb => 10.0 * a,
+            Knob::FrictionViscous => 100.0 * a,
+            Knob::Overlap => (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m),
+            Knob::Offset => 0.02 * theta,
+            Knob::Leakage => 1e-12 * a,
+            Knob::Compliance => p.plant.fluid.bulk_modulus_pa / (1.0 + a),
+            Knob::SupplySag => 1e10 * a,
+        };
+        s.set_unchecked(p, value.clamp(s.min, s.max));
         let e = &mut p.plant.effects;
         match self {
-            Knob::Cd => p.plant.valve.cd = (0.1 * theta).clamp(1e-3, 1.0),
-            Knob::Tau => p.plant.valve.tau_s = (0.01 * theta).clamp(0.0, 0.1),
-            Knob::Mass => p.plant.body.mass_kg = (10.0 * theta).clamp(1.0, 500.0),
-            Knob::FrictionCoulomb => {
-                e.friction.enabled = true;
-                e.friction.coulomb_n = (10.0 * a).min(5000.0);
-            }
-            Knob::FrictionViscous => {
-                e.friction.enabled = true;
-                e.friction.viscous_n_s_per_m = (100.0 * a).min(1e5);
-            }
-            Knob::Overlap => {
-                e.valve_overlap.enabled = true;
-                e.valve_overlap.overlap_m = (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m);
-            }
-            Knob::Offset => {
-                e.valve_offset.enabled = true;
-                e.valve_offset.bias_v = (0.02 * theta).clamp(-5.0, 5.0);
-            }
-            Knob::Leakage => {
-                e.leakage.enabled = true;
-                e.leakage.coefficient_m3_per_s_pa = (1e-12 * a).min(1e-9);
-            }
-            Knob::Compliance => {
-                e.compliance.enabled = true;
-                e.compliance.effective_bulk_modulus_pa =
-                    (p.plant.fluid.bulk_modulus_pa / (1.0 + a)).max(1e6);
-            }
-            Knob::SupplySag => {
-                e.supply_sag.enabled = true;
-                e.supply_sag.droop_pa_per_m3_s = (1e10 * a).min(1e12);
-            }
+            Knob::Cd | Knob::Tau | Knob::Mass => {}
+            Knob::FrictionCoulomb | Knob::FrictionViscous => e.friction.enabled = true,
+            Knob::Overlap => e.valve_overlap.enabled = true,
+            Knob::Offset => e.valve_offset.enabled = true,
+            Knob::Leakage => e.leakage.enabled = true,
+            Knob::Compliance => e.compliance.enabled = true,
+            Knob::SupplySag => e.supply_sag.enabled = true,
         }
     }
 
-    /// SI value of the parameter in `p`.
+    /// SI value of the parameter in `p` (for compliance, the bulk modulus in use).
     pub fn value(self, p: &Params) -> f64 {
-        let e = &p.plant.effects;
         match self {
-            Knob::Cd => p.plant.valve.cd,
-            Knob::Tau => p.plant.valve.tau_s,
-            Knob::Mass => p.plant.body.mass_kg,
-            Knob::FrictionCoulomb => e.friction.coulomb_n,
-            Knob::FrictionViscous => e.friction.viscous_n_s_per_m,
-            Knob::Overlap => e.valve_overlap.overlap_m,
-            Knob::Offset => e.valve_offset.bias_v,
-            Knob::Leakage => e.leakage.coefficient_m3_per_s_pa,
             Knob::Compliance => p.effective_bulk_modulus_pa(),
-            Knob::SupplySag => e.supply_sag.droop_pa_per_m3_s,
+            _ => self.spec().get(p),
         }
     }
 }

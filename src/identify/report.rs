@@ -130,24 +130,18 @@ fn decimals_for(std: f64, min: usize) -> usize {
     (d.max(min as i64).min(9)) as usize
 }
 
-/// Display form of a fitted parameter by its report name: `(symbol, scale from SI, unit)`,
-/// display = SI × scale; `("", 1, "")` for a name it does not know. The one table used by the
+/// Display form of a fitted parameter by its report name (the last part of its preset key:
+/// `cd`, `tau_s`, `coulomb_n`): `(symbol, scale from SI, unit)`, display = SI × scale, read
+/// from the parameter table [`crate::params::PARAMS`] (the first key ending in the name, so
+/// `tau_s` is the valve's delay); `("", 1, "")` for a name it does not know. Used by the
 /// report, the CLI and the app.
 pub fn display_unit(name: &str) -> (&'static str, f64, &'static str) {
-    match name {
-        "cd" => ("Cd", 1.0, ""),
-        "tau_s" => ("τ", 1e3, "ms"),
-        "mass_kg" => ("m", 1.0, "kg"),
-        "coulomb_n" => ("F_c", 1.0, "N"),
-        "viscous_n_s_per_m" => ("b", 1.0, "N·s/m"),
-        "stribeck_n" => ("F_s", 1.0, "N"),
-        "overlap_m" => ("overlap", 1e6, "µm"),
-        "bias_v" => ("V_bias", 1e3, "mV"),
-        "coefficient_m3_per_s_pa" => ("C_leak", 6e9, "(L/min)/bar"),
-        "effective_bulk_modulus_pa" => ("β", 1e-9, "GPa"),
-        "droop_pa_per_m3_s" => ("droop", 1e-5 / 6e4, "bar/(L/min)"),
-        _ => ("", 1.0, ""),
-    }
+    crate::params::PARAMS
+        .iter()
+        .find(|s| s.key.rsplit('.').next() == Some(name))
+        .map_or(("", 1.0, ""), |s| {
+            (s.symbol, s.display.scale, s.display.unit)
+        })
 }
 
 /// `τ = 17.50 ± 0.01 ms`: the parameter in its display unit with its 1-σ uncertainty.
