@@ -4,6 +4,7 @@
 //! kittest tests drive the real app headless; the `eframe::App` impl adds persistence, the
 //! window title and the frame-time readout.
 
+use super::ab::{AbAction, AbView};
 use super::controls::{self, ExcitationAction, ExcitationEditor, ExcitationKind, LoadedRecord};
 use super::files::{self, CsvTable, Dialogs, Purpose, Writer};
 use super::frequency::{self, Analytic, Curves, Dwell, FreqAction, FreqView};
@@ -108,6 +109,10 @@ pub struct EngineView {
     pub running: bool,
     /// Parameters the engine runs with (echo).
     pub params: Option<Params>,
+    /// The A/B reference controller the engine runs (`None`: A/B off).
+    pub reference: Option<ControllerParams>,
+    /// End-stop contacts since the last restart: live twin, reference twin.
+    pub contacts: (usize, usize),
 }
 
 /// An action waiting for "discard unsaved changes?".
@@ -204,6 +209,7 @@ pub struct SeatTwinApp {
     last_stable: Option<ControllerParams>,
     scope_frames: Vec<egui::Rect>,
     path_prompt: Option<(Purpose, String)>,
+    ab: AbView,
 }
 
 impl SeatTwinApp {
@@ -272,6 +278,7 @@ impl SeatTwinApp {
             last_stable: None,
             scope_frames: Vec::new(),
             path_prompt: None,
+            ab: AbView::default(),
         };
         if app.settings.excitation.kind == ExcitationKind::Record {
             // The record itself is not persisted.
@@ -293,6 +300,9 @@ impl SeatTwinApp {
     }
 
     fn send_engine_setup(&mut self) {
+        if self.ab.is_on() {
+            self.send(Command::SetReference(self.ab.command()));
+        }
         if let Some(e) = self.settings.excitation.excitation() {
             self.send(Command::SetExcitation(Box::new(e)));
         }
@@ -494,6 +504,31 @@ impl SeatTwinApp {
         self.engine_error = None;
     }
 
+    /// The A/B state.
+    pub fn ab(&self) -> &AbView {
+        &self.ab
+    }
+
+    /// Switches A/B on or off (the engine restarts A and B together from rest).
+    pub fn set_ab(&mut self, on: bool) {
+        self.ab.set_on(on);
+        self.send_reference();
+    }
+
+    /// Pins the current controller as the A/B reference (B).
+    pub fn set_current_as_reference(&mut self) {
+        self.ab.set_reference(self.params.controller);
+        if self.ab.is_on() {
+            self.send_reference();
+        }
+    }
+
+    fn send_reference(&mut self) {
+        self.send(Command::SetReference(self.ab.command()));
+        self.traces.clear();
+        self.engine_error = None;
+    }
+
     /// Loads a preset file; a bad file leaves everything as it was and says why.
     pub fn open_preset_file(&mut self, path: &Path) {
         match Preset::load(path) {
@@ -686,6 +721,7 @@ impl SeatTwinApp {
                 "seat-twin live traces (twin, linear, passive)".into(),
             ),
             ("preset".into(), self.preset.name.clone()),
+            ("controller".into(), c.kind.name().to_string()),
             ("kp_v_per_m".into(), c.kp_v_per_m.to_string()),
             ("ki_v_s_per_m".into(), c.ki_v_s_per_m.to_string()),
             (
@@ -752,10 +788,9 @@ impl SeatTwinApp {
         ];
         let mut freq = Figure::new(
             format!(
-                "seat-twin — {} (Kp = {:.2} V/m, Ki = {:.2} V·s/m)",
+                "seat-twin — {} ({})",
                 self.preset.name,
-                self.params.controller.kp_v_per_m,
-                self.params.controller.ki_v_s_per_m
+                super::format::controller_text(&self.params.controller)
             ),
             vec![t_mag, t_ph, b_mag, b_ph],
         );
@@ -834,12 +869,16 @@ impl SeatTwinApp {
                 realtime_factor,
                 running,
                 params,
+                reference,
+                contacts,
             } => {
                 self.engine_view = EngineView {
                     t,
                     realtime_factor,
                     running,
                     params: Some(*params),
+                    reference,
+                    contacts,
                 }
             }
             Event::Contact(_) => self.traces.contact_count += 1,
@@ -1082,10 +1121,12 @@ impl SeatTwinApp {
                     &self.traces,
                     &self.params,
                     &mut self.hidden_curves,
+                    self.ab.is_on(),
                 );
                 self.frame_stats.scopes_ms = t_scopes.elapsed().as_secs_f64() * 1e3;
                 let t_freq = Instant::now();
                 let last_stable = self.last_stable.filter(|g| *g != self.params.controller);
+                let reference = self.ab.curves(&self.params);
                 action = frequency::frequency_ui(
                     &mut cols[1],
                     self.analytic.curves(),
@@ -1095,6 +1136,7 @@ impl SeatTwinApp {
                         phase_unwrapped: &mut self.settings.phase_unwrapped,
                         hidden: &mut self.hidden_curves,
                         last_stable,
+                        reference,
                     },
                 );
                 self.frame_stats.freq_ms = t_freq.elapsed().as_secs_f64() * 1e3;
@@ -1277,8 +1319,13 @@ impl SeatTwinApp {
             }
         });
         ui.separator();
+        ui.heading("A/B comparison");
+        if self.ab.controls_ui(ui, &self.params.controller) == AbAction::Send {
+            self.send_reference();
+        }
+        ui.separator();
         ui.heading("Excitation");
-        match controls::excitation_ui(ui, &mut self.settings.excitation) {
+        match controls::excitation_ui(ui, &mut self.settings.excitation, self.params.body.mass_kg) {
             ExcitationAction::None => {}
             ExcitationAction::Apply => {
                 if let Some(p) = self.settings.excitation.problem() {
@@ -1347,6 +1394,10 @@ impl SeatTwinApp {
             "end-stop contacts (twin): {}",
             self.traces.contact_count
         ));
+        if self.ab.is_on() {
+            ui.separator();
+            super::ab::metrics_ui(ui, self.traces.metrics.ab(), self.engine_view.contacts);
+        }
         if let Some(r) = self.traces.last_row() {
             ui.weak(format!(
                 "now: u {:+.1} mm, p1 {:.1} bar, p2 {:.1} bar",

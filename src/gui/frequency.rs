@@ -521,7 +521,13 @@ pub struct FreqView<'a> {
     pub hidden: &'a mut BTreeSet<String>,
     /// The last stable gains, if they differ from the current ones.
     pub last_stable: Option<ControllerParams>,
+    /// A/B on: the curves of the reference controller on the same plant (its linearised
+    /// twin's transmissibility is drawn with the live one's).
+    pub reference: Option<&'a Curves>,
 }
+
+/// Legend name of the A/B reference's transmissibility.
+pub const REFERENCE_NAME: &str = "B: reference twin (linearised)";
 
 /// The phase curve as shown: wrapped into ±180° (default) or unwrapped. Wrapping breaks the
 /// line where it jumps, so no vertical stroke crosses the plot.
@@ -619,6 +625,8 @@ pub fn frequency_ui(
     ];
     let dwell_name = "twin simulated (dwell)";
     let dwell_c = dwell_color(ui);
+    let reference = view.reference;
+    let (ref_w, ref_style) = super::scopes::style_of(super::scopes::Model::Reference);
     let t_items = |ui: &mut egui::Ui, id: &str, hidden: &mut BTreeSet<String>| {
         let mut items: Vec<LegendItem<'_>> = (0..3)
             .map(|i| LegendItem {
@@ -627,6 +635,13 @@ pub fn frequency_ui(
                 swatch: Swatch::Line(styles[i].0, styles[i].1),
             })
             .collect();
+        if reference.is_some() {
+            items.push(LegendItem {
+                name: REFERENCE_NAME,
+                color: super::scopes::REFERENCE,
+                swatch: Swatch::Line(ref_w, ref_style),
+            });
+        }
         if show_dwell {
             items.push(LegendItem {
                 name: dwell_name,
@@ -654,6 +669,16 @@ pub fn frequency_ui(
                     .color(colors[i])
                     .width(styles[i].0)
                     .style(styles[i].1),
+            );
+        }
+        if let Some(r) = reference
+            && !plotkit::hidden(&hid, "t_mag", REFERENCE_NAME)
+        {
+            pu.line(
+                Line::new(REFERENCE_NAME, r.t_mag[1].as_slice())
+                    .color(super::scopes::REFERENCE)
+                    .width(ref_w)
+                    .style(ref_style),
             );
         }
         if show_dwell && !plotkit::hidden(&hid, "t_mag", dwell_name) {
@@ -719,6 +744,18 @@ pub fn frequency_ui(
                         .color(colors[i])
                         .width(styles[i].0)
                         .style(styles[i].1),
+                );
+            }
+        }
+        if let Some(r) = reference
+            && !plotkit::hidden(&hid, "t_phase", REFERENCE_NAME)
+        {
+            for seg in shown_phase(&r.t_phase[1], unwrapped) {
+                pu.line(
+                    Line::new(REFERENCE_NAME, PlotPoints::Owned(seg))
+                        .color(super::scopes::REFERENCE)
+                        .width(ref_w)
+                        .style(ref_style),
                 );
             }
         }
@@ -919,8 +956,8 @@ pub fn stability_ui(
                     && ui
                         .button("Reset to last stable gains")
                         .on_hover_text(format!(
-                            "Kp = {:.2} V/m, Ki = {:.2} V·s/m, and the simulation from rest",
-                            g.kp_v_per_m, g.ki_v_s_per_m
+                            "{}, and the simulation from rest",
+                            super::format::controller_text(&g)
                         ))
                         .clicked()
                 {

@@ -16,6 +16,7 @@
 //!   off the UI thread; [`units`] — display units; [`format`] — numbers for people;
 //!   [`plotkit`] — y axes, clickable legends, wrapped phase.
 
+pub mod ab;
 pub mod app;
 pub mod controls;
 pub mod files;
