@@ -517,7 +517,7 @@ impl Default for ExcitationEditor {
             valve_amplitude_v: 1.0,
             valve_freq_hz: 2.0,
             class_name: "EM6".into(),
-            class_duration_s: 60.0,
+            class_duration_s: crate::seat_test::run::DEFAULT_DURATION_S,
             record: None,
             typed_path: String::new(),
         }
@@ -759,6 +759,11 @@ pub fn excitation_ui(
                         .update_while_editing(false)
                         .text("record")
                         .suffix(" s"),
+                )
+                .on_hover_text(
+                    "Length of each generated record (a new seed follows). The generator meets \
+                     the class's PSD within its tolerance on the standard's 180 s; shorter \
+                     records can miss it by more.",
                 ),
             ) {
                 action = ExcitationAction::Apply;
