@@ -338,13 +338,13 @@ fn gain_view(key: &str) -> Option<GainView> {
 
 /// One-line description of a controller structure for the panel.
 pub fn kind_summary(kind: ControllerKind) -> &'static str {
+    // Only glyphs the app's font draws (no combining dots): v_p is the platform velocity
+    // integrated from its accelerometer, v_b the body velocity estimated from its own.
     match kind {
-        ControllerKind::Paper => "V = Kp·u + Ki·∫ẍ dt (the paper's Eq. 16)",
-        ControllerKind::Predictive => "V = Kp·u + Ki·(∫ẍ dt + L·LP(ẍ)): feed-forward τ ahead",
-        ControllerKind::Skyhook => "V = Kp·u + Ki·∫ẍ dt + Ksky·LP(ẏ̂): body-velocity feedback",
-        ControllerKind::Smith => {
-            "Smith predictor on G(s) with its delay + the paper's feed-forward"
-        }
+        ControllerKind::Paper => "V = Kp·u + Ki·v_p (the paper's Eq. 16)",
+        ControllerKind::Predictive => "V = Kp·u + Ki·(v_p + L·LP(a_p)): v_p predicted L ahead",
+        ControllerKind::Skyhook => "V = Kp·u + Ki·v_p + Ksky·LP(v_b): body-velocity feedback",
+        ControllerKind::Smith => "Smith predictor on G(s) with its delay, plus Ki·v_p",
     }
 }
 
@@ -744,6 +744,7 @@ pub fn excitation_ui(
             let before = ed.class_name.clone();
             egui::ComboBox::from_label("class")
                 .selected_text(ed.class_name.as_str())
+                .height(420.0)
                 .show_ui(ui, |ui| {
                     for c in &crate::seat_test::CLASSES {
                         ui.selectable_value(&mut ed.class_name, c.name.to_string(), c.name)

@@ -252,80 +252,62 @@ fn csv_export_table_holds_ten_seconds_of_finite_rows() {
 /// (layout, plots, analytic curves cache) plus egui's tessellation of the frame. Prints the
 /// figures (run with `--nocapture` to see them); what it asserts is that the scopes hold 10 s,
 /// the frame tessellates and a Kp change reaches the curves within the frame.
+/// Issue 13.7: this test used to time frames and end in an assertion that was always true.
+/// Speed is not asserted by tests (a busy CI machine would fail them; the app's debug overlay
+/// shows the frame cost). What it checks now can fail: with a full 10 s window every twin
+/// channel holds the whole window, every scope is laid out, the frame tessellates, and a
+/// slider frame recomputes the analytic curves for the new value.
 #[test]
-fn frame_cost_with_full_scopes() {
+fn full_scopes_paint_the_whole_window_and_sliders_recompute_in_frame() {
     let mut h = harness_at_max_speed();
     step_until(&mut h, "10 s of history", |a| a.traces().t_now() > 10.5);
     h.key_press(egui::Key::Space);
     h.step();
     step_until(&mut h, "pause", |a| !a.engine_view().running);
+    h.step();
     let rows = h.state().traces().rows().len();
     assert!(rows >= 4900, "{rows} rows in the window");
-
-    let mut ui_ms = Vec::new();
-    let mut tess_ms = Vec::new();
-    for _ in 0..30 {
-        let t0 = Instant::now();
-        h.step();
-        ui_ms.push(t0.elapsed().as_secs_f64() * 1e3);
-        let shapes = h.output().shapes.clone();
-        let ppp = h.output().pixels_per_point;
-        let t1 = Instant::now();
-        let prims = h.ctx.tessellate(shapes, ppp);
-        tess_ms.push(t1.elapsed().as_secs_f64() * 1e3);
-        assert!(!prims.is_empty());
-    }
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let (u, t) = (median(&mut ui_ms), median(&mut tess_ms));
-    let st = h.state().frame_stats();
-    let app_ms = st.mean_ui_ms();
-    println!(
-        "frame cost, 1600×1000, {rows} rows/scope-channel: app ui {app_ms:.2} ms \
-         (scopes {:.2}, frequency plots {:.2}), \
-         harness step {u:.2} ms (incl. AccessKit), tessellation {t:.2} ms, \
-         total ≈ {:.2} ms",
-        st.scopes_ms,
-        st.freq_ms,
-        u + t
+    // Every scope is laid out, and every twin channel holds the whole window (no sample
+    // dropped between the engine and the plots).
+    assert_eq!(
+        h.state().scope_frames().len(),
+        seat_twin::gui::scopes::N_SCOPES
     );
+    for f in h.state().scope_frames() {
+        assert!(f.width() > 100.0 && f.height() > 50.0, "scope frame {f:?}");
+    }
+    use seat_twin::gui::traces::Ch;
+    for ch in [
+        Ch::TwinAcc,
+        Ch::TwinU,
+        Ch::P1,
+        Ch::Q1,
+        Ch::TwinVin,
+        Ch::TwinXv,
+    ] {
+        let n = h.state().traces().channel(ch).points().len();
+        assert!(
+            n as f64 >= 0.98 * rows as f64,
+            "{ch:?}: {n} of {rows} points"
+        );
+    }
+    let shapes = h.output().shapes.clone();
+    let ppp = h.output().pixels_per_point;
+    assert!(!h.ctx.tessellate(shapes, ppp).is_empty());
     // A slider move: the analytic curves (and margins) are recomputed within that frame.
-    let mut drag_ms = Vec::new();
-    for kp in [-6.0, -7.0, -8.0, -9.0, -10.0] {
+    for kp in [-6.0, -7.0, -8.0] {
         h.get_by_role_and_label(Role::Slider, "Kp")
             .set_value_accesskit(kp);
-        let t0 = Instant::now();
         h.step();
-        drag_ms.push(t0.elapsed().as_secs_f64() * 1e3);
         assert_eq!(h.state().curves().params.unwrap().controller.kp_v_per_m, kp);
     }
-    let drag = median(&mut drag_ms);
-    println!(
-        "slider frame (Kp change, curves recomputed): {drag:.2} ms, of which curves {:.2} ms",
-        h.state().curves().compute_ms
-    );
     // A plant parameter: the twin is re-linearised and its responses re-evaluated in-frame.
-    let mut cd_ms = Vec::new();
-    let mut cd_curves_ms = Vec::new();
-    for cd in [0.14, 0.145, 0.15, 0.155, 0.16] {
+    for cd in [0.14, 0.15] {
         h.get_by_role_and_label(Role::Slider, "Cd")
             .set_value_accesskit(cd);
-        let t0 = Instant::now();
         h.step();
-        cd_ms.push(t0.elapsed().as_secs_f64() * 1e3);
-        cd_curves_ms.push(h.state().curves().compute_ms);
         assert_eq!(h.state().curves().params.unwrap().valve.cd, cd);
     }
-    let (cd_drag, cd_curves) = (median(&mut cd_ms), median(&mut cd_curves_ms));
-    println!(
-        "slider frame (Cd change, twin re-linearised): {cd_drag:.2} ms, of which curves \
-         {cd_curves:.2} ms"
-    );
-    // No assertion on the times: speed is measured and reported (README, "Speed"), not
-    // asserted by a timed test that a busy CI machine could fail. The figures must exist.
-    assert!(u.is_finite() && t.is_finite() && drag.is_finite() && cd_drag.is_finite());
 }
 
 /// Steps frames until `done` holds, with a longer limit for background calibrations.

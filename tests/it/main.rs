@@ -9,6 +9,7 @@ mod dataset_props;
 mod engine;
 mod fuzz;
 mod gui;
+mod gui_lab;
 mod identify;
 mod integrator;
 mod paper;
