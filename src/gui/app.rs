@@ -210,6 +210,7 @@ pub struct SeatTwinApp {
     scope_frames: Vec<egui::Rect>,
     path_prompt: Option<(Purpose, String)>,
     ab: AbView,
+    tune: super::tune::TunePanel,
 }
 
 impl SeatTwinApp {
@@ -279,6 +280,7 @@ impl SeatTwinApp {
             scope_frames: Vec::new(),
             path_prompt: None,
             ab: AbView::default(),
+            tune: super::tune::TunePanel::default(),
         };
         if app.settings.excitation.kind == ExcitationKind::Record {
             // The record itself is not persisted.
@@ -502,6 +504,41 @@ impl SeatTwinApp {
         }
         self.traces.clear();
         self.engine_error = None;
+    }
+
+    /// The Tune panel.
+    pub fn tune_panel(&self) -> &super::tune::TunePanel {
+        &self.tune
+    }
+
+    /// The Tune panel, to drive it (tests, menus).
+    pub fn tune_panel_mut(&mut self) -> &mut super::tune::TunePanel {
+        &mut self.tune
+    }
+
+    /// Starts tuning the live controller with these options (the Tune button uses
+    /// [`super::tune::interactive_options`]).
+    pub fn start_tune(&mut self, opts: crate::tune::TuneOptions) {
+        self.tune.start(&self.params, opts, self.waker.clone());
+    }
+
+    /// Sets the controller of a chosen Pareto point on the live twin (the preset is then
+    /// modified, as with a slider).
+    pub fn apply_tuned(&mut self, c: ControllerParams) {
+        let mut p = self.params;
+        p.controller = c;
+        match p.validate() {
+            Ok(()) => {
+                self.params = p;
+                self.field_errors.clear();
+                self.apply_params();
+                self.info(format!(
+                    "tuned gains applied: {}",
+                    super::format::controller_text(&c)
+                ));
+            }
+            Err(e) => self.error(format!("tuned gains not applied: {e}")),
+        }
     }
 
     /// The A/B state.
@@ -1029,6 +1066,7 @@ impl SeatTwinApp {
         self.drain_engine();
         self.poll_files(&ctx);
         self.measured.poll(&self.params);
+        self.tune.poll();
 
         if !ctx.egui_wants_keyboard_input() && ui.input(|i| i.key_pressed(Key::Space)) {
             self.toggle_running();
@@ -1318,6 +1356,15 @@ impl SeatTwinApp {
                 self.apply_params();
             }
         });
+        egui::CollapsingHeader::new("Tune")
+            .default_open(false)
+            .show(ui, |ui| {
+                if let super::tune::TuneAction::Apply(c) =
+                    self.tune.ui(ui, &self.params, &self.waker)
+                {
+                    self.apply_tuned(c);
+                }
+            });
         ui.separator();
         ui.heading("A/B comparison");
         if self.ab.controls_ui(ui, &self.params.controller) == AbAction::Send {

@@ -22,11 +22,13 @@ pub mod controls;
 pub mod files;
 pub mod format;
 pub mod frequency;
+pub mod job;
 pub mod measured;
 pub mod plotkit;
 pub mod schematic;
 pub mod scopes;
 pub mod traces;
+pub mod tune;
 pub mod units;
 
 pub use app::SeatTwinApp;

@@ -208,3 +208,68 @@ fn ab_switch_runs_the_reference_and_set_current_pins_it() {
     h.step();
     step_until(&mut h, "B off", |a| a.engine_view().reference.is_none());
 }
+
+fn tiny_tune(p: &Params, evaluations: usize, duration_s: f64) -> seat_twin::tune::TuneOptions {
+    seat_twin::tune::TuneOptions {
+        kind: p.controller.kind,
+        tune_seeds: vec![1],
+        heldout_seeds: vec![101],
+        duration_s,
+        max_evaluations: evaluations,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn tune_job_reports_progress_completes_and_apply_sets_the_gains() {
+    let mut h = harness();
+    let p0 = *h.state().params();
+    h.get_by_label("Tune").click();
+    h.run_steps(2);
+    let opts = tiny_tune(&p0, 10, 5.0);
+    h.state_mut().start_tune(opts);
+    step_until(&mut h, "the tuning result", |a| {
+        a.tune_panel().result().is_some()
+    });
+    let (done, budget) = h.state().tune_panel().last_progress().expect("a job");
+    assert_eq!(budget, 10);
+    assert!(done >= 1, "{done} evaluations reported");
+    let r = h.state().tune_panel().result().expect("a result").clone();
+    assert!(
+        !r.pareto.is_empty(),
+        "no feasible point on the paper's start"
+    );
+    // Every point on the front keeps the constraints.
+    for e in &r.pareto {
+        assert!(e.feasible && e.contacts == 0 && e.max_abs_u_m <= 0.030);
+        assert!(e.gain_margin_db >= 6.0 && e.phase_margin_deg >= 45.0);
+    }
+    h.run_steps(2);
+    h.get_by_label_contains("Held-out a_w");
+    let chosen = r.pareto[h.state().tune_panel().selected().expect("a chosen point")].controller;
+    h.get_by_label("Apply").click();
+    h.run_steps(2);
+    assert_eq!(h.state().params().controller, chosen);
+    assert!(h.state().is_modified() || chosen == p0.controller);
+    step_until(&mut h, "the engine to run the tuned gains", |a| {
+        a.engine_params().is_some_and(|p| p.controller == chosen)
+    });
+}
+
+#[test]
+fn tune_job_can_be_cancelled_from_the_panel() {
+    let mut h = harness();
+    h.get_by_label("Tune").click();
+    h.run_steps(2);
+    let p0 = *h.state().params();
+    h.state_mut().start_tune(tiny_tune(&p0, 10_000, 60.0));
+    h.run_steps(2);
+    assert!(h.state().tune_panel().is_running());
+    h.get_by_label("Cancel tuning").click();
+    h.run_steps(1);
+    step_until(&mut h, "the job to stop", |a| !a.tune_panel().is_running());
+    let (m, error) = h.state().tune_panel().message().expect("a message").clone();
+    assert!(m.contains("cancelled") && !error, "{m}");
+    assert!(h.state().tune_panel().result().is_none());
+    assert_eq!(*h.state().params(), p0);
+}
