@@ -527,7 +527,7 @@ pub struct FreqView<'a> {
 }
 
 /// Legend name of the A/B reference's transmissibility.
-pub const REFERENCE_NAME: &str = "B: reference twin (linearised)";
+pub const REFERENCE_NAME: &str = "B: reference";
 
 /// The phase curve as shown: wrapped into ±180° (default) or unwrapped. Wrapping breaks the
 /// line where it jumps, so no vertical stroke crosses the plot.
