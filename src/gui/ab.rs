@@ -18,21 +18,13 @@ pub enum AbAction {
     Send,
 }
 
-/// The A/B state: on/off, the reference controller and its analytic curves.
+/// The A/B state: on/off, the reference controller (default: the paper's gains) and its
+/// analytic curves.
+#[derive(Default)]
 pub struct AbView {
     on: bool,
     reference: ControllerParams,
     analytic: Analytic,
-}
-
-impl Default for AbView {
-    fn default() -> Self {
-        Self {
-            on: false,
-            reference: ControllerParams::default(),
-            analytic: Analytic::default(),
-        }
-    }
 }
 
 /// The reference twin's parameters: the live plant with the reference controller.
