@@ -49,9 +49,33 @@ impl Knob {
     /// Draws the slider (typed values apply on Enter or focus loss only, never per
     /// keystroke) and returns the new value [display units] when the user set one.
     fn ui(&self, ui: &mut egui::Ui, p: &Params) -> Option<f64> {
-        let mut shown = (self.get)(p) * self.scale;
+        let shown = (self.get)(p) * self.scale;
+        let view = SliderView {
+            label: self.label,
+            suffix: self.suffix,
+            span: self.range.clone(),
+            logarithmic: self.logarithmic,
+            decimals: self.decimals,
+        };
+        view.ui(ui, shown, self.hover)
+    }
+}
+
+/// How a parameter slider looks: label, unit suffix, span, scale type, decimals.
+struct SliderView<'a> {
+    label: &'a str,
+    suffix: &'a str,
+    span: RangeInclusive<f64>,
+    logarithmic: bool,
+    decimals: usize,
+}
+
+impl SliderView<'_> {
+    /// Draws a slider over `shown` [display units] that never clamps and applies typed values
+    /// on Enter or focus loss only; returns the new value when the user set one.
+    fn ui(&self, ui: &mut egui::Ui, mut shown: f64, hover: &str) -> Option<f64> {
         let before = shown;
-        let mut slider = Slider::new(&mut shown, self.range.clone())
+        let mut slider = Slider::new(&mut shown, self.span.clone())
             .text(self.label)
             .suffix(self.suffix)
             .clamping(SliderClamping::Never)
@@ -62,7 +86,7 @@ impl Knob {
         if self.logarithmic {
             slider = slider.smallest_positive(0.1);
         }
-        let response = ui.add(slider).on_hover_text(self.hover);
+        let response = ui.add(slider).on_hover_text(hover);
         (response.changed() && shown != before).then_some(shown)
     }
 }
@@ -386,24 +410,11 @@ pub fn controller_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors
         let Some(value) = p.controller.get(key) else {
             continue;
         };
-        let mut shown = value * view.scale;
-        let before = shown;
         // Typed or dragged values must lie in the slider's span within the valid range, as
         // for every control (a Kp of +5000 V/m is valid for a preset but only ever unstable).
         let lo = (min * view.scale).max(*view.slider.start());
         let hi = (max * view.scale).min(*view.slider.end());
         let fmt = super::format::compact;
-        let mut slider = Slider::new(&mut shown, view.slider.clone())
-            .text(view.label)
-            .suffix(format!(" {}", view.unit))
-            .clamping(SliderClamping::Never)
-            .update_while_editing(false)
-            .logarithmic(view.logarithmic)
-            .max_decimals(view.decimals)
-            .min_decimals(view.decimals.min(2));
-        if view.logarithmic {
-            slider = slider.smallest_positive(0.1);
-        }
         let hover = format!(
             "{} Accepted here: {} … {} {}.",
             view.hover,
@@ -411,8 +422,15 @@ pub fn controller_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors
             fmt(hi),
             view.unit
         );
-        let response = ui.add(slider).on_hover_text(hover);
-        if response.changed() && shown != before {
+        let suffix = format!(" {}", view.unit);
+        let slider = SliderView {
+            label: view.label,
+            suffix: &suffix,
+            span: view.slider.clone(),
+            logarithmic: view.logarithmic,
+            decimals: view.decimals,
+        };
+        if let Some(shown) = slider.ui(ui, value * view.scale, &hover) {
             changed |= try_edit_with(
                 view.label,
                 (lo, hi),

@@ -9,7 +9,7 @@ use seat_twin::gui::SeatTwinApp;
 use seat_twin::gui::app::Settings;
 use std::time::{Duration, Instant};
 
-fn harness() -> Harness<'static, SeatTwinApp> {
+pub(crate) fn harness() -> Harness<'static, SeatTwinApp> {
     let app = SeatTwinApp::new(Settings::default(), || {});
     Harness::builder()
         .with_size([1600.0, 1000.0])
@@ -27,7 +27,7 @@ fn harness_at_max_speed() -> Harness<'static, SeatTwinApp> {
 }
 
 /// Steps frames (with short sleeps so the engine can work) until `done` holds.
-fn step_until(
+pub(crate) fn step_until(
     h: &mut Harness<'static, SeatTwinApp>,
     what: &str,
     done: impl Fn(&SeatTwinApp) -> bool,

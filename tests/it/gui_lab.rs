@@ -3,45 +3,27 @@
 //! nothing, seat-test classes run from the excitation list, and the A/B view runs B.
 #![cfg(feature = "gui")]
 
+use super::gui::step_until;
 use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::{By, Queryable};
 use num_complex::Complex64;
 use seat_twin::control::ControlLaw;
 use seat_twin::gui::SeatTwinApp;
-use seat_twin::gui::app::Settings;
 use seat_twin::gui::frequency::{F_RANGE_HZ, N_POINTS};
 use seat_twin::model::linear::g_of;
 use seat_twin::params::{ControllerKind, ControllerParams, Params};
 use std::f64::consts::PI;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
+/// The app after its first frame, once the engine has answered.
 fn harness() -> Harness<'static, SeatTwinApp> {
-    let app = SeatTwinApp::new(Settings::default(), || {});
-    let mut h = Harness::builder()
-        .with_size([1600.0, 1000.0])
-        .build_ui_state(|ui, app: &mut SeatTwinApp| app.ui(ui), app);
+    let mut h = super::gui::harness();
     h.step();
     step_until(&mut h, "the engine's first status", |a| {
         a.engine_params().is_some()
     });
     h
-}
-
-fn step_until(
-    h: &mut Harness<'static, SeatTwinApp>,
-    what: &str,
-    done: impl Fn(&SeatTwinApp) -> bool,
-) {
-    let t0 = Instant::now();
-    while !done(h.state()) {
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "timed out waiting for: {what}"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-        h.step();
-    }
 }
 
 /// Opens the combo box that shows `current` and picks `choice` in it.
