@@ -10,6 +10,7 @@ mod engine;
 mod fuzz;
 mod gui;
 mod gui_lab;
+mod gui_measured;
 mod identify;
 mod integrator;
 mod paper;
