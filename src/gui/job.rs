@@ -47,7 +47,7 @@ impl JobCtx {
 pub struct Job<T> {
     ctx: JobCtx,
     result: Receiver<Result<T, String>>,
-    finished: bool,
+    finished: std::cell::Cell<bool>,
 }
 
 impl<T: Send + 'static> Job<T> {
@@ -81,18 +81,18 @@ impl<T: Send + 'static> Job<T> {
                 let _ = tx.send(out);
                 (worker.waker)();
             });
-        let (result, finished) = match spawned {
-            Ok(_) => (rx, false),
+        let result = match spawned {
+            Ok(_) => rx,
             Err(e) => {
                 let (tx, rx) = channel();
                 let _ = tx.send(Err(format!("could not start a thread: {e}")));
-                (rx, false)
+                rx
             }
         };
         Self {
             ctx,
             result,
-            finished,
+            finished: std::cell::Cell::new(false),
         }
     }
 
@@ -116,22 +116,22 @@ impl<T: Send + 'static> Job<T> {
 
     /// Whether the result has been taken.
     pub fn is_finished(&self) -> bool {
-        self.finished
+        self.finished.get()
     }
 
     /// The result, once, when the work has ended; `None` while it runs (or after).
-    pub fn poll(&mut self) -> Option<Result<T, String>> {
-        if self.finished {
+    pub fn poll(&self) -> Option<Result<T, String>> {
+        if self.finished.get() {
             return None;
         }
         match self.result.try_recv() {
             Ok(r) => {
-                self.finished = true;
+                self.finished.set(true);
                 Some(r)
             }
             Err(TryRecvError::Empty) => None,
             Err(TryRecvError::Disconnected) => {
-                self.finished = true;
+                self.finished.set(true);
                 Some(Err("the job's thread ended without a result".into()))
             }
         }
@@ -143,7 +143,7 @@ mod tests {
     use super::*;
     use std::time::{Duration, Instant};
 
-    fn wait<T: Send + 'static>(job: &mut Job<T>) -> Result<T, String> {
+    fn wait<T: Send + 'static>(job: &Job<T>) -> Result<T, String> {
         let t0 = Instant::now();
         loop {
             if let Some(r) = job.poll() {
@@ -157,25 +157,25 @@ mod tests {
     #[test]
     fn result_progress_cancel_and_panic() {
         let noop: Waker = Arc::new(|| {});
-        let mut ok = Job::spawn("t", noop.clone(), |ctx| {
+        let ok = Job::spawn("t", noop.clone(), |ctx| {
             ctx.report(3, 4);
             Ok(7)
         });
-        assert_eq!(wait(&mut ok), Ok(7));
+        assert_eq!(wait(&ok), Ok(7));
         assert_eq!(ok.progress(), (3, 4));
         assert!(ok.poll().is_none(), "the result comes once");
 
-        let mut stop = Job::spawn("t", noop.clone(), |ctx| {
+        let stop = Job::spawn("t", noop.clone(), |ctx| {
             while !ctx.cancelled() {
                 std::thread::sleep(Duration::from_millis(1));
             }
             Err::<(), _>("cancelled".into())
         });
         stop.cancel();
-        assert_eq!(wait(&mut stop), Err("cancelled".into()));
+        assert_eq!(wait(&stop), Err("cancelled".into()));
 
-        let mut boom = Job::spawn("t", noop, |_| -> Result<(), String> { panic!("kaboom") });
-        let e = wait(&mut boom).unwrap_err();
+        let boom = Job::spawn("t", noop, |_| -> Result<(), String> { panic!("kaboom") });
+        let e = wait(&boom).unwrap_err();
         assert!(e.contains("kaboom"), "{e}");
     }
 }
