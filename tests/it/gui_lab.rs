@@ -255,3 +255,29 @@ fn tune_job_can_be_cancelled_from_the_panel() {
     assert!(h.state().tune_panel().result().is_none());
     assert_eq!(*h.state().params(), p0);
 }
+
+#[test]
+fn a_saved_preset_keeps_the_structure_and_its_gains() {
+    let mut h = harness();
+    pick(&mut h, "paper", "predictive");
+    h.get_by_role_and_label(Role::Slider, "lead")
+        .set_value_accesskit(25.0);
+    h.run_steps(2);
+    let c = h.state().params().controller;
+    assert_eq!(c.kind, ControllerKind::Predictive);
+    let dir = tempfile::tempdir().expect("a temp dir");
+    let path = dir.path().join("lab.toml");
+    h.state_mut().save_preset_file(&path);
+    let text = std::fs::read_to_string(&path).expect("the preset file");
+    assert!(text.contains("kind = \"predictive\""), "{text}");
+    // Back to paper, then the file brings the structure and gains back.
+    pick(&mut h, "predictive", "paper");
+    assert_eq!(h.state().params().controller.kind, ControllerKind::Paper);
+    h.state_mut().open_preset_file(&path);
+    h.run_steps(2);
+    assert_eq!(h.state().params().controller, c);
+    h.get_by_role_and_label(Role::Slider, "lead");
+    step_until(&mut h, "the engine to run the loaded controller", |a| {
+        a.engine_params().is_some_and(|p| p.controller == c)
+    });
+}
