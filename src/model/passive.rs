@@ -19,13 +19,13 @@ pub struct PassiveModel {
 impl PassiveModel {
     /// Builds the passive reference from the body parameters and `passive.zeta`.
     pub fn new(params: &Params) -> Self {
-        let m = params.body.mass_kg;
-        let k = params.body.stiffness_n_per_m;
+        let m = params.plant.body.mass_kg;
+        let k = params.plant.body.stiffness_n_per_m;
         Self {
             mass_kg: m,
             stiffness_n_per_m: k,
             damping_n_s_per_m: 2.0 * params.passive.zeta * (k * m).sqrt(),
-            half_stroke_m: 0.5 * params.cylinder.stroke_m,
+            half_stroke_m: 0.5 * params.plant.cylinder.stroke_m,
         }
     }
 

@@ -97,11 +97,11 @@ fn typed_tau_in_ms_is_stored_in_seconds() {
         .set_value_accesskit(25.0);
     h.step();
     let p = h.state().params();
-    assert!((p.valve.tau_s - 0.025).abs() < 1e-12, "{}", p.valve.tau_s);
+    assert!((p.plant.valve.tau_s - 0.025).abs() < 1e-12, "{}", p.plant.valve.tau_s);
     assert!((p.linear.tau_s - 0.025).abs() < 1e-12);
     step_until(&mut h, "the engine to run with τ = 25 ms", |a| {
         a.engine_params()
-            .is_some_and(|p| (p.valve.tau_s - 0.025).abs() < 1e-12)
+            .is_some_and(|p| (p.plant.valve.tau_s - 0.025).abs() < 1e-12)
     });
 }
 
@@ -160,10 +160,10 @@ fn shipped_preset_opens_from_the_menu_after_the_discard_prompt() {
     assert!(!h.state().is_confirm_open());
     let app = h.state();
     assert_eq!(app.preset().name, "paper-initial");
-    assert_eq!(app.params().valve.cd, 0.1074);
+    assert_eq!(app.params().plant.valve.cd, 0.1074);
     assert!(!app.is_modified());
     step_until(&mut h, "the engine to run the preset", |a| {
-        a.engine_params().is_some_and(|p| p.valve.cd == 0.1074)
+        a.engine_params().is_some_and(|p| p.plant.valve.cd == 0.1074)
     });
 }
 
@@ -306,7 +306,7 @@ fn full_scopes_paint_the_whole_window_and_sliders_recompute_in_frame() {
         h.get_by_role_and_label(Role::Slider, "Cd")
             .set_value_accesskit(cd);
         h.step();
-        assert_eq!(h.state().curves().params.unwrap().valve.cd, cd);
+        assert_eq!(h.state().curves().params.unwrap().plant.valve.cd, cd);
     }
 }
 
@@ -426,7 +426,7 @@ fn number(s: &str) -> Option<f64> {
 fn typed_value_applies_on_enter_only() {
     let mut h = harness();
     h.step();
-    let cd0 = h.state().params().valve.cd;
+    let cd0 = h.state().params().plant.valve.cd;
     h.get_by_role_and_label(Role::SpinButton, "Cd").click();
     h.run_steps(2);
     // The field is in text mode, focused, all of its text selected.
@@ -434,9 +434,9 @@ fn typed_value_applies_on_enter_only() {
     assert!(field.is_focused());
     field.type_text("0.12");
     h.run_steps(2);
-    assert_eq!(h.state().params().valve.cd, cd0, "applied while typing");
+    assert_eq!(h.state().params().plant.valve.cd, cd0, "applied while typing");
     assert_eq!(
-        h.state().curves().params.unwrap().valve.cd,
+        h.state().curves().params.unwrap().plant.valve.cd,
         cd0,
         "curves follow a half-typed value"
     );
@@ -447,9 +447,9 @@ fn typed_value_applies_on_enter_only() {
     assert_eq!(knob, Some(cd0), "the slider knob moved while typing");
     h.key_press(egui::Key::Enter);
     h.run_steps(2);
-    assert_eq!(h.state().params().valve.cd, 0.12);
+    assert_eq!(h.state().params().plant.valve.cd, 0.12);
     step_until(&mut h, "the engine to run with Cd = 0.12", |a| {
-        a.engine_params().is_some_and(|p| p.valve.cd == 0.12)
+        a.engine_params().is_some_and(|p| p.plant.valve.cd == 0.12)
     });
 }
 
@@ -496,7 +496,7 @@ fn refused_values_reach_no_view() {
     h.get_by_role_and_label(Role::Slider, "mass")
         .set_value_accesskit(20.0);
     h.step();
-    assert_eq!(h.state().params().body.mass_kg, 20.0);
+    assert_eq!(h.state().params().plant.body.mass_kg, 20.0);
     assert!(h.state().field_errors().get("mass").is_none());
 }
 

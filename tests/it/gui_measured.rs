@@ -70,7 +70,7 @@ fn demo_campaign_loads_from_the_menu_and_replays_with_the_live_parameters() {
     step_until(&mut h, "the replay with Cd = 0.10", |a| {
         a.measured()
             .view()
-            .is_some_and(|v| v.params.valve.cd == 0.10)
+            .is_some_and(|v| v.params.plant.valve.cd == 0.10)
     });
     let after = h.state().measured().view().unwrap().errors.du;
     assert!(
@@ -161,7 +161,7 @@ fn calibration_recovers_the_valve_gain_and_applies_it_to_the_live_twin() {
     let r = m.report().expect("a report");
     // The demo rig's truth is Cd = 0.1506 (tests/data/demo-campaign-truth.json); the
     // calibration starts from 0.12 and knows nothing of it.
-    let cd = r.params.valve.cd;
+    let cd = r.params.plant.valve.cd;
     assert!((cd - 0.1506).abs() < 0.006, "Cd = {cd}");
     assert!(r.error_before.value < r.error_nominal.value);
     h.run_steps(2);
@@ -169,8 +169,8 @@ fn calibration_recovers_the_valve_gain_and_applies_it_to_the_live_twin() {
     h.step();
     h.get_by_label("Apply to the live twin").click();
     h.step();
-    assert_eq!(h.state().params().valve.cd, cd);
+    assert_eq!(h.state().params().plant.valve.cd, cd);
     step_until(&mut h, "the engine to run the calibrated twin", |a| {
-        a.engine_params().is_some_and(|p| p.valve.cd == cd)
+        a.engine_params().is_some_and(|p| p.plant.valve.cd == cd)
     });
 }
