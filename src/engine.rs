@@ -13,8 +13,10 @@ use crate::control::ControlLaw;
 use crate::model::linear::LinearModel;
 use crate::model::passive::PassiveModel;
 use crate::model::twin::Twin;
+use crate::params::ControllerParams;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, SampledMotion};
+use crate::seat_test::{ClassMotion, InputClass};
 use crate::simulation::{ContactEvent, Drive, Sample, SimError, Simulation, step_for_rate};
 use serde::{Deserialize, Serialize};
 use std::panic::AssertUnwindSafe;
@@ -81,6 +83,16 @@ pub enum Excitation {
     },
     /// A loaded platform record (replayed from the start when it ends).
     Record(SampledMotion),
+    /// A seat-test input class (ISO 7096 / ISO 5007 / EN 13490) generated as the CLI's
+    /// `simulate --scenario class` does; a new seed starts when the record ends.
+    Class {
+        /// The class.
+        class: &'static InputClass,
+        /// Record length [s], 20 ..= 3600.
+        duration_s: f64,
+        /// Seed of the phases.
+        seed: u64,
+    },
     /// Platform still; open-loop valve sine `A·cos(2πft)` on the active models.
     ValveSine {
         /// Amplitude [V].
@@ -100,11 +112,26 @@ impl Default for Excitation {
 }
 
 impl Excitation {
-    /// The platform motion and the drive of the active models, and how long it lasts [s].
-    fn build(&self, params: &Params) -> (PlatformMotion, Drive, f64) {
+    /// The platform motion and the drive of the active models, and how long it lasts [s];
+    /// an error for a seat-test class whose record cannot be generated (bad duration).
+    fn build(&self, params: &Params) -> Result<(PlatformMotion, Drive, f64), String> {
         let closed = Drive::ClosedLoop(ControlLaw::new(params));
-        match self {
+        Ok(match self {
             Excitation::Random(r) => (PlatformMotion::Sampled(r.generate()), closed, r.duration_s),
+            Excitation::Class {
+                class,
+                duration_s,
+                seed,
+            } => {
+                let motion = ClassMotion {
+                    seed: *seed,
+                    ..ClassMotion::new(class, *duration_s)
+                }
+                .generate()
+                .map_err(|e| format!("seat-test class {}: {e}", class.name))?;
+                let d = motion.duration_s();
+                (PlatformMotion::Sampled(motion), closed, d)
+            }
             Excitation::Cycloid { bump, period_s } => {
                 // Build one up-and-down cycle as a sampled record so it can repeat.
                 let period = period_s.max(2.0 * (bump.start_s + bump.rise_time_s));
@@ -156,6 +183,26 @@ impl Excitation {
                 }),
                 f64::INFINITY,
             ),
+        })
+    }
+
+    /// The same excitation with the next seed (random ride and seat-test class), or as it is.
+    fn reseeded(&self, bump: u64) -> Excitation {
+        match self {
+            Excitation::Random(r) => Excitation::Random(RandomRide {
+                seed: r.seed.wrapping_add(bump),
+                ..*r
+            }),
+            Excitation::Class {
+                class,
+                duration_s,
+                seed,
+            } => Excitation::Class {
+                class,
+                duration_s: *duration_s,
+                seed: seed.wrapping_add(bump),
+            },
+            other => other.clone(),
         }
     }
 }
@@ -169,6 +216,10 @@ pub enum Command {
     SetExcitation(Box<Excitation>),
     /// Pacing.
     SetSpeed(Speed),
+    /// The A/B reference: a second twin with the same plant and excitation running this
+    /// controller (`None` switches it off). Restarts both from rest, so A and B start
+    /// together.
+    SetReference(Option<ControllerParams>),
     /// Run.
     Run,
     /// Pause.
@@ -194,6 +245,8 @@ pub struct Batch {
     pub linear: Vec<Sample>,
     /// Passive samples.
     pub passive: Vec<Sample>,
+    /// Samples of the A/B reference twin (empty while A/B is off).
+    pub reference: Vec<Sample>,
 }
 
 /// Events from the engine.
@@ -213,6 +266,10 @@ pub enum Event {
         running: bool,
         /// The parameters in use (echo, so the UI and tests can see what was applied).
         params: Box<Params>,
+        /// The A/B reference controller in use (`None`: A/B off).
+        reference: Option<ControllerParams>,
+        /// End-stop contacts so far since the last restart: live twin, reference twin.
+        contacts: (usize, usize),
     },
     /// A new end-stop contact of the twin.
     Contact(ContactEvent),
@@ -251,27 +308,55 @@ struct Sims {
     twin: Simulation<Twin, 10>,
     linear: Simulation<LinearModel, 3>,
     passive: Simulation<PassiveModel, 2>,
+    /// The A/B reference twin and its controller.
+    reference: Option<(Simulation<Twin, 10>, ControllerParams)>,
     every: u64,
     duration: f64,
     contacts_seen: usize,
 }
 
+/// The parameters of the reference twin: the live plant with the reference controller.
+fn with_controller(params: &Params, c: ControllerParams) -> Params {
+    Params {
+        controller: c,
+        ..*params
+    }
+}
+
 impl Sims {
-    fn new(params: &Params, excitation: &Excitation) -> Self {
-        let (platform, drive, duration) = excitation.build(params);
+    fn new(
+        params: &Params,
+        excitation: &Excitation,
+        reference: Option<ControllerParams>,
+    ) -> Result<Self, String> {
+        let (platform, drive, duration) = excitation.build(params)?;
         let h = step_for_rate(params.numerics.max_step_s, STREAM_RATE_HZ);
         let every = ((1.0 / STREAM_RATE_HZ) / h).round() as u64;
-        Self {
+        let reference = reference.map(|c| {
+            let rp = with_controller(params, c);
+            let rdrive = match &drive {
+                Drive::ClosedLoop(_) => Drive::ClosedLoop(ControlLaw::new(&rp)),
+                open => open.clone(),
+            };
+            (Simulation::twin(&rp, h, rdrive, platform.clone()), c)
+        });
+        Ok(Self {
+            reference,
             twin: Simulation::twin(params, h, drive.clone(), platform.clone()),
             linear: Simulation::new(LinearModel::new(params), h, drive.clone(), platform.clone()),
             passive: Simulation::new(PassiveModel::new(params), h, drive, platform),
             every,
             duration,
             contacts_seen: 0,
-        }
+        })
     }
 
     fn set_params(&mut self, params: &Params) {
+        if let Some((sim, c)) = self.reference.as_mut() {
+            let rp = with_controller(params, *c);
+            sim.set_model(Twin::new(rp));
+            sim.update_gains(&rp);
+        }
         self.twin.set_model(Twin::new(*params));
         self.linear.set_model(LinearModel::new(params));
         self.passive.set_model(PassiveModel::new(params));
@@ -296,6 +381,9 @@ impl Sims {
             .run_until(t_end, every, |s| batch.linear.push(s))?;
         self.passive
             .run_until(t_end, every, |s| batch.passive.push(s))?;
+        if let Some((sim, _)) = self.reference.as_mut() {
+            sim.run_until(t_end, every, |s| batch.reference.push(s))?;
+        }
         Ok(())
     }
 }
@@ -334,6 +422,7 @@ pub fn spawn(params: Params, waker: impl Fn() + Send + 'static) -> EngineHandle 
 struct Loop<W: Fn()> {
     params: Params,
     excitation: Excitation,
+    reference: Option<ControllerParams>,
     speed: Speed,
     running: bool,
     failed: bool,
@@ -361,10 +450,14 @@ fn engine_loop<W: Fn()>(
     waker: W,
 ) {
     let excitation = Excitation::default();
-    let sims = Sims::new(&params, &excitation);
+    // The default random ride always builds.
+    let Ok(sims) = Sims::new(&params, &excitation, None) else {
+        return;
+    };
     let mut l = Loop {
         params,
         excitation,
+        reference: None,
         speed: Speed::RealTime,
         running: true,
         failed: false,
@@ -426,15 +519,17 @@ impl<W: Fn()> Loop<W> {
     }
 
     fn restart(&mut self) {
-        let excitation = match &self.excitation {
-            Excitation::Random(r) => Excitation::Random(RandomRide {
-                seed: r.seed.wrapping_add(self.seed_bump),
-                ..*r
-            }),
-            other => other.clone(),
-        };
-        self.sims = Sims::new(&self.params, &excitation);
-        self.failed = false;
+        let excitation = self.excitation.reseeded(self.seed_bump);
+        match Sims::new(&self.params, &excitation, self.reference) {
+            Ok(sims) => {
+                self.sims = sims;
+                self.failed = false;
+            }
+            Err(e) => {
+                self.failed = true;
+                self.send(Event::Error(format!("excitation refused: {e}")));
+            }
+        }
         self.reanchor();
     }
 
@@ -454,6 +549,16 @@ impl<W: Fn()> Loop<W> {
                 self.seed_bump = 0;
                 self.epoch = 0.0;
                 self.restart();
+            }
+            Command::SetReference(r) => {
+                if r.is_none_or(|c| c.validate().is_ok()) {
+                    self.reference = r;
+                    self.epoch = 0.0;
+                    self.seed_bump = 0;
+                    self.restart();
+                } else {
+                    self.send(Event::Error("reference controller refused".into()));
+                }
             }
             Command::SetSpeed(s) => {
                 self.speed = s;
@@ -489,6 +594,14 @@ impl<W: Fn()> Loop<W> {
             realtime_factor: if running { self.rtf.max(0.0) } else { 0.0 },
             running,
             params: Box::new(self.params),
+            reference: self.reference,
+            contacts: (
+                self.sims.twin.contacts().len(),
+                self.sims
+                    .reference
+                    .as_ref()
+                    .map_or(0, |(r, _)| r.contacts().len()),
+            ),
         });
         (self.waker)();
     }

@@ -4,6 +4,10 @@
 //! kittest tests drive the real app headless; the `eframe::App` impl adds persistence, the
 //! window title and the frame-time readout.
 
+mod export;
+mod panels;
+
+use super::ab::{AbAction, AbView};
 use super::controls::{self, ExcitationAction, ExcitationEditor, ExcitationKind, LoadedRecord};
 use super::files::{self, CsvTable, Dialogs, Purpose, Writer};
 use super::frequency::{self, Analytic, Curves, Dwell, FreqAction, FreqView};
@@ -108,6 +112,10 @@ pub struct EngineView {
     pub running: bool,
     /// Parameters the engine runs with (echo).
     pub params: Option<Params>,
+    /// The A/B reference controller the engine runs (`None`: A/B off).
+    pub reference: Option<ControllerParams>,
+    /// End-stop contacts since the last restart: live twin, reference twin.
+    pub contacts: (usize, usize),
 }
 
 /// An action waiting for "discard unsaved changes?".
@@ -204,6 +212,8 @@ pub struct SeatTwinApp {
     last_stable: Option<ControllerParams>,
     scope_frames: Vec<egui::Rect>,
     path_prompt: Option<(Purpose, String)>,
+    ab: AbView,
+    tune: super::tune::TunePanel,
 }
 
 impl SeatTwinApp {
@@ -272,6 +282,8 @@ impl SeatTwinApp {
             last_stable: None,
             scope_frames: Vec::new(),
             path_prompt: None,
+            ab: AbView::default(),
+            tune: super::tune::TunePanel::default(),
         };
         if app.settings.excitation.kind == ExcitationKind::Record {
             // The record itself is not persisted.
@@ -293,6 +305,9 @@ impl SeatTwinApp {
     }
 
     fn send_engine_setup(&mut self) {
+        if self.ab.is_on() {
+            self.send(Command::SetReference(self.ab.command()));
+        }
         if let Some(e) = self.settings.excitation.excitation() {
             self.send(Command::SetExcitation(Box::new(e)));
         }
@@ -494,6 +509,66 @@ impl SeatTwinApp {
         self.engine_error = None;
     }
 
+    /// The Tune panel.
+    pub fn tune_panel(&self) -> &super::tune::TunePanel {
+        &self.tune
+    }
+
+    /// The Tune panel, to drive it (tests, menus).
+    pub fn tune_panel_mut(&mut self) -> &mut super::tune::TunePanel {
+        &mut self.tune
+    }
+
+    /// Starts tuning the live controller with these options (the Tune button uses
+    /// [`super::tune::interactive_options`]).
+    pub fn start_tune(&mut self, opts: crate::tune::TuneOptions) {
+        self.tune.start(&self.params, opts, self.waker.clone());
+    }
+
+    /// Sets the controller of a chosen Pareto point on the live twin (the preset is then
+    /// modified, as with a slider).
+    pub fn apply_tuned(&mut self, c: ControllerParams) {
+        let mut p = self.params;
+        p.controller = c;
+        match p.validate() {
+            Ok(()) => {
+                self.params = p;
+                self.field_errors.clear();
+                self.apply_params();
+                self.info(format!(
+                    "tuned gains applied: {}",
+                    super::format::controller_text(&c)
+                ));
+            }
+            Err(e) => self.error(format!("tuned gains not applied: {e}")),
+        }
+    }
+
+    /// The A/B state.
+    pub fn ab(&self) -> &AbView {
+        &self.ab
+    }
+
+    /// Switches A/B on or off (the engine restarts A and B together from rest).
+    pub fn set_ab(&mut self, on: bool) {
+        self.ab.set_on(on);
+        self.send_reference();
+    }
+
+    /// Pins the current controller as the A/B reference (B).
+    pub fn set_current_as_reference(&mut self) {
+        self.ab.set_reference(self.params.controller);
+        if self.ab.is_on() {
+            self.send_reference();
+        }
+    }
+
+    fn send_reference(&mut self) {
+        self.send(Command::SetReference(self.ab.command()));
+        self.traces.clear();
+        self.engine_error = None;
+    }
+
     /// Loads a preset file; a bad file leaves everything as it was and says why.
     pub fn open_preset_file(&mut self, path: &Path) {
         match Preset::load(path) {
@@ -627,185 +702,6 @@ impl SeatTwinApp {
         self.dialogs.request(Purpose::SavePreset, &name, ctx);
     }
 
-    /// The traces in the window as a CSV table (SI, the dataset format; twin columns carry
-    /// the dataset's names so the file reads back as a measured record).
-    pub fn traces_table(&self) -> CsvTable {
-        let header = vec![
-            "t",
-            "x",
-            "xdd",
-            "u",
-            "du",
-            "ydd",
-            "v_in",
-            "xv",
-            "p1",
-            "p2",
-            "q1",
-            "q2",
-            "contact",
-            "linear_u",
-            "linear_ydd",
-            "linear_v_in",
-            "passive_u",
-            "passive_ydd",
-        ];
-        let rows = self
-            .traces
-            .rows()
-            .iter()
-            .map(|r| {
-                let (w, l, p) = (&r.twin, &r.linear, &r.passive);
-                vec![
-                    r.t,
-                    w.x,
-                    w.xdd,
-                    w.u,
-                    w.du,
-                    w.ydd,
-                    w.v_in,
-                    w.xv,
-                    w.p1,
-                    w.p2,
-                    w.q1,
-                    w.q2,
-                    f64::from(u8::from(w.contact)),
-                    l.u,
-                    l.ydd,
-                    l.v_in,
-                    p.u,
-                    p.ydd,
-                ]
-            })
-            .filter(|row| row.iter().all(|v| v.is_finite()))
-            .collect();
-        let c = &self.params.controller;
-        let comments = vec![
-            (
-                "source".into(),
-                "seat-twin live traces (twin, linear, passive)".into(),
-            ),
-            ("preset".into(), self.preset.name.clone()),
-            ("kp_v_per_m".into(), c.kp_v_per_m.to_string()),
-            ("ki_v_s_per_m".into(), c.ki_v_s_per_m.to_string()),
-            (
-                "units".into(),
-                "SI (s, m, m/s², V, Pa, m³/s); t continues across restarts".into(),
-            ),
-        ];
-        CsvTable {
-            header,
-            comments,
-            rows,
-        }
-    }
-
-    /// The current plots as report figures: frequency responses and scopes.
-    pub fn plot_figures(&self) -> Vec<(&'static str, Figure)> {
-        let c = self.analytic.curves();
-        let xy = |pts: &[egui_plot::PlotPoint], logx: bool| -> (Vec<f64>, Vec<f64>) {
-            pts.iter()
-                .map(|p| (if logx { 10f64.powf(p.x) } else { p.x }, p.y))
-                .unzip()
-        };
-        let line = |label: &str, pts: &[egui_plot::PlotPoint], color: Rgb, logx: bool| {
-            let (x, y) = xy(pts, logx);
-            Series::line(label, x, y, color)
-        };
-        let (lin_c, twin_c, pas_c) = (Rgb(255, 127, 14), Rgb(31, 119, 180), Rgb(44, 160, 44));
-        let mut t_mag = Panel::new("Transmissibility", "frequency [Hz]", "|T| [dB]");
-        t_mag.x_scale = Scale::Log10;
-        t_mag.series = vec![
-            line("linear active", &c.t_mag[0], lin_c, true),
-            line("twin active (linearised)", &c.t_mag[1], twin_c, true),
-            line("passive", &c.t_mag[2], pas_c, true),
-        ];
-        if !self.dwell.mag.is_empty() {
-            let (x, y) = xy(&self.dwell.mag, true);
-            t_mag
-                .series
-                .push(Series::markers("twin simulated (dwell)", x, y, twin_c));
-        }
-        t_mag.hlines = vec![(0.0, "|T| = 1".into())];
-        let mut t_ph = Panel::new("", "frequency [Hz]", "phase T [deg]");
-        t_ph.x_scale = Scale::Log10;
-        t_ph.series = vec![
-            line("linear active", &c.t_phase[0], lin_c, true),
-            line("twin active", &c.t_phase[1], twin_c, true),
-            line("passive", &c.t_phase[2], pas_c, true),
-        ];
-        let mut b_mag = Panel::new(
-            "Valve/actuator (du/dt)/V_in",
-            "frequency [Hz]",
-            "|du/dt / V_in| [dB re (mm/s)/V]",
-        );
-        b_mag.x_scale = Scale::Log10;
-        b_mag.series = vec![
-            line("twin (linearised)", &c.bode_mag[0], twin_c, true),
-            line("G(s)", &c.bode_mag[1], lin_c, true),
-        ];
-        let mut b_ph = Panel::new("", "frequency [Hz]", "phase (du/dt)/V_in [deg]");
-        b_ph.x_scale = Scale::Log10;
-        b_ph.series = vec![
-            line("twin (linearised)", &c.bode_phase[0], twin_c, true),
-            line("G(s)", &c.bode_phase[1], lin_c, true),
-        ];
-        let mut freq = Figure::new(
-            format!(
-                "seat-twin — {} (Kp = {:.2} V/m, Ki = {:.2} V·s/m)",
-                self.preset.name,
-                self.params.controller.kp_v_per_m,
-                self.params.controller.ki_v_s_per_m
-            ),
-            vec![t_mag, t_ph, b_mag, b_ph],
-        );
-        freq.height = 1200;
-
-        let tr = &self.traces;
-        let ch = |label: &str, chan: Ch, color: Rgb| {
-            line(label, tr.channel(chan).points(), color, false)
-        };
-        let mut acc = Panel::new("Live traces", "time [s]", "acceleration [m/s²]");
-        acc.series = vec![
-            ch("platform", Ch::PlatformAcc, Rgb(127, 127, 127)),
-            ch("passive", Ch::PassiveAcc, pas_c),
-            ch("linear", Ch::LinearAcc, lin_c),
-            ch("twin", Ch::TwinAcc, twin_c),
-        ];
-        let mut stroke = Panel::new("", "time [s]", "stroke u [mm]");
-        let lim = self.params.plant.cylinder.stroke_m / 2.0 * MM_PER_M;
-        stroke.series = vec![
-            ch("passive", Ch::PassiveU, pas_c),
-            ch("linear", Ch::LinearU, lin_c),
-            ch("twin", Ch::TwinU, twin_c),
-        ];
-        stroke.hlines = vec![(lim, "end stop".into()), (-lim, "end stop".into())];
-        stroke.vspans = tr.contacts().to_vec();
-        let mut pr = Panel::new("", "time [s]", "pressure [bar]");
-        pr.series = vec![
-            ch("p1", Ch::P1, Rgb(214, 39, 40)),
-            ch("p2", Ch::P2, Rgb(148, 103, 189)),
-        ];
-        let mut q = Panel::new("", "time [s]", "flow [L/min]");
-        q.series = vec![
-            ch("Q1", Ch::Q1, Rgb(214, 39, 40)),
-            ch("Q2", Ch::Q2, Rgb(148, 103, 189)),
-        ];
-        let mut v = Panel::new("", "time [s]", "V_in [V]");
-        v.series = vec![
-            ch("linear", Ch::LinearVin, lin_c),
-            ch("twin", Ch::TwinVin, twin_c),
-        ];
-        let mut xv = Panel::new("", "time [s]", "spool x_v [mm]");
-        xv.series = vec![ch("twin", Ch::TwinXv, twin_c)];
-        let mut scopes = Figure::new(
-            format!("seat-twin — {} live traces", self.preset.name),
-            vec![acc, stroke, pr, q, v, xv],
-        );
-        scopes.height = 1500;
-        vec![("frequency", freq), ("scopes", scopes)]
-    }
-
     // ----- per frame -----
 
     fn drain_engine(&mut self) {
@@ -834,12 +730,16 @@ impl SeatTwinApp {
                 realtime_factor,
                 running,
                 params,
+                reference,
+                contacts,
             } => {
                 self.engine_view = EngineView {
                     t,
                     realtime_factor,
                     running,
                     params: Some(*params),
+                    reference,
+                    contacts,
                 }
             }
             Event::Contact(_) => self.traces.contact_count += 1,
@@ -990,6 +890,7 @@ impl SeatTwinApp {
         self.drain_engine();
         self.poll_files(&ctx);
         self.measured.poll(&self.params);
+        self.tune.poll();
 
         if !ctx.egui_wants_keyboard_input() && ui.input(|i| i.key_pressed(Key::Space)) {
             self.toggle_running();
@@ -1082,10 +983,12 @@ impl SeatTwinApp {
                     &self.traces,
                     &self.params,
                     &mut self.hidden_curves,
+                    self.ab.is_on(),
                 );
                 self.frame_stats.scopes_ms = t_scopes.elapsed().as_secs_f64() * 1e3;
                 let t_freq = Instant::now();
                 let last_stable = self.last_stable.filter(|g| *g != self.params.controller);
+                let reference = self.ab.curves(&self.params);
                 action = frequency::frequency_ui(
                     &mut cols[1],
                     self.analytic.curves(),
@@ -1095,6 +998,7 @@ impl SeatTwinApp {
                         phase_unwrapped: &mut self.settings.phase_unwrapped,
                         hidden: &mut self.hidden_curves,
                         last_stable,
+                        reference,
                     },
                 );
                 self.frame_stats.freq_ms = t_freq.elapsed().as_secs_f64() * 1e3;
@@ -1122,307 +1026,6 @@ impl SeatTwinApp {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
         self.frame_stats.record(t0.elapsed().as_secs_f64() * 1e3);
-    }
-
-    fn menu_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
-        ui.menu_button("File", |ui| {
-            if ui.button("Open preset…").clicked() {
-                self.guarded(Pending::OpenDialog, ctx);
-            }
-            if ui.button("Save preset").clicked() {
-                self.save(ctx);
-            }
-            if ui.button("Save preset as…").clicked() {
-                self.save_as(ctx);
-            }
-            ui.separator();
-            if ui.button("Load platform record (CSV)…").clicked() {
-                self.dialogs.request(Purpose::LoadRecord, "", ctx);
-            }
-            if ui.button("Export traces (CSV)…").clicked() {
-                self.dialogs.request(Purpose::ExportCsv, "traces.csv", ctx);
-            }
-            if ui.button("Export plots (PNG)…").clicked() {
-                self.dialogs.request(Purpose::ExportPng, "plots.png", ctx);
-            }
-            ui.separator();
-            if ui.button("Quit").clicked() {
-                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-            }
-        });
-        ui.menu_button("Data", |ui| {
-            if ui.button("Measured data & calibration…").clicked() {
-                self.measured.open = true;
-            }
-            if ui.button("Load measured records (CSV)…").clicked() {
-                self.measured.open = true;
-                self.dialogs.request(Purpose::LoadMeasured, "", ctx);
-            }
-            if ui.button("Load the demo campaign").clicked() {
-                self.measured.open = true;
-                self.measured.load_files(MeasuredData::demo_campaign());
-            }
-        });
-        ui.menu_button("Presets", |ui| {
-            if self.shipped.is_empty() {
-                ui.weak("no presets/ directory found");
-            }
-            for (name, path) in self.shipped.clone() {
-                if ui
-                    .button(&name)
-                    .on_hover_text(path.display().to_string())
-                    .clicked()
-                {
-                    self.guarded(Pending::LoadFile(path), ctx);
-                }
-            }
-        });
-        ui.menu_button("View", |ui| {
-            let before = self.settings.theme;
-            ui.radio_value(&mut self.settings.theme, Theme::System, "System theme");
-            ui.radio_value(&mut self.settings.theme, Theme::Light, "Light");
-            ui.radio_value(&mut self.settings.theme, Theme::Dark, "Dark");
-            if self.settings.theme != before {
-                ctx.set_theme(self.settings.theme.preference());
-            }
-            ui.separator();
-            ui.checkbox(&mut self.settings.show_schematic, "Schematic");
-            ui.checkbox(&mut self.settings.dwell_auto, "Auto-recompute dwell points");
-            ui.checkbox(&mut self.settings.show_debug, "Frame-time overlay");
-        });
-    }
-
-    fn toolbar_ui(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
-            let label = if self.want_running { "Pause" } else { "Run" };
-            if ui
-                .button(label)
-                .on_hover_text("Run / pause (space bar)")
-                .clicked()
-            {
-                self.toggle_running();
-            }
-            if ui
-                .button("Reset")
-                .on_hover_text("Back to rest at t = 0")
-                .clicked()
-            {
-                self.reset();
-            }
-            ui.separator();
-            ui.label("speed");
-            let before = self.settings.speed;
-            for s in [Speed::Slow, Speed::RealTime, Speed::Fast, Speed::Max] {
-                ui.selectable_value(&mut self.settings.speed, s, s.label());
-            }
-            if self.settings.speed != before {
-                self.send(Command::SetSpeed(self.settings.speed));
-            }
-            ui.separator();
-            let v = &self.engine_view;
-            let state = if self.engine_error.is_some() {
-                RichText::new("stopped (error)").color(Color32::from_rgb(220, 50, 40))
-            } else if v.running {
-                RichText::new("running").color(Color32::from_rgb(40, 160, 60))
-            } else {
-                RichText::new("paused")
-            };
-            ui.label(state);
-            ui.monospace(self.clock_text())
-                .on_hover_text("Simulated time (the scopes' time axis) and how fast it runs");
-            ui.separator();
-            let modified = self.is_modified();
-            let name = RichText::new(format!(
-                "preset: {}{}",
-                self.preset.name,
-                if modified { " * modified" } else { "" }
-            ));
-            ui.label(if modified { name.italics() } else { name })
-                .on_hover_text(&self.preset.description);
-            if let Some(n) = &self.notice {
-                ui.separator();
-                let color = if n.error {
-                    Color32::from_rgb(220, 50, 40)
-                } else {
-                    ui.visuals().weak_text_color()
-                };
-                ui.add(egui::Label::new(RichText::new(&n.text).color(color)).truncate());
-            }
-        });
-    }
-
-    fn controls_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) -> bool {
-        ui.heading("Parameters");
-        let changed = controls::params_ui(ui, &mut self.params, &mut self.field_errors);
-        if let Some(e) = &self.param_error {
-            ui.colored_label(Color32::from_rgb(220, 50, 40), e);
-        }
-        let effects = super::format::active_effects(&self.params);
-        ui.label(RichText::new("Model effects").strong());
-        if effects.is_empty() {
-            ui.weak("none (the paper's model)");
-        } else {
-            for e in effects {
-                ui.label(format!("on: {e}"));
-            }
-        }
-        ui.horizontal(|ui| {
-            if ui
-                .add_enabled(self.is_modified(), egui::Button::new("Revert to preset"))
-                .clicked()
-            {
-                self.params = self.preset.baseline;
-                self.field_errors.clear();
-                self.apply_params();
-            }
-        });
-        ui.separator();
-        ui.heading("Excitation");
-        match controls::excitation_ui(ui, &mut self.settings.excitation) {
-            ExcitationAction::None => {}
-            ExcitationAction::Apply => {
-                if let Some(p) = self.settings.excitation.problem() {
-                    self.error(format!("excitation not applied: {p}"));
-                } else {
-                    self.apply_excitation();
-                }
-            }
-            ExcitationAction::LoadRecord => self.dialogs.request(Purpose::LoadRecord, "", ctx),
-            ExcitationAction::LoadRecordPath(p) => self.load_record_file(&p),
-        }
-        if let Some(p) = self.dialogs.open() {
-            ui.weak(format!("file dialog open ({p:?})…"));
-        }
-        changed
-    }
-
-    fn side_ui(&mut self, ui: &mut egui::Ui) {
-        if self.settings.show_schematic {
-            ui.heading("Rig");
-            let h = (ui.available_width() * 1.15).clamp(260.0, 460.0);
-            schematic::schematic_ui(
-                ui,
-                self.traces.last_row().map(|r| &r.twin),
-                &self.params,
-                h,
-                self.traces.pressure_range_pa(),
-            );
-            ui.separator();
-        }
-        ui.heading("Metrics");
-        let (rows, platform) = self.traces.metrics.rows();
-        ui.weak(format!(
-            "over {:.1} s since the last change (ISO 2631-1 Wk)",
-            self.traces.metrics.counted_s()
-        ));
-        egui::Grid::new("metrics")
-            .striped(true)
-            .num_columns(5)
-            .show(ui, |ui| {
-                for h in ["", "RMS", "a_w", "VDV", "SEAT"] {
-                    ui.strong(h);
-                }
-                ui.end_row();
-                ui.label("platform");
-                ui.monospace(format!("{:.3}", platform.rms));
-                ui.monospace(format!("{:.3}", platform.aw));
-                ui.monospace(format!("{:.3}", platform.vdv));
-                ui.label("");
-                ui.end_row();
-                for (name, m, seat) in rows {
-                    ui.label(name);
-                    ui.monospace(format!("{:.3}", m.rms));
-                    ui.monospace(format!("{:.3}", m.aw));
-                    ui.monospace(format!("{:.3}", m.vdv));
-                    if seat.is_finite() {
-                        ui.monospace(format!("{seat:.0} %"));
-                    } else {
-                        ui.monospace("–");
-                    }
-                    ui.end_row();
-                }
-            });
-        ui.weak("RMS, a_w [m/s²]; VDV [m/s^1.75]; SEAT = a_w body / a_w platform");
-        ui.label(format!(
-            "end-stop contacts (twin): {}",
-            self.traces.contact_count
-        ));
-        if let Some(r) = self.traces.last_row() {
-            ui.weak(format!(
-                "now: u {:+.1} mm, p1 {:.1} bar, p2 {:.1} bar",
-                r.twin.u * MM_PER_M,
-                r.twin.p1 * BAR_PER_PA,
-                r.twin.p2 * BAR_PER_PA
-            ));
-        }
-    }
-
-    fn confirm_ui(&mut self, ctx: &egui::Context) {
-        let Some(action) = self.pending.clone() else {
-            return;
-        };
-        let mut decision: Option<bool> = None;
-        egui::Modal::new(egui::Id::unique("discard")).show(ctx, |ui| {
-            ui.set_width(360.0);
-            ui.heading("Unsaved changes");
-            ui.label(format!(
-                "The parameters differ from the preset “{}”. Discard the changes?",
-                self.preset.name
-            ));
-            ui.add_space(8.0);
-            ui.horizontal(|ui| {
-                if ui.button("Discard changes").clicked() {
-                    decision = Some(true);
-                }
-                if ui.button("Cancel").clicked() {
-                    decision = Some(false);
-                }
-            });
-        });
-        match decision {
-            Some(true) => {
-                self.pending = None;
-                self.run_pending(action, ctx);
-            }
-            Some(false) => self.pending = None,
-            None => {}
-        }
-    }
-
-    fn debug_overlay(&self, ctx: &egui::Context) {
-        egui::Area::new(egui::Id::unique("frame_time"))
-            .anchor(egui::Align2::RIGHT_BOTTOM, [-8.0, -8.0])
-            .order(egui::Order::Foreground)
-            .interactable(false)
-            .show(ctx, |ui| {
-                egui::Frame::popup(ui.style()).show(ui, |ui| {
-                    let s = &self.frame_stats;
-                    ui.monospace(format!(
-                        "UI build {:.2} ms (max {:.2})\n  scopes {:.2} ms, freq. plots {:.2} ms\nframe CPU {}\n{:.0} frames/s\nfreq. curves {:.2} ms",
-                        s.mean_ui_ms(),
-                        s.max_ui_ms(),
-                        s.scopes_ms,
-                        s.freq_ms,
-                        s.cpu_ms
-                            .map(|c| format!("{c:.2} ms"))
-                            .unwrap_or_else(|| "n/a".into()),
-                        s.fps(),
-                        self.analytic.curves().compute_ms,
-                    ));
-                });
-            });
-    }
-
-    fn window_title(&self) -> String {
-        format!(
-            "seat-twin — {}{}",
-            self.preset.name,
-            if self.is_modified() {
-                " (modified)"
-            } else {
-                ""
-            }
-        )
     }
 }
 

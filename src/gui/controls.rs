@@ -3,7 +3,7 @@
 
 use super::units::{BAR_PER_PA, KN_PER_N, MM_PER_M, MS_PER_S};
 use crate::engine::Excitation;
-use crate::params::{ParamError, Params};
+use crate::params::{ControllerKind, ControllerParams, ParamError, Params};
 use crate::scenario::{Cycloid, RandomRide, SampledMotion};
 use egui::{Response, Slider, SliderClamping};
 use serde::{Deserialize, Serialize};
@@ -49,9 +49,33 @@ impl Knob {
     /// Draws the slider (typed values apply on Enter or focus loss only, never per
     /// keystroke) and returns the new value [display units] when the user set one.
     fn ui(&self, ui: &mut egui::Ui, p: &Params) -> Option<f64> {
-        let mut shown = (self.get)(p) * self.scale;
+        let shown = (self.get)(p) * self.scale;
+        let view = SliderView {
+            label: self.label,
+            suffix: self.suffix,
+            span: self.range.clone(),
+            logarithmic: self.logarithmic,
+            decimals: self.decimals,
+        };
+        view.ui(ui, shown, self.hover)
+    }
+}
+
+/// How a parameter slider looks: label, unit suffix, span, scale type, decimals.
+struct SliderView<'a> {
+    label: &'a str,
+    suffix: &'a str,
+    span: RangeInclusive<f64>,
+    logarithmic: bool,
+    decimals: usize,
+}
+
+impl SliderView<'_> {
+    /// Draws a slider over `shown` [display units] that never clamps and applies typed values
+    /// on Enter or focus loss only; returns the new value when the user set one.
+    fn ui(&self, ui: &mut egui::Ui, mut shown: f64, hover: &str) -> Option<f64> {
         let before = shown;
-        let mut slider = Slider::new(&mut shown, self.range.clone())
+        let mut slider = Slider::new(&mut shown, self.span.clone())
             .text(self.label)
             .suffix(self.suffix)
             .clamping(SliderClamping::Never)
@@ -62,41 +86,13 @@ impl Knob {
         if self.logarithmic {
             slider = slider.smallest_positive(0.1);
         }
-        let response = ui.add(slider).on_hover_text(self.hover);
+        let response = ui.add(slider).on_hover_text(hover);
         (response.changed() && shown != before).then_some(shown)
     }
 }
 
 /// Refused values, by control label, shown next to the control until a value is accepted.
 pub type FieldErrors = std::collections::BTreeMap<&'static str, String>;
-
-fn knobs_controller() -> [Knob; 2] {
-    [
-        Knob {
-            label: "Kp",
-            get: |p| p.controller.kp_v_per_m,
-            set: |p, v| p.controller.kp_v_per_m = v,
-            scale: 1.0,
-            range: -2000.0..=200.0,
-            suffix: " V/m",
-            logarithmic: true,
-            decimals: 2,
-            hover: "Position gain Kp [V/m] of V = Kp·u + (Ki/s)·a_platform. Negative is negative \
-                    feedback; paper: −5.",
-        },
-        Knob {
-            label: "Ki",
-            get: |p| p.controller.ki_v_s_per_m,
-            set: |p, v| p.controller.ki_v_s_per_m = v,
-            scale: 1.0,
-            range: -200.0..=200.0,
-            suffix: " V·s/m",
-            logarithmic: true,
-            decimals: 2,
-            hover: "Gain Ki [V·s/m] on the integral of the platform acceleration; paper: −7.5.",
-        },
-    ]
-}
 
 fn knobs_valve() -> [Knob; 2] {
     [
@@ -179,18 +175,26 @@ fn knobs_rig() -> [Knob; 4] {
     ]
 }
 
-/// Tries one edit: the value must lie in the control's accepted range and the whole
-/// parameter set must validate. Only then is it written to `p`.
-fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -> bool {
-    let (lo, hi) = knob.accepted();
-    let unit = knob.suffix.trim();
+/// Tries one edit of the control `label`: the value [display units] must lie in `accepted`
+/// and the whole parameter set, with `set` applied, must validate. Only then is it written to
+/// `p`; otherwise the message goes to `errors` and `p` stays as it was.
+fn try_edit_with(
+    label: &'static str,
+    accepted: (f64, f64),
+    unit: &str,
+    p: &mut Params,
+    shown: f64,
+    set: impl FnOnce(&mut Params, f64),
+    errors: &mut FieldErrors,
+) -> bool {
+    let (lo, hi) = accepted;
+    let unit = unit.trim();
     let fmt = super::format::compact;
     if !(shown.is_finite() && shown >= lo && shown <= hi) {
         errors.insert(
-            knob.label,
+            label,
             format!(
-                "{} = {} {unit} refused: allowed {} … {} {unit}",
-                knob.label,
+                "{label} = {} {unit} refused: allowed {} … {} {unit}",
                 fmt(shown),
                 fmt(lo),
                 fmt(hi)
@@ -199,7 +203,7 @@ fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -
         return false;
     }
     let mut candidate = *p;
-    (knob.set)(&mut candidate, shown / knob.scale);
+    set(&mut candidate, shown);
     match candidate.validate() {
         Ok(()) => {
             *p = candidate;
@@ -208,10 +212,23 @@ fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -
             true
         }
         Err(e) => {
-            errors.insert(knob.label, format!("{} refused: {e}", knob.label));
+            errors.insert(label, format!("{label} refused: {e}"));
             false
         }
     }
+}
+
+/// Tries one edit of a [`Knob`] (see [`try_edit_with`]).
+fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -> bool {
+    try_edit_with(
+        knob.label,
+        knob.accepted(),
+        knob.suffix,
+        p,
+        shown,
+        |c, v| (knob.set)(c, v / knob.scale),
+        errors,
+    )
 }
 
 /// The parameter sliders. A value is written to `p` only when it is accepted (in range and
@@ -220,25 +237,214 @@ fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -
 pub fn params_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors) -> bool {
     let mut changed = false;
     ui.spacing_mut().slider_width = 150.0;
-    let mut group = |ui: &mut egui::Ui, knobs: &[Knob]| {
+    fn group(ui: &mut egui::Ui, knobs: &[Knob], p: &mut Params, errors: &mut FieldErrors) -> bool {
+        let mut changed = false;
         for k in knobs {
             if let Some(v) = k.ui(ui, p) {
                 changed |= try_edit(k, p, v, errors);
             }
-            if let Some(e) = errors.get(k.label) {
-                ui.colored_label(egui::Color32::from_rgb(220, 50, 40), e);
-            }
+            show_error(ui, errors, k.label);
         }
-    };
+        changed
+    }
     egui::CollapsingHeader::new("Controller")
         .default_open(true)
-        .show(ui, |ui| group(ui, &knobs_controller()));
+        .show(ui, |ui| changed |= controller_ui(ui, p, errors));
     egui::CollapsingHeader::new("Valve")
         .default_open(true)
-        .show(ui, |ui| group(ui, &knobs_valve()));
+        .show(ui, |ui| changed |= group(ui, &knobs_valve(), p, errors));
     egui::CollapsingHeader::new("Rig")
         .default_open(true)
-        .show(ui, |ui| group(ui, &knobs_rig()));
+        .show(ui, |ui| changed |= group(ui, &knobs_rig(), p, errors));
+    changed
+}
+
+/// The refusal message of control `label`, if any, next to it.
+fn show_error(ui: &mut egui::Ui, errors: &FieldErrors, label: &str) {
+    if let Some(e) = errors.get(label) {
+        ui.colored_label(egui::Color32::from_rgb(220, 50, 40), e);
+    }
+}
+
+/// How one controller gain is shown: label, display scale and unit, slider span.
+struct GainView {
+    label: &'static str,
+    scale: f64,
+    unit: &'static str,
+    slider: RangeInclusive<f64>,
+    logarithmic: bool,
+    decimals: usize,
+    hover: &'static str,
+}
+
+/// The display of a controller gain by its preset key ([`ControllerParams::range`] gives its
+/// valid range and SI unit; this adds the label, the display scale and the slider span).
+fn gain_view(key: &str) -> Option<GainView> {
+    let v = |label, scale, unit, slider, logarithmic, decimals, hover| GainView {
+        label,
+        scale,
+        unit,
+        slider,
+        logarithmic,
+        decimals,
+        hover,
+    };
+    Some(match key {
+        "kp_v_per_m" => v(
+            "Kp",
+            1.0,
+            "V/m",
+            -2000.0..=200.0,
+            true,
+            2,
+            "Position gain Kp [V/m] on u = y − x. Negative is negative feedback; paper: −5.",
+        ),
+        "ki_v_s_per_m" => v(
+            "Ki",
+            1.0,
+            "V·s/m",
+            -200.0..=200.0,
+            true,
+            2,
+            "Gain Ki [V·s/m] on the integral of the platform acceleration; paper: −7.5.",
+        ),
+        "lead_s" => v(
+            "lead",
+            MS_PER_S,
+            "ms",
+            0.0..=100.0,
+            false,
+            1,
+            "Prediction horizon L of the platform velocity [ms]; default 20.7 ms (the valve's \
+             delay plus the spool's lag).",
+        ),
+        "lead_cutoff_hz" => v(
+            "lead fc",
+            1.0,
+            "Hz",
+            0.5..=200.0,
+            true,
+            1,
+            "Corner of the low-pass on the predicted term [Hz]; default 12 Hz.",
+        ),
+        "sky_v_s_per_m" => v(
+            "Ksky",
+            1.0,
+            "V·s/m",
+            -200.0..=200.0,
+            true,
+            2,
+            "Gain on the estimated absolute body velocity [V·s/m]; negative opposes the body's \
+             motion; default −3.",
+        ),
+        "leak_hz" => v(
+            "leak",
+            1.0,
+            "Hz",
+            0.01..=10.0,
+            true,
+            2,
+            "Corner of the leaky integrator that estimates the body velocity [Hz]; default 0.3.",
+        ),
+        "sky_cutoff_hz" => v(
+            "sky fc",
+            1.0,
+            "Hz",
+            0.5..=200.0,
+            true,
+            1,
+            "Corner of the low-pass on the body-velocity feedback [Hz]; default 6 Hz (keeps it \
+             off the valve's 80 Hz resonance).",
+        ),
+        _ => return None,
+    })
+}
+
+/// One-line description of a controller structure for the panel.
+pub fn kind_summary(kind: ControllerKind) -> &'static str {
+    // Only glyphs the app's font draws (no combining dots): v_p is the platform velocity
+    // integrated from its accelerometer, v_b the body velocity estimated from its own.
+    match kind {
+        ControllerKind::Paper => "V = Kp·u + Ki·v_p (the paper's Eq. 16)",
+        ControllerKind::Predictive => "V = Kp·u + Ki·(v_p + L·LP(a_p)): v_p predicted L ahead",
+        ControllerKind::Skyhook => "V = Kp·u + Ki·v_p + Ksky·LP(v_b): body-velocity feedback",
+        ControllerKind::Smith => "Smith predictor on G(s) with its delay, plus Ki·v_p",
+    }
+}
+
+/// The controller panel: a structure combo box and the gain sliders of that structure. Like
+/// every control, a refused value (out of [`ControllerParams::range`] or invalid as a whole)
+/// never reaches `p`. Returns true if the controller changed.
+pub fn controller_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors) -> bool {
+    let mut changed = false;
+    let mut kind = p.controller.kind;
+    egui::ComboBox::from_label("structure")
+        .selected_text(kind.name())
+        .show_ui(ui, |ui| {
+            for k in ControllerKind::ALL {
+                ui.selectable_value(&mut kind, k, k.name())
+                    .on_hover_text(kind_summary(k));
+            }
+        });
+    if kind != p.controller.kind {
+        let mut candidate = *p;
+        candidate.controller.kind = kind;
+        match candidate.validate() {
+            Ok(()) => {
+                *p = candidate;
+                errors.clear();
+                changed = true;
+            }
+            Err(e) => {
+                errors.insert("structure", format!("structure {kind} refused: {e}"));
+            }
+        }
+    }
+    show_error(ui, errors, "structure");
+    ui.weak(kind_summary(p.controller.kind));
+    for &key in p.controller.kind.keys() {
+        let (Some(view), Some((min, max, _))) = (gain_view(key), ControllerParams::range(key))
+        else {
+            continue;
+        };
+        let Some(value) = p.controller.get(key) else {
+            continue;
+        };
+        // Typed or dragged values must lie in the slider's span within the valid range, as
+        // for every control (a Kp of +5000 V/m is valid for a preset but only ever unstable).
+        let lo = (min * view.scale).max(*view.slider.start());
+        let hi = (max * view.scale).min(*view.slider.end());
+        let fmt = super::format::compact;
+        let hover = format!(
+            "{} Accepted here: {} … {} {}.",
+            view.hover,
+            fmt(lo),
+            fmt(hi),
+            view.unit
+        );
+        let suffix = format!(" {}", view.unit);
+        let slider = SliderView {
+            label: view.label,
+            suffix: &suffix,
+            span: view.slider.clone(),
+            logarithmic: view.logarithmic,
+            decimals: view.decimals,
+        };
+        if let Some(shown) = slider.ui(ui, value * view.scale, &hover) {
+            changed |= try_edit_with(
+                view.label,
+                (lo, hi),
+                view.unit,
+                p,
+                shown,
+                |c, v| {
+                    c.controller.set(key, v / view.scale);
+                },
+                errors,
+            );
+        }
+        show_error(ui, errors, view.label);
+    }
     changed
 }
 
@@ -254,6 +460,8 @@ pub enum ExcitationKind {
     Sine,
     /// Open-loop valve sine, platform still.
     ValveSine,
+    /// A seat-test input class (ISO 7096, ISO 5007, EN 13490).
+    Class,
     /// A loaded CSV platform record.
     Record,
 }
@@ -265,6 +473,7 @@ impl ExcitationKind {
             ExcitationKind::Cycloid => "cycloid bump",
             ExcitationKind::Sine => "platform sine",
             ExcitationKind::ValveSine => "valve sine (open loop)",
+            ExcitationKind::Class => "seat-test class",
             ExcitationKind::Record => "CSV record",
         }
     }
@@ -299,6 +508,10 @@ pub struct ExcitationEditor {
     pub valve_amplitude_v: f64,
     /// Valve sine frequency [Hz].
     pub valve_freq_hz: f64,
+    /// Seat-test class name (e.g. `"EM6"`).
+    pub class_name: String,
+    /// Seat-test class record length [s] (a new seed follows when it ends).
+    pub class_duration_s: f64,
     /// The loaded record (not persisted).
     #[serde(skip)]
     pub record: Option<LoadedRecord>,
@@ -321,6 +534,8 @@ impl Default for ExcitationEditor {
             sine_freq_hz: 2.0,
             valve_amplitude_v: 1.0,
             valve_freq_hz: 2.0,
+            class_name: "EM6".into(),
+            class_duration_s: crate::seat_test::run::DEFAULT_DURATION_S,
             record: None,
             typed_path: String::new(),
         }
@@ -344,6 +559,11 @@ impl ExcitationEditor {
                 amplitude_v: self.valve_amplitude_v,
                 freq_hz: self.valve_freq_hz,
             },
+            ExcitationKind::Class => Excitation::Class {
+                class: crate::seat_test::find(&self.class_name)?,
+                duration_s: self.class_duration_s,
+                seed: 1,
+            },
             ExcitationKind::Record => Excitation::Record(self.record.as_ref()?.motion.clone()),
         })
     }
@@ -353,6 +573,9 @@ impl ExcitationEditor {
         match self.kind {
             ExcitationKind::Random if self.random.f_high_hz <= self.random.f_low_hz => {
                 Some("the upper band edge must be above the lower one".into())
+            }
+            ExcitationKind::Class if crate::seat_test::find(&self.class_name).is_none() => {
+                Some(format!("unknown seat-test class `{}`", self.class_name))
             }
             ExcitationKind::Record if self.record.is_none() => {
                 Some("no record loaded: press “Load CSV…”".into())
@@ -380,8 +603,38 @@ fn committed(r: &Response) -> bool {
     r.drag_stopped() || (r.changed() && !r.dragged())
 }
 
-/// The excitation editor.
-pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> ExcitationAction {
+/// What to know about a seat-test class on this rig: its standard, band rms and the mass the
+/// standard tests with against the suspended mass here.
+pub fn class_note(class: &crate::seat_test::InputClass, mass_kg: f64) -> String {
+    let mut s = format!(
+        "{}: {} — platform rms {:.2} m/s² in {:.2}–{:.2} Hz. The standard tests with people \
+         (or a 75 kg inert mass); this twin carries {:.1} kg{}, so the result is this rig's \
+         hardware on the standard input, not a seat certification.",
+        class.name,
+        class.standard.citation(),
+        class.rms_m_s2,
+        class.rms_band_hz.0,
+        class.rms_band_hz.1,
+        mass_kg,
+        if (mass_kg - crate::seat_test::report::RIG_MASS_KG).abs() < 1e-9 {
+            " (the paper's rig)"
+        } else {
+            ""
+        }
+    );
+    if !class.note.is_empty() {
+        s.push(' ');
+        s.push_str(class.note);
+    }
+    s
+}
+
+/// The excitation editor; `mass_kg` is the suspended mass (for the seat-test class note).
+pub fn excitation_ui(
+    ui: &mut egui::Ui,
+    ed: &mut ExcitationEditor,
+    mass_kg: f64,
+) -> ExcitationAction {
     let mut action = ExcitationAction::None;
     let before = ed.kind;
     egui::ComboBox::from_label("excitation")
@@ -392,6 +645,7 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                 ExcitationKind::Cycloid,
                 ExcitationKind::Sine,
                 ExcitationKind::ValveSine,
+                ExcitationKind::Class,
                 ExcitationKind::Record,
             ] {
                 ui.selectable_value(&mut ed.kind, k, k.label());
@@ -503,6 +757,39 @@ pub fn excitation_ui(ui: &mut egui::Ui, ed: &mut ExcitationEditor) -> Excitation
                         .suffix(" Hz"),
                 ),
             );
+        }
+        ExcitationKind::Class => {
+            let before = ed.class_name.clone();
+            egui::ComboBox::from_label("class")
+                .selected_text(ed.class_name.as_str())
+                .height(420.0)
+                .show_ui(ui, |ui| {
+                    for c in &crate::seat_test::CLASSES {
+                        ui.selectable_value(&mut ed.class_name, c.name.to_string(), c.name)
+                            .on_hover_text(c.standard.citation());
+                    }
+                });
+            if ed.class_name != before {
+                action = ExcitationAction::Apply;
+            }
+            if committed(
+                &ui.add(
+                    Slider::new(&mut ed.class_duration_s, 20.0..=600.0)
+                        .update_while_editing(false)
+                        .text("record")
+                        .suffix(" s"),
+                )
+                .on_hover_text(
+                    "Length of each generated record (a new seed follows). The generator meets \
+                     the class's PSD within its tolerance on the standard's 180 s; shorter \
+                     records can miss it by more.",
+                ),
+            ) {
+                action = ExcitationAction::Apply;
+            }
+            if let Some(c) = crate::seat_test::find(&ed.class_name) {
+                ui.add(egui::Label::new(egui::RichText::new(class_note(c, mass_kg)).weak()).wrap());
+            }
         }
         ExcitationKind::Record => {
             ui.horizontal(|ui| {

@@ -51,6 +51,18 @@ pub fn fitted(name: &str, value_si: f64, std_si: f64) -> String {
     }
 }
 
+/// A controller for people: its structure and every gain it reads, in SI, e.g.
+/// `paper (kp_v_per_m = -5, ki_v_s_per_m = -7.5)`.
+pub fn controller_text(c: &crate::params::ControllerParams) -> String {
+    let gains: Vec<String> = c
+        .kind
+        .keys()
+        .iter()
+        .filter_map(|k| c.get(k).map(|v| format!("{k} = {}", compact(v))))
+        .collect();
+    format!("{} ({})", c.kind, gains.join(", "))
+}
+
 /// A number with at most four significant digits and no trailing zeros ("1", "200",
 /// "0.1506", "−5").
 pub fn compact(v: f64) -> String {

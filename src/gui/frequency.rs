@@ -6,10 +6,15 @@
 //! The analytic curves are recomputed on the frame the parameters change (the twin's
 //! linearisation only when a plant parameter changes, not for a gain).
 
+mod dwell;
+
+pub use dwell::Dwell;
+
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};
 use super::units::{db, deg};
-use crate::analysis::dwell::{self, DwellOptions};
-use crate::analysis::frequency_response::{self as fr, Crossing, LoopMargins, OpenLoop};
+use crate::analysis::frequency_response::{
+    self as fr, Crossing, DwellOptions, LoopMargins, OpenLoop,
+};
 use crate::control::ControlLaw;
 use crate::model::ModelKind;
 use crate::params::{ControllerParams, Params};
@@ -219,218 +224,6 @@ impl Analytic {
     }
 }
 
-/// A message from the dwell thread.
-enum DwellMsg {
-    Point {
-        freq_hz: f64,
-        value: Complex64,
-        bode: Option<Complex64>,
-    },
-    Failed {
-        freq_hz: f64,
-        reason: String,
-    },
-    Finished,
-}
-
-/// A running sine-dwell sweep of the twin.
-struct DwellJob {
-    params: Params,
-    cancel: Arc<AtomicBool>,
-    rx: Receiver<DwellMsg>,
-    total: usize,
-    done: usize,
-}
-
-impl Drop for DwellJob {
-    fn drop(&mut self) {
-        self.cancel.store(true, Ordering::Relaxed);
-    }
-}
-
-/// The simulated (sine dwell) points of the twin: transmissibility, and u̇/V_in up to
-/// [`BODE_DWELL_MAX_HZ`].
-#[derive(Default)]
-pub struct Dwell {
-    job: Option<DwellJob>,
-    /// Parameters of the shown points.
-    shown_for: Option<Params>,
-    /// |T| [dB] points.
-    pub mag: Curve,
-    /// Phase [deg] points.
-    pub phase: Curve,
-    /// |u̇/V_in| [dB re 1 mm/(s·V)] points.
-    pub bode_mag: Curve,
-    /// Phase of u̇/V_in [deg] points.
-    pub bode_phase: Curve,
-    /// Points that failed (diverged), with the reason.
-    pub failures: Vec<(f64, String)>,
-    /// Last parameter change not yet simulated, and when it happened.
-    pending: Option<(Params, Instant)>,
-    /// Whether the user cancelled the sweep for the current parameters.
-    pub cancelled: bool,
-}
-
-impl Dwell {
-    /// Progress `(done, total)` of a running sweep.
-    pub fn progress(&self) -> Option<(usize, usize)> {
-        self.job.as_ref().map(|j| (j.done, j.total))
-    }
-
-    /// Whether the shown points belong to `params`.
-    pub fn is_current(&self, params: &Params) -> bool {
-        self.shown_for.as_ref() == Some(params) && self.job.is_none()
-    }
-
-    /// Cancels the running sweep (the thread stops after its current point).
-    pub fn cancel(&mut self) {
-        self.job = None;
-        self.pending = None;
-        self.cancelled = true;
-    }
-
-    /// Starts a sweep now for `params` (also after a cancel).
-    pub fn start(&mut self, params: &Params) {
-        self.pending = None;
-        self.cancelled = false;
-        self.mag.clear();
-        self.phase.clear();
-        self.bode_mag.clear();
-        self.bode_phase.clear();
-        self.failures.clear();
-        self.shown_for = Some(*params);
-        let freqs = fr::log_space(DWELL_RANGE_HZ.0, DWELL_RANGE_HZ.1, N_DWELL);
-        let cancel = Arc::new(AtomicBool::new(false));
-        let (tx, rx) = channel();
-        let p = *params;
-        let stop = cancel.clone();
-        let total = freqs.len();
-        let spawned = std::thread::Builder::new()
-            .name("seat-twin-dwell".into())
-            .spawn(move || {
-                let opt = DwellOptions::default();
-                for &f in &freqs {
-                    if stop.load(Ordering::Relaxed) {
-                        return;
-                    }
-                    let r = std::panic::catch_unwind(|| {
-                        let t = dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
-                        let b = if f <= BODE_DWELL_MAX_HZ {
-                            Some(dwell::simulated_bode(
-                                &p,
-                                ModelKind::Twin,
-                                f,
-                                bode_dwell_amplitude_v(f),
-                                &opt,
-                            )?)
-                        } else {
-                            None
-                        };
-                        Ok::<_, crate::simulation::SimError>((t, b))
-                    });
-                    let msg = match r {
-                        Ok(Ok((value, bode))) => DwellMsg::Point {
-                            freq_hz: f,
-                            value,
-                            bode,
-                        },
-                        Ok(Err(e)) => DwellMsg::Failed {
-                            freq_hz: f,
-                            reason: e.to_string(),
-                        },
-                        Err(_) => DwellMsg::Failed {
-                            freq_hz: f,
-                            reason: "internal error in the simulation".into(),
-                        },
-                    };
-                    if tx.send(msg).is_err() {
-                        return;
-                    }
-                }
-                let _ = tx.send(DwellMsg::Finished);
-            });
-        match spawned {
-            Ok(_) => {
-                self.job = Some(DwellJob {
-                    params: p,
-                    cancel,
-                    rx,
-                    total,
-                    done: 0,
-                })
-            }
-            Err(e) => self
-                .failures
-                .push((0.0, format!("could not start a thread: {e}"))),
-        }
-    }
-
-    /// Follows the parameters (debounced restart) and collects finished points. Returns
-    /// true while work is under way (the caller keeps repainting).
-    pub fn poll(&mut self, params: &Params, auto: bool) -> bool {
-        let stale = self.shown_for.as_ref() != Some(params);
-        if stale && auto {
-            match &self.pending {
-                Some((p, _)) if p == params => {}
-                _ => {
-                    self.pending = Some((*params, Instant::now()));
-                    self.cancelled = false;
-                }
-            }
-        }
-        if let Some((p, since)) = self.pending
-            && since.elapsed() >= DWELL_DEBOUNCE
-        {
-            self.start(&p);
-        }
-        let mut finished = false;
-        if let Some(job) = self.job.as_mut() {
-            for msg in job.rx.try_iter() {
-                match msg {
-                    DwellMsg::Point {
-                        freq_hz,
-                        value,
-                        bode,
-                    } => {
-                        job.done += 1;
-                        let x = freq_hz.log10();
-                        if value.norm().is_finite() {
-                            self.mag.push(PlotPoint::new(x, db(value.norm())));
-                            self.phase.push(PlotPoint::new(x, deg(value.arg())));
-                        }
-                        if let Some(b) = bode.filter(|b| b.norm().is_finite()) {
-                            self.bode_mag.push(PlotPoint::new(x, db(b.norm() * 1e3)));
-                            self.bode_phase.push(PlotPoint::new(x, deg(b.arg())));
-                        }
-                    }
-                    DwellMsg::Failed { freq_hz, reason } => {
-                        job.done += 1;
-                        self.failures.push((freq_hz, reason));
-                    }
-                    DwellMsg::Finished => finished = true,
-                }
-            }
-            if finished || job.done >= job.total {
-                self.shown_for = Some(job.params);
-                self.job = None;
-                self.unwrap_phase_points();
-            }
-        }
-        self.job.is_some() || self.pending.is_some()
-    }
-
-    /// Puts the dwell phases on the same branch as a continuous curve (each point is an
-    /// independent `arg` in (−180°, 180°]).
-    fn unwrap_phase_points(&mut self) {
-        for curve in [&mut self.phase, &mut self.bode_phase] {
-            let ph: Vec<f64> = curve.iter().map(|p| p.y.to_radians()).collect();
-            for (p, u) in curve.iter_mut().zip(fr::unwrap_phase(&ph)) {
-                p.y = u.to_degrees();
-            }
-        }
-    }
-}
-
 /// Formats a log10-frequency axis mark as Hz.
 fn hz_axis(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
     let f = 10f64.powf(mark.value);
@@ -520,7 +313,13 @@ pub struct FreqView<'a> {
     pub hidden: &'a mut BTreeSet<String>,
     /// The last stable gains, if they differ from the current ones.
     pub last_stable: Option<ControllerParams>,
+    /// A/B on: the curves of the reference controller on the same plant (its linearised
+    /// twin's transmissibility is drawn with the live one's).
+    pub reference: Option<&'a Curves>,
 }
+
+/// Legend name of the A/B reference's transmissibility.
+pub const REFERENCE_NAME: &str = "B: reference";
 
 /// The phase curve as shown: wrapped into ±180° (default) or unwrapped. Wrapping breaks the
 /// line where it jumps, so no vertical stroke crosses the plot.
@@ -618,6 +417,8 @@ pub fn frequency_ui(
     ];
     let dwell_name = "twin simulated (dwell)";
     let dwell_c = dwell_color(ui);
+    let reference = view.reference;
+    let (ref_w, ref_style) = super::scopes::style_of(super::scopes::Model::Reference);
     let t_items = |ui: &mut egui::Ui, id: &str, hidden: &mut BTreeSet<String>| {
         let mut items: Vec<LegendItem<'_>> = (0..3)
             .map(|i| LegendItem {
@@ -626,6 +427,13 @@ pub fn frequency_ui(
                 swatch: Swatch::Line(styles[i].0, styles[i].1),
             })
             .collect();
+        if reference.is_some() {
+            items.push(LegendItem {
+                name: REFERENCE_NAME,
+                color: super::scopes::REFERENCE,
+                swatch: Swatch::Line(ref_w, ref_style),
+            });
+        }
         if show_dwell {
             items.push(LegendItem {
                 name: dwell_name,
@@ -653,6 +461,16 @@ pub fn frequency_ui(
                     .color(colors[i])
                     .width(styles[i].0)
                     .style(styles[i].1),
+            );
+        }
+        if let Some(r) = reference
+            && !plotkit::hidden(&hid, "t_mag", REFERENCE_NAME)
+        {
+            pu.line(
+                Line::new(REFERENCE_NAME, r.t_mag[1].as_slice())
+                    .color(super::scopes::REFERENCE)
+                    .width(ref_w)
+                    .style(ref_style),
             );
         }
         if show_dwell && !plotkit::hidden(&hid, "t_mag", dwell_name) {
@@ -718,6 +536,18 @@ pub fn frequency_ui(
                         .color(colors[i])
                         .width(styles[i].0)
                         .style(styles[i].1),
+                );
+            }
+        }
+        if let Some(r) = reference
+            && !plotkit::hidden(&hid, "t_phase", REFERENCE_NAME)
+        {
+            for seg in shown_phase(&r.t_phase[1], unwrapped) {
+                pu.line(
+                    Line::new(REFERENCE_NAME, PlotPoints::Owned(seg))
+                        .color(super::scopes::REFERENCE)
+                        .width(ref_w)
+                        .style(ref_style),
                 );
             }
         }
@@ -918,8 +748,8 @@ pub fn stability_ui(
                     && ui
                         .button("Reset to last stable gains")
                         .on_hover_text(format!(
-                            "Kp = {:.2} V/m, Ki = {:.2} V·s/m, and the simulation from rest",
-                            g.kp_v_per_m, g.ki_v_s_per_m
+                            "{}, and the simulation from rest",
+                            super::format::controller_text(&g)
                         ))
                         .clicked()
                 {

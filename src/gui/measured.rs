@@ -19,7 +19,6 @@ use egui::{Color32, RichText};
 use egui_plot::{Corner, Legend, Line, Plot, PlotPoints};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 
 /// Measured channel colour.
@@ -35,10 +34,9 @@ const WHITENESS_LAGS: usize = 20;
 
 type Waker = Arc<dyn Fn() + Send + Sync>;
 
-/// A job on a worker thread; its result (or its error message) arrives once over a channel.
-struct Job<T> {
-    rx: Receiver<Result<T, String>>,
-}
+/// A job on a worker thread ([`super::job::Job`]: the app's one background-job type); its
+/// result (or its error message, a panic's included) arrives once.
+struct Job<T>(super::job::Job<T>);
 
 impl<T: Send + 'static> Job<T> {
     /// Runs `work` on a named thread; a panic in it becomes an error message.
@@ -47,32 +45,18 @@ impl<T: Send + 'static> Job<T> {
         waker: &Waker,
         work: impl FnOnce() -> Result<T, String> + Send + 'static,
     ) -> Result<Job<T>, String> {
-        let (tx, rx) = channel();
-        let w = waker.clone();
-        std::thread::Builder::new()
-            .name(name.into())
-            .spawn(move || {
-                let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(work))
-                    .unwrap_or_else(|p| Err(format!("internal error: {}", panic_text(&p))));
-                let _ = tx.send(r);
-                w();
-            })
-            .map_err(|e| format!("could not start a worker thread: {e}"))?;
-        Ok(Job { rx })
+        Ok(Job(super::job::Job::spawn(
+            name,
+            waker.clone(),
+            move |_| work(),
+        )))
     }
 }
 
-impl<T> Job<T> {
+impl<T: Send + 'static> Job<T> {
     fn poll(&self) -> Option<Result<T, String>> {
-        self.rx.try_recv().ok()
+        self.0.poll()
     }
-}
-
-fn panic_text(p: &Box<dyn std::any::Any + Send>) -> String {
-    p.downcast_ref::<&str>()
-        .map(|s| (*s).to_owned())
-        .or_else(|| p.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "a worker panicked".into())
 }
 
 /// A record loaded in the window, with its metric preparation.

@@ -16,16 +16,19 @@
 //!   off the UI thread; [`units`] — display units; [`format`] — numbers for people;
 //!   [`plotkit`] — y axes, clickable legends, wrapped phase.
 
+pub mod ab;
 pub mod app;
 pub mod controls;
 pub mod files;
 pub mod format;
 pub mod frequency;
+pub mod job;
 pub mod measured;
 pub mod plotkit;
 pub mod schematic;
 pub mod scopes;
 pub mod traces;
+pub mod tune;
 pub mod units;
 
 pub use app::SeatTwinApp;

@@ -16,6 +16,9 @@ const P1_COLOR: Color32 = Color32::from_rgb(214, 39, 40);
 /// Lower chamber colour.
 const P2_COLOR: Color32 = Color32::from_rgb(148, 103, 189);
 /// End-stop contact highlight.
+/// Colour of the A/B reference twin (B) wherever it is drawn.
+pub const REFERENCE: Color32 = Color32::from_rgb(220, 0, 150);
+
 const CONTACT: Color32 = Color32::from_rgba_premultiplied(200, 30, 30, 60);
 
 /// Number of scopes stacked in [`scopes_ui`].
@@ -33,6 +36,7 @@ pub fn style_of(model: Model) -> (f32, LineStyle) {
         Model::Passive => (1.6, LineStyle::dotted_dense()),
         Model::Platform => (1.0, LineStyle::Solid),
         Model::Second => (1.6, LineStyle::dashed_dense()),
+        Model::Reference => (1.8, LineStyle::dashed_loose()),
     }
 }
 
@@ -49,6 +53,8 @@ pub enum Model {
     Platform,
     /// The second of two twin channels in one scope (Q2 under Q1, p2 under p1): dashed.
     Second,
+    /// The A/B reference twin (B): loosely dashed, magenta.
+    Reference,
 }
 
 fn scope<'a>(
@@ -118,7 +124,15 @@ pub fn scopes_ui(
     traces: &Traces,
     params: &Params,
     hidden: &mut BTreeSet<String>,
+    ab: bool,
 ) -> ScopeFrames {
+    // With A/B on, the reference twin (B) is overlaid on the twin (A) where they differ most.
+    let with_b = |mut v: Vec<(&'static str, Ch, Color32, Model)>, b: (&'static str, Ch)| {
+        if ab {
+            v.push((b.0, b.1, REFERENCE, Model::Reference));
+        }
+        v
+    };
     let spacing = ui.spacing().item_spacing.y;
     let h = ((ui.available_height() - (spacing * 2.0 + LEGEND_H) * N_SCOPES as f32)
         / N_SCOPES as f32)
@@ -178,12 +192,15 @@ pub fn scopes_ui(
         "accel. [m/s²]",
         "m/s²",
         false,
-        &[
-            ("platform", Ch::PlatformAcc, PLATFORM, Model::Platform),
-            ("passive", Ch::PassiveAcc, PASSIVE, Model::Passive),
-            ("twin", Ch::TwinAcc, TWIN, Model::Twin),
-            ("linear", Ch::LinearAcc, LINEAR, Model::Linear),
-        ],
+        &with_b(
+            vec![
+                ("platform", Ch::PlatformAcc, PLATFORM, Model::Platform),
+                ("passive", Ch::PassiveAcc, PASSIVE, Model::Passive),
+                ("twin", Ch::TwinAcc, TWIN, Model::Twin),
+                ("linear", Ch::LinearAcc, LINEAR, Model::Linear),
+            ],
+            ("B: reference", Ch::RefAcc),
+        ),
         &|_, _| {},
     );
 
@@ -195,11 +212,14 @@ pub fn scopes_ui(
         "stroke u [mm]",
         "mm",
         false,
-        &[
-            ("passive u", Ch::PassiveU, PASSIVE, Model::Passive),
-            ("twin u", Ch::TwinU, TWIN, Model::Twin),
-            ("linear u", Ch::LinearU, LINEAR, Model::Linear),
-        ],
+        &with_b(
+            vec![
+                ("passive u", Ch::PassiveU, PASSIVE, Model::Passive),
+                ("twin u", Ch::TwinU, TWIN, Model::Twin),
+                ("linear u", Ch::LinearU, LINEAR, Model::Linear),
+            ],
+            ("B: reference u", Ch::RefU),
+        ),
         &|pu, hidden| {
             if plotkit::hidden(hidden, "scope_stroke", "end stops, contacts") {
                 return;
@@ -253,10 +273,13 @@ pub fn scopes_ui(
         "V_in [V]",
         "V",
         false,
-        &[
-            ("twin V_in", Ch::TwinVin, TWIN, Model::Twin),
-            ("linear V_in", Ch::LinearVin, LINEAR, Model::Linear),
-        ],
+        &with_b(
+            vec![
+                ("twin V_in", Ch::TwinVin, TWIN, Model::Twin),
+                ("linear V_in", Ch::LinearVin, LINEAR, Model::Linear),
+            ],
+            ("B: reference V_in", Ch::RefVin),
+        ),
         &|_, _| {},
     );
 

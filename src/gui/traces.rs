@@ -85,9 +85,15 @@ pub enum Ch {
     LinearVin,
     /// Twin spool position x_v [mm].
     TwinXv,
+    /// A/B reference twin body acceleration [m/s²].
+    RefAcc,
+    /// A/B reference twin stroke [mm].
+    RefU,
+    /// A/B reference twin command [V].
+    RefVin,
 }
 
-const N_CH: usize = 14;
+const N_CH: usize = 17;
 
 /// Running metrics of the platform and the three bodies.
 #[derive(Debug, Clone)]
@@ -100,6 +106,12 @@ pub struct LiveMetrics {
     pub linear: RunningMetrics,
     /// Passive body acceleration.
     pub passive: RunningMetrics,
+    /// A/B reference twin body acceleration.
+    pub reference: RunningMetrics,
+    /// Largest |u| of the live twin since the last metrics reset [m].
+    pub max_u_twin: f64,
+    /// Largest |u| of the reference twin since the last metrics reset [m].
+    pub max_u_reference: f64,
 }
 
 impl LiveMetrics {
@@ -111,7 +123,10 @@ impl LiveMetrics {
             platform: m.clone(),
             twin: m.clone(),
             linear: m.clone(),
-            passive: m,
+            passive: m.clone(),
+            reference: m,
+            max_u_twin: 0.0,
+            max_u_reference: 0.0,
         }
     }
 
@@ -121,9 +136,24 @@ impl LiveMetrics {
             &mut self.twin,
             &mut self.linear,
             &mut self.passive,
+            &mut self.reference,
         ] {
             m.reset();
         }
+        self.max_u_twin = 0.0;
+        self.max_u_reference = 0.0;
+    }
+
+    /// The A/B comparison: live twin (A) against the reference twin (B), `None` before the
+    /// reference has counted any data.
+    pub fn ab(&self) -> Option<AbMetrics> {
+        let (a, b) = (self.twin.metrics(), self.reference.metrics());
+        (b.duration_s > 0.0).then_some(AbMetrics {
+            a,
+            b,
+            max_u_a: self.max_u_twin,
+            max_u_b: self.max_u_reference,
+        })
     }
 
     /// `(name, metrics, SEAT %)` for twin, linear and passive, and the platform's metrics.
@@ -146,6 +176,28 @@ impl LiveMetrics {
     /// Seconds of data counted in the statistics.
     pub fn counted_s(&self) -> f64 {
         self.platform.metrics().duration_s
+    }
+}
+
+/// Metrics of the live twin (A) and the A/B reference twin (B) over the same samples.
+#[derive(Debug, Clone, Copy)]
+pub struct AbMetrics {
+    /// Live twin body acceleration.
+    pub a: VibrationMetrics,
+    /// Reference twin body acceleration.
+    pub b: VibrationMetrics,
+    /// Largest |u| of A [m].
+    pub max_u_a: f64,
+    /// Largest |u| of B [m].
+    pub max_u_b: f64,
+}
+
+/// `(a − b)/b` in percent (NaN when `b` is 0).
+pub fn difference_percent(a: f64, b: f64) -> f64 {
+    if b == 0.0 {
+        f64::NAN
+    } else {
+        100.0 * (a - b) / b
     }
 }
 
@@ -320,6 +372,21 @@ impl Traces {
                     m.push(v);
                 }
             }
+            // Same settling as the running metrics: nothing counted before it.
+            if self.metrics.twin.metrics().duration_s > 0.0 && tw.u.is_finite() {
+                self.metrics.max_u_twin = self.metrics.max_u_twin.max(tw.u.abs());
+            }
+            if let Some(r) = batch.reference.get(i) {
+                c[Ch::RefAcc as usize].push(t, r.ydd);
+                c[Ch::RefU as usize].push(t, r.u * MM_PER_M);
+                c[Ch::RefVin as usize].push(t, r.v_in);
+                if r.ydd.is_finite() {
+                    self.metrics.reference.push(r.ydd);
+                }
+                if self.metrics.reference.metrics().duration_s > 0.0 && r.u.is_finite() {
+                    self.metrics.max_u_reference = self.metrics.max_u_reference.max(r.u.abs());
+                }
+            }
             self.rows.push(Row {
                 t,
                 twin: *tw,
@@ -377,6 +444,7 @@ mod tests {
             twin: s.clone(),
             linear: s.clone(),
             passive: s,
+            reference: Vec::new(),
         }
     }
 

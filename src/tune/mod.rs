@@ -400,7 +400,13 @@ struct Problem {
     log: Mutex<Vec<Evaluation>>,
     count: AtomicUsize,
     cancel: Option<std::sync::Arc<AtomicBool>>,
+    /// Told `(evaluations done, budget)` after each search evaluation.
+    progress: Option<Progress>,
+    budget: usize,
 }
+
+/// A progress observer: called with `(evaluations done, budget)` from the tuning thread.
+pub type Progress = std::sync::Arc<dyn Fn(usize, usize) + Send + Sync>;
 
 impl Problem {
     fn controller_at(&self, x: &[f64]) -> ControllerParams {
@@ -492,7 +498,10 @@ impl CostFunction for &Problem {
             return Err(argmin::core::Error::msg("cancelled"));
         }
         let e = self.evaluate(self.controller_at(x));
-        self.count.fetch_add(1, Ordering::Relaxed);
+        let done = self.count.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(p) = &self.progress {
+            p(done, self.budget);
+        }
         let cost = Problem::cost(self, &e);
         if let Ok(mut log) = self.log.lock() {
             log.push(e);
@@ -520,12 +529,23 @@ pub fn pareto_front(evals: &[Evaluation]) -> Vec<Evaluation> {
     front
 }
 
-/// Tunes the preset's controller of `opts.kind` on the twin; `progress(done, budget)` is
-/// called after each evaluation; setting `cancel` stops at the next evaluation.
+/// Tunes the preset's controller of `opts.kind` on the twin; setting `cancel` stops at the
+/// next evaluation.
 pub fn tune(
     params: &Params,
     opts: &TuneOptions,
     cancel: Option<std::sync::Arc<AtomicBool>>,
+) -> Result<TuneResult, TuneError> {
+    tune_observed(params, opts, cancel, None)
+}
+
+/// [`tune`] with a progress observer: `progress(done, budget)` after each search evaluation
+/// (`budget` = `opts.max_evaluations`; the search may stop earlier, on its tolerance).
+pub fn tune_observed(
+    params: &Params,
+    opts: &TuneOptions,
+    cancel: Option<std::sync::Arc<AtomicBool>>,
+    progress: Option<Progress>,
 ) -> Result<TuneResult, TuneError> {
     check_options(opts)?;
     let nominal = {
@@ -561,6 +581,8 @@ pub fn tune(
         log: Mutex::new(Vec::new()),
         count: AtomicUsize::new(0),
         cancel,
+        progress,
+        budget: opts.max_evaluations,
     };
     let baseline = problem.evaluate(nominal.controller);
     let scale = if baseline.objective.is_finite() {
@@ -611,6 +633,7 @@ pub fn tune(
     let nominal_problem = Problem {
         plants: plants_of(vec![nominal]),
         rides: heldout,
+        progress: None,
         ..problem
     };
     let baseline_heldout = nominal_problem.evaluate(nominal.controller);

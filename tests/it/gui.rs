@@ -9,7 +9,7 @@ use seat_twin::gui::SeatTwinApp;
 use seat_twin::gui::app::Settings;
 use std::time::{Duration, Instant};
 
-fn harness() -> Harness<'static, SeatTwinApp> {
+pub(crate) fn harness() -> Harness<'static, SeatTwinApp> {
     let app = SeatTwinApp::new(Settings::default(), || {});
     Harness::builder()
         .with_size([1600.0, 1000.0])
@@ -27,7 +27,7 @@ fn harness_at_max_speed() -> Harness<'static, SeatTwinApp> {
 }
 
 /// Steps frames (with short sleeps so the engine can work) until `done` holds.
-fn step_until(
+pub(crate) fn step_until(
     h: &mut Harness<'static, SeatTwinApp>,
     what: &str,
     done: impl Fn(&SeatTwinApp) -> bool,
@@ -97,11 +97,7 @@ fn typed_tau_in_ms_is_stored_in_seconds() {
         .set_value_accesskit(25.0);
     h.step();
     let p = h.state().params();
-    assert!(
-        (p.plant.valve.tau_s - 0.025).abs() < 1e-12,
-        "{}",
-        p.plant.valve.tau_s
-    );
+    assert!((p.plant.valve.tau_s - 0.025).abs() < 1e-12, "{}", p.plant.valve.tau_s);
     assert!((p.linear.tau_s - 0.025).abs() < 1e-12);
     step_until(&mut h, "the engine to run with τ = 25 ms", |a| {
         a.engine_params()
@@ -167,8 +163,7 @@ fn shipped_preset_opens_from_the_menu_after_the_discard_prompt() {
     assert_eq!(app.params().plant.valve.cd, 0.1074);
     assert!(!app.is_modified());
     step_until(&mut h, "the engine to run the preset", |a| {
-        a.engine_params()
-            .is_some_and(|p| p.plant.valve.cd == 0.1074)
+        a.engine_params().is_some_and(|p| p.plant.valve.cd == 0.1074)
     });
 }
 
@@ -257,252 +252,69 @@ fn csv_export_table_holds_ten_seconds_of_finite_rows() {
 /// (layout, plots, analytic curves cache) plus egui's tessellation of the frame. Prints the
 /// figures (run with `--nocapture` to see them); what it asserts is that the scopes hold 10 s,
 /// the frame tessellates and a Kp change reaches the curves within the frame.
+/// Issue 13.7: this test used to time frames and end in an assertion that was always true.
+/// Speed is not asserted by tests (a busy CI machine would fail them; the app's debug overlay
+/// shows the frame cost). What it checks now can fail: with a full 10 s window every twin
+/// channel holds the whole window, every scope is laid out, the frame tessellates, and a
+/// slider frame recomputes the analytic curves for the new value.
 #[test]
-fn frame_cost_with_full_scopes() {
+fn full_scopes_paint_the_whole_window_and_sliders_recompute_in_frame() {
     let mut h = harness_at_max_speed();
     step_until(&mut h, "10 s of history", |a| a.traces().t_now() > 10.5);
     h.key_press(egui::Key::Space);
     h.step();
     step_until(&mut h, "pause", |a| !a.engine_view().running);
+    h.step();
     let rows = h.state().traces().rows().len();
     assert!(rows >= 4900, "{rows} rows in the window");
-
-    let mut ui_ms = Vec::new();
-    let mut tess_ms = Vec::new();
-    for _ in 0..30 {
-        let t0 = Instant::now();
-        h.step();
-        ui_ms.push(t0.elapsed().as_secs_f64() * 1e3);
-        let shapes = h.output().shapes.clone();
-        let ppp = h.output().pixels_per_point;
-        let t1 = Instant::now();
-        let prims = h.ctx.tessellate(shapes, ppp);
-        tess_ms.push(t1.elapsed().as_secs_f64() * 1e3);
-        assert!(!prims.is_empty());
-    }
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let (u, t) = (median(&mut ui_ms), median(&mut tess_ms));
-    let st = h.state().frame_stats();
-    let app_ms = st.mean_ui_ms();
-    println!(
-        "frame cost, 1600×1000, {rows} rows/scope-channel: app ui {app_ms:.2} ms \
-         (scopes {:.2}, frequency plots {:.2}), \
-         harness step {u:.2} ms (incl. AccessKit), tessellation {t:.2} ms, \
-         total ≈ {:.2} ms",
-        st.scopes_ms,
-        st.freq_ms,
-        u + t
+    // Every scope is laid out, and every twin channel holds the whole window (no sample
+    // dropped between the engine and the plots).
+    assert_eq!(
+        h.state().scope_frames().len(),
+        seat_twin::gui::scopes::N_SCOPES
     );
+    for f in h.state().scope_frames() {
+        assert!(f.width() > 100.0 && f.height() > 50.0, "scope frame {f:?}");
+    }
+    use seat_twin::gui::traces::Ch;
+    for ch in [
+        Ch::TwinAcc,
+        Ch::TwinU,
+        Ch::P1,
+        Ch::Q1,
+        Ch::TwinVin,
+        Ch::TwinXv,
+    ] {
+        let n = h.state().traces().channel(ch).points().len();
+        assert!(
+            n as f64 >= 0.98 * rows as f64,
+            "{ch:?}: {n} of {rows} points"
+        );
+    }
+    let shapes = h.output().shapes.clone();
+    let ppp = h.output().pixels_per_point;
+    assert!(!h.ctx.tessellate(shapes, ppp).is_empty());
     // A slider move: the analytic curves (and margins) are recomputed within that frame.
-    let mut drag_ms = Vec::new();
-    for kp in [-6.0, -7.0, -8.0, -9.0, -10.0] {
+    for kp in [-6.0, -7.0, -8.0] {
         h.get_by_role_and_label(Role::Slider, "Kp")
             .set_value_accesskit(kp);
-        let t0 = Instant::now();
         h.step();
-        drag_ms.push(t0.elapsed().as_secs_f64() * 1e3);
         assert_eq!(h.state().curves().params.unwrap().controller.kp_v_per_m, kp);
     }
-    let drag = median(&mut drag_ms);
-    println!(
-        "slider frame (Kp change, curves recomputed): {drag:.2} ms, of which curves {:.2} ms",
-        h.state().curves().compute_ms
-    );
     // A plant parameter: the twin is re-linearised and its responses re-evaluated in-frame.
-    let mut cd_ms = Vec::new();
-    let mut cd_curves_ms = Vec::new();
-    for cd in [0.14, 0.145, 0.15, 0.155, 0.16] {
+    for cd in [0.14, 0.15] {
         h.get_by_role_and_label(Role::Slider, "Cd")
             .set_value_accesskit(cd);
-        let t0 = Instant::now();
         h.step();
-        cd_ms.push(t0.elapsed().as_secs_f64() * 1e3);
-        cd_curves_ms.push(h.state().curves().compute_ms);
         assert_eq!(h.state().curves().params.unwrap().plant.valve.cd, cd);
     }
-    let (cd_drag, cd_curves) = (median(&mut cd_ms), median(&mut cd_curves_ms));
-    println!(
-        "slider frame (Cd change, twin re-linearised): {cd_drag:.2} ms, of which curves \
-         {cd_curves:.2} ms"
-    );
-    // No assertion on the times: speed is measured and reported (README, "Speed"), not
-    // asserted by a timed test that a busy CI machine could fail. The figures must exist.
-    assert!(u.is_finite() && t.is_finite() && drag.is_finite() && cd_drag.is_finite());
-}
-
-/// Steps frames until `done` holds, with a longer limit for background calibrations.
-fn step_until_long(
-    h: &mut Harness<'static, SeatTwinApp>,
-    what: &str,
-    limit: Duration,
-    done: impl Fn(&SeatTwinApp) -> bool,
-) {
-    let t0 = Instant::now();
-    while !done(h.state()) {
-        assert!(t0.elapsed() < limit, "timed out waiting for: {what}");
-        std::thread::sleep(Duration::from_millis(50));
-        h.step();
-    }
-}
-
-fn demo(name: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("assets/demo-campaign")
-        .join(name)
-}
-
-#[test]
-fn demo_campaign_loads_from_the_menu_and_replays_with_the_live_parameters() {
-    let mut h = harness();
-    h.step();
-    h.get_by_label("Data").click();
-    h.run_steps(3);
-    h.get_by_label("Load the demo campaign").click();
-    h.step();
-    assert!(h.state().measured().open, "the window did not open");
-    step_until(&mut h, "the campaign and its first replay", |a| {
-        a.measured().records.len() == 10 && a.measured().view().is_some()
-    });
-    let m = h.state().measured();
-    let v = m.view().unwrap();
-    assert!(v.n_points() > 1000, "{} points", v.n_points());
-    // The paper preset is close to this rig (an independent model): the velocity error is a
-    // fraction of the signal, not of the order of it, and finite.
-    assert!(
-        v.errors.du.is_finite() && v.errors.du_nrmse < 0.5,
-        "du error {} ({} of signal)",
-        v.errors.du,
-        v.errors.du_nrmse
-    );
-    assert_eq!(v.correlations.len(), 5, "one row per signature feature");
-    assert!(
-        v.weighted_rms.is_finite() && v.weighted_rms > 0.0,
-        "{}",
-        v.weighted_rms
-    );
-    h.get_by_label_contains("Measured vs twin");
-
-    // A slider change re-runs the replay with the new parameters.
-    let before = v.errors.du;
-    h.get_by_role_and_label(Role::Slider, "Cd")
-        .set_value_accesskit(0.10);
-    h.step();
-    step_until(&mut h, "the replay with Cd = 0.10", |a| {
-        a.measured()
-            .view()
-            .is_some_and(|v| v.params.plant.valve.cd == 0.10)
-    });
-    let after = h.state().measured().view().unwrap().errors.du;
-    assert!(
-        after > before * 1.2,
-        "a third less valve gain must fit the sine tests worse: {before} → {after}"
-    );
-}
-
-#[test]
-fn bad_measured_file_names_file_and_line_and_adds_nothing() {
-    let mut h = harness();
-    h.step();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("broken-rig.csv");
-    let mut text = String::from("t,v_in,u\n");
-    for i in 0..400 {
-        text.push_str(&format!("{},0.1,0.0\n", i as f64 * 1e-3));
-    }
-    text.push_str("0.4,abc,0.0\n");
-    std::fs::write(&path, text).unwrap();
-    h.state_mut().measured_mut().load_files(vec![path]);
-    step_until(&mut h, "the error", |a| a.measured().last_error().is_some());
-    let m = h.state().measured();
-    let e = m.last_error().unwrap();
-    assert!(e.contains("broken-rig.csv"), "{e}");
-    assert!(e.contains("402"), "line number missing: {e}");
-    assert!(e.contains("v_in"), "column missing: {e}");
-    assert!(m.records.is_empty());
-}
-
-#[test]
-fn calibration_runs_in_the_background_and_cancel_stops_it() {
-    let mut h = harness();
-    h.step();
-    h.state_mut().measured_mut().open = true;
-    // The whole campaign: a calibration of it takes seconds, long enough to cancel.
-    let campaign = seat_twin::gui::measured::MeasuredData::demo_campaign();
-    assert_eq!(campaign.len(), 10);
-    h.state_mut().measured_mut().load_files(campaign);
-    step_until(&mut h, "the records", |a| a.measured().view().is_some());
-    h.get_by_label("Calibrate on 10 record(s)").scroll_to_me();
-    h.step();
-    h.get_by_label("Calibrate on 10 record(s)").click();
-    h.step();
-    assert!(h.state().measured().calibrating());
-    // The UI keeps drawing frames while it runs.
-    h.run_steps(3);
-    h.get_by_label("Cancel calibration").click();
-    step_until(&mut h, "the calibration to stop", |a| {
-        !a.measured().calibrating()
-    });
-    let m = h.state().measured();
-    assert_eq!(
-        m.last_error(),
-        Some("calibration cancelled"),
-        "info: {:?}",
-        m.last_info()
-    );
-    assert!(m.report().is_none());
-}
-
-#[test]
-fn calibration_recovers_the_valve_gain_and_applies_it_to_the_live_twin() {
-    let mut h = harness();
-    h.step();
-    {
-        let m = h.state_mut().measured_mut();
-        m.open = true;
-        // Declared parameters only (the effect search is covered by tests/identify.rs).
-        m.options.candidates.clear();
-        m.load_files(vec![
-            demo("sine_05hz_4.50v.csv"),
-            demo("sine_10hz_6.40v.csv"),
-        ]);
-    }
-    // Start from a wrong valve gain.
-    h.get_by_role_and_label(Role::Slider, "Cd")
-        .set_value_accesskit(0.12);
-    h.step();
-    step_until(&mut h, "the records", |a| a.measured().records.len() == 2);
-    let start = *h.state().params();
-    h.state_mut().measured_mut().start_calibration(&start);
-    step_until_long(&mut h, "the calibration", Duration::from_secs(240), |a| {
-        !a.measured().calibrating()
-    });
-    let m = h.state().measured();
-    assert!(m.last_error().is_none(), "{:?}", m.last_error());
-    let r = m.report().expect("a report");
-    // The demo rig's truth is Cd = 0.1506 (tests/data/demo-campaign-truth.json); the
-    // calibration starts from 0.12 and knows nothing of it.
-    let cd = r.params.plant.valve.cd;
-    assert!((cd - 0.1506).abs() < 0.006, "Cd = {cd}");
-    assert!(r.error_before.value < r.error_nominal.value);
-    h.run_steps(2);
-    h.get_by_label("Apply to the live twin").scroll_to_me();
-    h.step();
-    h.get_by_label("Apply to the live twin").click();
-    h.step();
-    assert_eq!(h.state().params().plant.valve.cd, cd);
-    step_until(&mut h, "the engine to run the calibrated twin", |a| {
-        a.engine_params().is_some_and(|p| p.plant.valve.cd == cd)
-    });
 }
 
 #[test]
 fn simulated_bode_points_follow_the_paper_gain_and_the_linearised_phase() {
     let mut h = harness();
     h.step();
-    step_until_long(
+    super::gui_measured::step_until_long(
         &mut h,
         "the background sine dwells",
         Duration::from_secs(120),
@@ -622,11 +434,7 @@ fn typed_value_applies_on_enter_only() {
     assert!(field.is_focused());
     field.type_text("0.12");
     h.run_steps(2);
-    assert_eq!(
-        h.state().params().plant.valve.cd,
-        cd0,
-        "applied while typing"
-    );
+    assert_eq!(h.state().params().plant.valve.cd, cd0, "applied while typing");
     assert_eq!(
         h.state().curves().params.unwrap().plant.valve.cd,
         cd0,

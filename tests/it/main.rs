@@ -9,6 +9,8 @@ mod dataset_props;
 mod engine;
 mod fuzz;
 mod gui;
+mod gui_lab;
+mod gui_measured;
 mod identify;
 mod integrator;
 mod paper;

@@ -1,0 +1,325 @@
+//! The app's panels: menu, toolbar, controls (parameters, Tune, A/B, excitation), side
+//! (schematic, metrics), the discard prompt and the debug overlay.
+
+use super::*;
+
+impl SeatTwinApp {
+    pub(super) fn menu_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
+        ui.menu_button("File", |ui| {
+            if ui.button("Open preset…").clicked() {
+                self.guarded(Pending::OpenDialog, ctx);
+            }
+            if ui.button("Save preset").clicked() {
+                self.save(ctx);
+            }
+            if ui.button("Save preset as…").clicked() {
+                self.save_as(ctx);
+            }
+            ui.separator();
+            if ui.button("Load platform record (CSV)…").clicked() {
+                self.dialogs.request(Purpose::LoadRecord, "", ctx);
+            }
+            if ui.button("Export traces (CSV)…").clicked() {
+                self.dialogs.request(Purpose::ExportCsv, "traces.csv", ctx);
+            }
+            if ui.button("Export plots (PNG)…").clicked() {
+                self.dialogs.request(Purpose::ExportPng, "plots.png", ctx);
+            }
+            ui.separator();
+            if ui.button("Quit").clicked() {
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+        });
+        ui.menu_button("Data", |ui| {
+            if ui.button("Measured data & calibration…").clicked() {
+                self.measured.open = true;
+            }
+            if ui.button("Load measured records (CSV)…").clicked() {
+                self.measured.open = true;
+                self.dialogs.request(Purpose::LoadMeasured, "", ctx);
+            }
+            if ui.button("Load the demo campaign").clicked() {
+                self.measured.open = true;
+                self.measured.load_files(MeasuredData::demo_campaign());
+            }
+        });
+        ui.menu_button("Presets", |ui| {
+            if self.shipped.is_empty() {
+                ui.weak("no presets/ directory found");
+            }
+            for (name, path) in self.shipped.clone() {
+                if ui
+                    .button(&name)
+                    .on_hover_text(path.display().to_string())
+                    .clicked()
+                {
+                    self.guarded(Pending::LoadFile(path), ctx);
+                }
+            }
+        });
+        ui.menu_button("View", |ui| {
+            let before = self.settings.theme;
+            ui.radio_value(&mut self.settings.theme, Theme::System, "System theme");
+            ui.radio_value(&mut self.settings.theme, Theme::Light, "Light");
+            ui.radio_value(&mut self.settings.theme, Theme::Dark, "Dark");
+            if self.settings.theme != before {
+                ctx.set_theme(self.settings.theme.preference());
+            }
+            ui.separator();
+            ui.checkbox(&mut self.settings.show_schematic, "Schematic");
+            ui.checkbox(&mut self.settings.dwell_auto, "Auto-recompute dwell points");
+            ui.checkbox(&mut self.settings.show_debug, "Frame-time overlay");
+        });
+    }
+
+    pub(super) fn toolbar_ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let label = if self.want_running { "Pause" } else { "Run" };
+            if ui
+                .button(label)
+                .on_hover_text("Run / pause (space bar)")
+                .clicked()
+            {
+                self.toggle_running();
+            }
+            if ui
+                .button("Reset")
+                .on_hover_text("Back to rest at t = 0")
+                .clicked()
+            {
+                self.reset();
+            }
+            ui.separator();
+            ui.label("speed");
+            let before = self.settings.speed;
+            for s in [Speed::Slow, Speed::RealTime, Speed::Fast, Speed::Max] {
+                ui.selectable_value(&mut self.settings.speed, s, s.label());
+            }
+            if self.settings.speed != before {
+                self.send(Command::SetSpeed(self.settings.speed));
+            }
+            ui.separator();
+            let v = &self.engine_view;
+            let state = if self.engine_error.is_some() {
+                RichText::new("stopped (error)").color(Color32::from_rgb(220, 50, 40))
+            } else if v.running {
+                RichText::new("running").color(Color32::from_rgb(40, 160, 60))
+            } else {
+                RichText::new("paused")
+            };
+            ui.label(state);
+            ui.monospace(self.clock_text())
+                .on_hover_text("Simulated time (the scopes' time axis) and how fast it runs");
+            ui.separator();
+            let modified = self.is_modified();
+            let name = RichText::new(format!(
+                "preset: {}{}",
+                self.preset.name,
+                if modified { " * modified" } else { "" }
+            ));
+            ui.label(if modified { name.italics() } else { name })
+                .on_hover_text(&self.preset.description);
+            if let Some(n) = &self.notice {
+                ui.separator();
+                let color = if n.error {
+                    Color32::from_rgb(220, 50, 40)
+                } else {
+                    ui.visuals().weak_text_color()
+                };
+                ui.add(egui::Label::new(RichText::new(&n.text).color(color)).truncate());
+            }
+        });
+    }
+
+    pub(super) fn controls_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) -> bool {
+        ui.heading("Parameters");
+        let changed = controls::params_ui(ui, &mut self.params, &mut self.field_errors);
+        if let Some(e) = &self.param_error {
+            ui.colored_label(Color32::from_rgb(220, 50, 40), e);
+        }
+        let effects = crate::gui::format::active_effects(&self.params);
+        ui.label(RichText::new("Model effects").strong());
+        if effects.is_empty() {
+            ui.weak("none (the paper's model)");
+        } else {
+            for e in effects {
+                ui.label(format!("on: {e}"));
+            }
+        }
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(self.is_modified(), egui::Button::new("Revert to preset"))
+                .clicked()
+            {
+                self.params = self.preset.baseline;
+                self.field_errors.clear();
+                self.apply_params();
+            }
+        });
+        egui::CollapsingHeader::new("Tune")
+            .default_open(false)
+            .show(ui, |ui| {
+                if let crate::gui::tune::TuneAction::Apply(c) =
+                    self.tune.ui(ui, &self.params, &self.waker)
+                {
+                    self.apply_tuned(c);
+                }
+            });
+        ui.separator();
+        ui.heading("A/B comparison");
+        if self.ab.controls_ui(ui, &self.params.controller) == AbAction::Send {
+            self.send_reference();
+        }
+        ui.separator();
+        ui.heading("Excitation");
+        match controls::excitation_ui(ui, &mut self.settings.excitation, self.params.plant.body.mass_kg) {
+            ExcitationAction::None => {}
+            ExcitationAction::Apply => {
+                if let Some(p) = self.settings.excitation.problem() {
+                    self.error(format!("excitation not applied: {p}"));
+                } else {
+                    self.apply_excitation();
+                }
+            }
+            ExcitationAction::LoadRecord => self.dialogs.request(Purpose::LoadRecord, "", ctx),
+            ExcitationAction::LoadRecordPath(p) => self.load_record_file(&p),
+        }
+        if let Some(p) = self.dialogs.open() {
+            ui.weak(format!("file dialog open ({p:?})…"));
+        }
+        changed
+    }
+
+    pub(super) fn side_ui(&mut self, ui: &mut egui::Ui) {
+        if self.settings.show_schematic {
+            ui.heading("Rig");
+            let h = (ui.available_width() * 1.15).clamp(260.0, 460.0);
+            schematic::schematic_ui(
+                ui,
+                self.traces.last_row().map(|r| &r.twin),
+                &self.params,
+                h,
+                self.traces.pressure_range_pa(),
+            );
+            ui.separator();
+        }
+        ui.heading("Metrics");
+        let (rows, platform) = self.traces.metrics.rows();
+        ui.weak(format!(
+            "over {:.1} s since the last change (ISO 2631-1 Wk)",
+            self.traces.metrics.counted_s()
+        ));
+        egui::Grid::new("metrics")
+            .striped(true)
+            .num_columns(5)
+            .show(ui, |ui| {
+                for h in ["", "RMS", "a_w", "VDV", "SEAT"] {
+                    ui.strong(h);
+                }
+                ui.end_row();
+                ui.label("platform");
+                ui.monospace(format!("{:.3}", platform.rms));
+                ui.monospace(format!("{:.3}", platform.aw));
+                ui.monospace(format!("{:.3}", platform.vdv));
+                ui.label("");
+                ui.end_row();
+                for (name, m, seat) in rows {
+                    ui.label(name);
+                    ui.monospace(format!("{:.3}", m.rms));
+                    ui.monospace(format!("{:.3}", m.aw));
+                    ui.monospace(format!("{:.3}", m.vdv));
+                    if seat.is_finite() {
+                        ui.monospace(format!("{seat:.0} %"));
+                    } else {
+                        ui.monospace("–");
+                    }
+                    ui.end_row();
+                }
+            });
+        ui.weak("RMS, a_w [m/s²]; VDV [m/s^1.75]; SEAT = a_w body / a_w platform");
+        ui.label(format!(
+            "end-stop contacts (twin): {}",
+            self.traces.contact_count
+        ));
+        if self.ab.is_on() {
+            ui.separator();
+            crate::gui::ab::metrics_ui(ui, self.traces.metrics.ab(), self.engine_view.contacts);
+        }
+        if let Some(r) = self.traces.last_row() {
+            ui.weak(format!(
+                "now: u {:+.1} mm, p1 {:.1} bar, p2 {:.1} bar",
+                r.twin.u * MM_PER_M,
+                r.twin.p1 * BAR_PER_PA,
+                r.twin.p2 * BAR_PER_PA
+            ));
+        }
+    }
+
+    pub(super) fn confirm_ui(&mut self, ctx: &egui::Context) {
+        let Some(action) = self.pending.clone() else {
+            return;
+        };
+        let mut decision: Option<bool> = None;
+        egui::Modal::new(egui::Id::unique("discard")).show(ctx, |ui| {
+            ui.set_width(360.0);
+            ui.heading("Unsaved changes");
+            ui.label(format!(
+                "The parameters differ from the preset “{}”. Discard the changes?",
+                self.preset.name
+            ));
+            ui.add_space(8.0);
+            ui.horizontal(|ui| {
+                if ui.button("Discard changes").clicked() {
+                    decision = Some(true);
+                }
+                if ui.button("Cancel").clicked() {
+                    decision = Some(false);
+                }
+            });
+        });
+        match decision {
+            Some(true) => {
+                self.pending = None;
+                self.run_pending(action, ctx);
+            }
+            Some(false) => self.pending = None,
+            None => {}
+        }
+    }
+
+    pub(super) fn debug_overlay(&self, ctx: &egui::Context) {
+        egui::Area::new(egui::Id::unique("frame_time"))
+            .anchor(egui::Align2::RIGHT_BOTTOM, [-8.0, -8.0])
+            .order(egui::Order::Foreground)
+            .interactable(false)
+            .show(ctx, |ui| {
+                egui::Frame::popup(ui.style()).show(ui, |ui| {
+                    let s = &self.frame_stats;
+                    ui.monospace(format!(
+                        "UI build {:.2} ms (max {:.2})\n  scopes {:.2} ms, freq. plots {:.2} ms\nframe CPU {}\n{:.0} frames/s\nfreq. curves {:.2} ms",
+                        s.mean_ui_ms(),
+                        s.max_ui_ms(),
+                        s.scopes_ms,
+                        s.freq_ms,
+                        s.cpu_ms
+                            .map(|c| format!("{c:.2} ms"))
+                            .unwrap_or_else(|| "n/a".into()),
+                        s.fps(),
+                        self.analytic.curves().compute_ms,
+                    ));
+                });
+            });
+    }
+
+    pub(super) fn window_title(&self) -> String {
+        format!(
+            "seat-twin — {}{}",
+            self.preset.name,
+            if self.is_modified() {
+                " (modified)"
+            } else {
+                ""
+            }
+        )
+    }
+}

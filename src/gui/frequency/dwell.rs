@@ -1,0 +1,216 @@
+//! The simulated twin's sine dwell in the background: one thread steps the twin at each
+//! dwell frequency and streams the points back; cancelled when superseded.
+
+use super::*;
+
+/// A message from the dwell thread.
+enum DwellMsg {
+    Point {
+        freq_hz: f64,
+        value: Complex64,
+        bode: Option<Complex64>,
+    },
+    Failed {
+        freq_hz: f64,
+        reason: String,
+    },
+    Finished,
+}
+
+/// A running sine-dwell sweep of the twin.
+struct DwellJob {
+    params: Params,
+    cancel: Arc<AtomicBool>,
+    rx: Receiver<DwellMsg>,
+    total: usize,
+    done: usize,
+}
+
+impl Drop for DwellJob {
+    fn drop(&mut self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+}
+
+/// The simulated (sine dwell) points of the twin: transmissibility, and u̇/V_in up to
+/// [`BODE_DWELL_MAX_HZ`].
+#[derive(Default)]
+pub struct Dwell {
+    job: Option<DwellJob>,
+    /// Parameters of the shown points.
+    shown_for: Option<Params>,
+    /// |T| [dB] points.
+    pub mag: Curve,
+    /// Phase [deg] points.
+    pub phase: Curve,
+    /// |u̇/V_in| [dB re 1 mm/(s·V)] points.
+    pub bode_mag: Curve,
+    /// Phase of u̇/V_in [deg] points.
+    pub bode_phase: Curve,
+    /// Points that failed (diverged), with the reason.
+    pub failures: Vec<(f64, String)>,
+    /// Last parameter change not yet simulated, and when it happened.
+    pending: Option<(Params, Instant)>,
+    /// Whether the user cancelled the sweep for the current parameters.
+    pub cancelled: bool,
+}
+
+impl Dwell {
+    /// Progress `(done, total)` of a running sweep.
+    pub fn progress(&self) -> Option<(usize, usize)> {
+        self.job.as_ref().map(|j| (j.done, j.total))
+    }
+
+    /// Whether the shown points belong to `params`.
+    pub fn is_current(&self, params: &Params) -> bool {
+        self.shown_for.as_ref() == Some(params) && self.job.is_none()
+    }
+
+    /// Cancels the running sweep (the thread stops after its current point).
+    pub fn cancel(&mut self) {
+        self.job = None;
+        self.pending = None;
+        self.cancelled = true;
+    }
+
+    /// Starts a sweep now for `params` (also after a cancel).
+    pub fn start(&mut self, params: &Params) {
+        self.pending = None;
+        self.cancelled = false;
+        self.mag.clear();
+        self.phase.clear();
+        self.bode_mag.clear();
+        self.bode_phase.clear();
+        self.failures.clear();
+        self.shown_for = Some(*params);
+        let freqs = fr::log_space(DWELL_RANGE_HZ.0, DWELL_RANGE_HZ.1, N_DWELL);
+        let cancel = Arc::new(AtomicBool::new(false));
+        let (tx, rx) = channel();
+        let p = *params;
+        let stop = cancel.clone();
+        let total = freqs.len();
+        let spawned = std::thread::Builder::new()
+            .name("seat-twin-dwell".into())
+            .spawn(move || {
+                let opt = DwellOptions::default();
+                for &f in &freqs {
+                    if stop.load(Ordering::Relaxed) {
+                        return;
+                    }
+                    let r = std::panic::catch_unwind(|| {
+                        let t = fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
+                        let b = if f <= BODE_DWELL_MAX_HZ {
+                            Some(fr::simulated_bode(
+                                &p,
+                                ModelKind::Twin,
+                                f,
+                                bode_dwell_amplitude_v(f),
+                                &opt,
+                            )?)
+                        } else {
+                            None
+                        };
+                        Ok::<_, crate::simulation::SimError>((t, b))
+                    });
+                    let msg = match r {
+                        Ok(Ok((value, bode))) => DwellMsg::Point {
+                            freq_hz: f,
+                            value,
+                            bode,
+                        },
+                        Ok(Err(e)) => DwellMsg::Failed {
+                            freq_hz: f,
+                            reason: e.to_string(),
+                        },
+                        Err(_) => DwellMsg::Failed {
+                            freq_hz: f,
+                            reason: "internal error in the simulation".into(),
+                        },
+                    };
+                    if tx.send(msg).is_err() {
+                        return;
+                    }
+                }
+                let _ = tx.send(DwellMsg::Finished);
+            });
+        match spawned {
+            Ok(_) => {
+                self.job = Some(DwellJob {
+                    params: p,
+                    cancel,
+                    rx,
+                    total,
+                    done: 0,
+                })
+            }
+            Err(e) => self
+                .failures
+                .push((0.0, format!("could not start a thread: {e}"))),
+        }
+    }
+
+    /// Follows the parameters (debounced restart) and collects finished points. Returns
+    /// true while work is under way (the caller keeps repainting).
+    pub fn poll(&mut self, params: &Params, auto: bool) -> bool {
+        let stale = self.shown_for.as_ref() != Some(params);
+        if stale && auto {
+            match &self.pending {
+                Some((p, _)) if p == params => {}
+                _ => {
+                    self.pending = Some((*params, Instant::now()));
+                    self.cancelled = false;
+                }
+            }
+        }
+        if let Some((p, since)) = self.pending
+            && since.elapsed() >= DWELL_DEBOUNCE
+        {
+            self.start(&p);
+        }
+        let mut finished = false;
+        if let Some(job) = self.job.as_mut() {
+            for msg in job.rx.try_iter() {
+                match msg {
+                    DwellMsg::Point {
+                        freq_hz,
+                        value,
+                        bode,
+                    } => {
+                        job.done += 1;
+                        let x = freq_hz.log10();
+                        if value.norm().is_finite() {
+                            self.mag.push(PlotPoint::new(x, db(value.norm())));
+                            self.phase.push(PlotPoint::new(x, deg(value.arg())));
+                        }
+                        if let Some(b) = bode.filter(|b| b.norm().is_finite()) {
+                            self.bode_mag.push(PlotPoint::new(x, db(b.norm() * 1e3)));
+                            self.bode_phase.push(PlotPoint::new(x, deg(b.arg())));
+                        }
+                    }
+                    DwellMsg::Failed { freq_hz, reason } => {
+                        job.done += 1;
+                        self.failures.push((freq_hz, reason));
+                    }
+                    DwellMsg::Finished => finished = true,
+                }
+            }
+            if finished || job.done >= job.total {
+                self.shown_for = Some(job.params);
+                self.job = None;
+                self.unwrap_phase_points();
+            }
+        }
+        self.job.is_some() || self.pending.is_some()
+    }
+
+    /// Puts the dwell phases on the same branch as a continuous curve (each point is an
+    /// independent `arg` in (−180°, 180°]).
+    fn unwrap_phase_points(&mut self) {
+        for curve in [&mut self.phase, &mut self.bode_phase] {
+            let ph: Vec<f64> = curve.iter().map(|p| p.y.to_radians()).collect();
+            for (p, u) in curve.iter_mut().zip(fr::unwrap_phase(&ph)) {
+                p.y = u.to_degrees();
+            }
+        }
+    }
+}
