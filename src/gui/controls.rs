@@ -1,83 +1,146 @@
 //! Unit-aware sliders (with typed entry) for the parameters and the excitation editor.
 //! Values stay SI in [`Params`]; the sliders show display units and convert at the edge.
 
-use super::units::{BAR_PER_PA, KN_PER_N, MM_PER_M, MS_PER_S};
+use super::units::MM_PER_M;
 use crate::engine::Excitation;
-use crate::params::{ControllerKind, ControllerParams, ParamError, Params};
+use crate::params::{ControllerKind, ParamSpec, Params, spec};
 use crate::scenario::{Cycloid, RandomRide, SampledMotion};
 use egui::{Response, Slider, SliderClamping};
 use serde::{Deserialize, Serialize};
 use std::ops::RangeInclusive;
 
-/// One parameter control: a slider over an SI value shown as `value·scale` with a unit.
+/// One parameter slider. What it shows (display unit and scale), what it accepts (valid range)
+/// and its description come from the parameter table [`crate::params::PARAMS`]; the app adds
+/// only its label, the slider's span, the scale type and the decimals.
 struct Knob {
+    /// Dotted preset key of the parameter.
+    key: &'static str,
+    /// Short label beside the slider.
     label: &'static str,
-    get: fn(&Params) -> f64,
-    set: fn(&mut Params, f64),
-    scale: f64,
-    range: RangeInclusive<f64>,
-    suffix: &'static str,
-    logarithmic: bool,
-    decimals: usize,
-    hover: &'static str,
-}
-
-/// The range [SI] that [`Params::validate`] accepts for one parameter, read from the
-/// validation itself: the paper's parameters with this one set far out of range must fail
-/// with an out-of-range error that names the bounds.
-pub fn validation_range(set: fn(&mut Params, f64)) -> Option<(f64, f64)> {
-    let mut p = Params::paper();
-    set(&mut p, f64::NEG_INFINITY);
-    match p.validate() {
-        Err(ParamError::OutOfRange { min, max, .. }) => Some((min, max)),
-        _ => None,
-    }
-}
-
-impl Knob {
-    /// The range a typed or dragged value must lie in [display units]: the slider's range
-    /// within the range the parameter's validation accepts.
-    fn accepted(&self) -> (f64, f64) {
-        let (mut lo, mut hi) = (*self.range.start(), *self.range.end());
-        if let Some((a, b)) = validation_range(self.set) {
-            lo = lo.max(a * self.scale);
-            hi = hi.min(b * self.scale);
-        }
-        (lo, hi)
-    }
-
-    /// Draws the slider (typed values apply on Enter or focus loss only, never per
-    /// keystroke) and returns the new value [display units] when the user set one.
-    fn ui(&self, ui: &mut egui::Ui, p: &Params) -> Option<f64> {
-        let shown = (self.get)(p) * self.scale;
-        let view = SliderView {
-            label: self.label,
-            suffix: self.suffix,
-            span: self.range.clone(),
-            logarithmic: self.logarithmic,
-            decimals: self.decimals,
-        };
-        view.ui(ui, shown, self.hover)
-    }
-}
-
-/// How a parameter slider looks: label, unit suffix, span, scale type, decimals.
-struct SliderView<'a> {
-    label: &'a str,
-    suffix: &'a str,
+    /// Slider span [display units]; typed values must lie in it too.
     span: RangeInclusive<f64>,
     logarithmic: bool,
     decimals: usize,
+    /// A parameter that follows this one (the linear model's τ follows the valve's).
+    follows: Option<&'static str>,
+    /// What to add to the table's description, if anything.
+    note: &'static str,
 }
 
-impl SliderView<'_> {
-    /// Draws a slider over `shown` [display units] that never clamps and applies typed values
-    /// on Enter or focus loss only; returns the new value when the user set one.
-    fn ui(&self, ui: &mut egui::Ui, mut shown: f64, hover: &str) -> Option<f64> {
+const fn knob(
+    key: &'static str,
+    label: &'static str,
+    span: RangeInclusive<f64>,
+    logarithmic: bool,
+    decimals: usize,
+) -> Knob {
+    Knob {
+        key,
+        label,
+        span,
+        logarithmic,
+        decimals,
+        follows: None,
+        note: "",
+    }
+}
+
+/// The valve group.
+const VALVE: [Knob; 2] = [
+    knob("valve.cd", "Cd", 0.01..=0.5, false, 4),
+    Knob {
+        follows: Some("linear.tau_s"),
+        note: "The linear model G(s) follows it: one τ, as in the paper.",
+        ..knob("valve.tau_s", "τ", 0.0..=60.0, false, 1)
+    },
+];
+
+/// The rig group.
+const RIG: [Knob; 4] = [
+    knob("body.mass_kg", "mass", 1.0..=200.0, true, 1),
+    knob("body.stiffness_n_per_m", "stiffness", 0.1..=100.0, true, 2),
+    knob(
+        "supply.supply_pressure_pa",
+        "supply",
+        15.0..=250.0,
+        false,
+        0,
+    ),
+    knob("passive.zeta", "passive ζ", 0.0..=2.0, false, 2),
+];
+
+/// Every controller gain; the panel shows those of the chosen structure. The spans keep the
+/// sliders where loops can be stable (a Kp of +5000 V/m is valid in a preset but only ever
+/// unstable).
+const GAINS: [Knob; 7] = [
+    Knob {
+        note: "Negative is negative feedback.",
+        ..knob("controller.kp_v_per_m", "Kp", -2000.0..=200.0, true, 2)
+    },
+    knob("controller.ki_v_s_per_m", "Ki", -200.0..=200.0, true, 2),
+    Knob {
+        note: "Default 20.7 ms: the valve's delay plus the spool's lag.",
+        ..knob("controller.lead_s", "lead", 0.0..=100.0, false, 1)
+    },
+    knob("controller.lead_cutoff_hz", "lead fc", 0.5..=200.0, true, 1),
+    Knob {
+        note: "Negative opposes the body's motion.",
+        ..knob("controller.sky_v_s_per_m", "Ksky", -200.0..=200.0, true, 2)
+    },
+    knob("controller.leak_hz", "leak", 0.01..=10.0, true, 2),
+    Knob {
+        note: "Keeps the feedback off the valve's 80 Hz resonance.",
+        ..knob("controller.sky_cutoff_hz", "sky fc", 0.5..=200.0, true, 1)
+    },
+];
+
+impl Knob {
+    fn spec(&self) -> &'static ParamSpec {
+        spec(self.key).expect("every slider's key is in the parameter table")
+    }
+
+    /// The range a typed or dragged value must lie in [display units]: the slider's span
+    /// within the parameter's valid range.
+    fn accepted(&self) -> (f64, f64) {
+        let (a, b) = self.spec().display_range();
+        (a.max(*self.span.start()), b.min(*self.span.end()))
+    }
+
+    /// The tooltip: the table's description, unit, paper value and the accepted range.
+    fn hover(&self) -> String {
+        let s = self.spec();
+        let fmt = super::format::compact;
+        let unit = s.display.unit;
+        let paper = s
+            .paper
+            .map(|v| format!(" Paper: {} {unit}.", fmt(s.to_display(v))))
+            .unwrap_or_default();
+        let (lo, hi) = self.accepted();
+        format!(
+            "{} {} [{}].{paper} {} Accepted here: {} … {} {unit}.",
+            s.symbol,
+            s.doc,
+            if unit.is_empty() { "-" } else { unit },
+            self.note,
+            fmt(lo),
+            fmt(hi)
+        )
+    }
+
+    /// Draws the slider (never clamping; typed values apply on Enter or focus loss only) and
+    /// writes an accepted value to `p`; a refused one leaves `p` as it was and its message
+    /// stays next to the slider. Returns true if `p` changed.
+    fn ui(&self, ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors) -> bool {
+        let s = self.spec();
+        let mut shown = s.to_display(s.get(p));
         let before = shown;
+        let suffix = match s.display.unit {
+            "" => String::new(),
+            u => format!(" {u}"),
+        };
         let mut slider = Slider::new(&mut shown, self.span.clone())
             .text(self.label)
-            .suffix(self.suffix)
+            .suffix(suffix)
             .clamping(SliderClamping::Never)
             .update_while_editing(false)
             .logarithmic(self.logarithmic)
@@ -86,109 +149,44 @@ impl SliderView<'_> {
         if self.logarithmic {
             slider = slider.smallest_positive(0.1);
         }
-        let response = ui.add(slider).on_hover_text(hover);
-        (response.changed() && shown != before).then_some(shown)
+        let response = ui.add(slider).on_hover_text(self.hover());
+        let changed = response.changed()
+            && shown != before
+            && try_edit(
+                self.label,
+                self.accepted(),
+                s.display.unit,
+                shown,
+                p,
+                errors,
+                |c| {
+                    let v = s.from_display(shown);
+                    s.set_unchecked(c, v);
+                    if let Some(f) = self.follows.and_then(spec) {
+                        f.set_unchecked(c, v);
+                    }
+                },
+            );
+        show_error(ui, errors, self.label);
+        changed
     }
 }
 
 /// Refused values, by control label, shown next to the control until a value is accepted.
 pub type FieldErrors = std::collections::BTreeMap<&'static str, String>;
 
-fn knobs_valve() -> [Knob; 2] {
-    [
-        Knob {
-            label: "Cd",
-            get: |p| p.plant.valve.cd,
-            set: |p, v| p.plant.valve.cd = v,
-            scale: 1.0,
-            range: 0.01..=0.5,
-            suffix: "",
-            logarithmic: false,
-            decimals: 4,
-            hover: "Flow coefficient Cd [-]; paper: 0.1074 initial, 0.1506 adjusted.",
-        },
-        Knob {
-            label: "τ",
-            get: |p| p.plant.valve.tau_s,
-            // The linear model's delay follows the twin's: one τ, as in the paper.
-            set: |p, v| {
-                p.plant.valve.tau_s = v;
-                p.linear.tau_s = v;
-            },
-            scale: MS_PER_S,
-            range: 0.0..=60.0,
-            suffix: " ms",
-            logarithmic: false,
-            decimals: 1,
-            hover: "Pure input delay of the valve command (twin) [ms]; paper: 17.5 ms. The linear \
-                    model G(s) follows it.",
-        },
-    ]
-}
-
-fn knobs_rig() -> [Knob; 4] {
-    [
-        Knob {
-            label: "mass",
-            get: |p| p.plant.body.mass_kg,
-            set: |p, v| p.plant.body.mass_kg = v,
-            scale: 1.0,
-            range: 1.0..=200.0,
-            suffix: " kg",
-            logarithmic: true,
-            decimals: 1,
-            hover: "Suspended mass incl. seat, operator and payload [kg]; paper: 11.7 kg.",
-        },
-        Knob {
-            label: "stiffness",
-            get: |p| p.plant.body.stiffness_n_per_m,
-            set: |p, v| p.plant.body.stiffness_n_per_m = v,
-            scale: KN_PER_N,
-            range: 0.1..=100.0,
-            suffix: " kN/m",
-            logarithmic: true,
-            decimals: 2,
-            hover: "Equivalent stiffness of the springs [kN/m]; paper: 3.68 kN/m.",
-        },
-        Knob {
-            label: "supply",
-            get: |p| p.plant.supply.supply_pressure_pa,
-            set: |p, v| p.plant.supply.supply_pressure_pa = v,
-            scale: BAR_PER_PA,
-            range: 15.0..=250.0,
-            suffix: " bar",
-            logarithmic: false,
-            decimals: 0,
-            hover: "Supply pressure pA [bar]; paper: 100 bar (return 10 bar).",
-        },
-        Knob {
-            label: "passive ζ",
-            get: |p| p.passive.zeta,
-            set: |p, v| p.passive.zeta = v,
-            scale: 1.0,
-            range: 0.0..=2.0,
-            suffix: "",
-            logarithmic: false,
-            decimals: 2,
-            hover: "Damping ratio of the passive reference suspension; paper: 0.3.",
-        },
-    ]
-}
-
-/// Tries one edit of the control `label`: the value [display units] must lie in `accepted`
-/// and the whole parameter set, with `set` applied, must validate. Only then is it written to
-/// `p`; otherwise the message goes to `errors` and `p` stays as it was.
-fn try_edit_with(
+/// Tries one edit of the control `label`: the value `shown` [display units] must lie in
+/// `accepted` and the whole parameter set, with `set` applied, must validate. Only then is it
+/// written to `p`; otherwise the message goes to `errors` and `p` stays as it was.
+fn try_edit(
     label: &'static str,
-    accepted: (f64, f64),
+    (lo, hi): (f64, f64),
     unit: &str,
-    p: &mut Params,
     shown: f64,
-    set: impl FnOnce(&mut Params, f64),
+    p: &mut Params,
     errors: &mut FieldErrors,
+    set: impl FnOnce(&mut Params),
 ) -> bool {
-    let (lo, hi) = accepted;
-    let unit = unit.trim();
     let fmt = super::format::compact;
     if !(shown.is_finite() && shown >= lo && shown <= hi) {
         errors.insert(
@@ -203,7 +201,7 @@ fn try_edit_with(
         return false;
     }
     let mut candidate = *p;
-    set(&mut candidate, shown);
+    set(&mut candidate);
     match candidate.validate() {
         Ok(()) => {
             *p = candidate;
@@ -218,44 +216,24 @@ fn try_edit_with(
     }
 }
 
-/// Tries one edit of a [`Knob`] (see [`try_edit_with`]).
-fn try_edit(knob: &Knob, p: &mut Params, shown: f64, errors: &mut FieldErrors) -> bool {
-    try_edit_with(
-        knob.label,
-        knob.accepted(),
-        knob.suffix,
-        p,
-        shown,
-        |c, v| (knob.set)(c, v / knob.scale),
-        errors,
-    )
-}
-
 /// The parameter sliders. A value is written to `p` only when it is accepted (in range and
 /// valid as a whole); a refused value leaves `p` as it was (the field shows the old value
 /// again) and its message stays next to the control. Returns true if a parameter changed.
 pub fn params_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors) -> bool {
     let mut changed = false;
     ui.spacing_mut().slider_width = 150.0;
-    fn group(ui: &mut egui::Ui, knobs: &[Knob], p: &mut Params, errors: &mut FieldErrors) -> bool {
-        let mut changed = false;
-        for k in knobs {
-            if let Some(v) = k.ui(ui, p) {
-                changed |= try_edit(k, p, v, errors);
-            }
-            show_error(ui, errors, k.label);
-        }
-        changed
-    }
     egui::CollapsingHeader::new("Controller")
         .default_open(true)
         .show(ui, |ui| changed |= controller_ui(ui, p, errors));
-    egui::CollapsingHeader::new("Valve")
-        .default_open(true)
-        .show(ui, |ui| changed |= group(ui, &knobs_valve(), p, errors));
-    egui::CollapsingHeader::new("Rig")
-        .default_open(true)
-        .show(ui, |ui| changed |= group(ui, &knobs_rig(), p, errors));
+    for (title, knobs) in [("Valve", &VALVE[..]), ("Rig", &RIG[..])] {
+        egui::CollapsingHeader::new(title)
+            .default_open(true)
+            .show(ui, |ui| {
+                for k in knobs {
+                    changed |= k.ui(ui, p, errors);
+                }
+            });
+    }
     changed
 }
 
@@ -264,100 +242,6 @@ fn show_error(ui: &mut egui::Ui, errors: &FieldErrors, label: &str) {
     if let Some(e) = errors.get(label) {
         ui.colored_label(egui::Color32::from_rgb(220, 50, 40), e);
     }
-}
-
-/// How one controller gain is shown: label, display scale and unit, slider span.
-struct GainView {
-    label: &'static str,
-    scale: f64,
-    unit: &'static str,
-    slider: RangeInclusive<f64>,
-    logarithmic: bool,
-    decimals: usize,
-    hover: &'static str,
-}
-
-/// The display of a controller gain by its preset key ([`ControllerParams::range`] gives its
-/// valid range and SI unit; this adds the label, the display scale and the slider span).
-fn gain_view(key: &str) -> Option<GainView> {
-    let v = |label, scale, unit, slider, logarithmic, decimals, hover| GainView {
-        label,
-        scale,
-        unit,
-        slider,
-        logarithmic,
-        decimals,
-        hover,
-    };
-    Some(match key {
-        "kp_v_per_m" => v(
-            "Kp",
-            1.0,
-            "V/m",
-            -2000.0..=200.0,
-            true,
-            2,
-            "Position gain Kp [V/m] on u = y − x. Negative is negative feedback; paper: −5.",
-        ),
-        "ki_v_s_per_m" => v(
-            "Ki",
-            1.0,
-            "V·s/m",
-            -200.0..=200.0,
-            true,
-            2,
-            "Gain Ki [V·s/m] on the integral of the platform acceleration; paper: −7.5.",
-        ),
-        "lead_s" => v(
-            "lead",
-            MS_PER_S,
-            "ms",
-            0.0..=100.0,
-            false,
-            1,
-            "Prediction horizon L of the platform velocity [ms]; default 20.7 ms (the valve's \
-             delay plus the spool's lag).",
-        ),
-        "lead_cutoff_hz" => v(
-            "lead fc",
-            1.0,
-            "Hz",
-            0.5..=200.0,
-            true,
-            1,
-            "Corner of the low-pass on the predicted term [Hz]; default 12 Hz.",
-        ),
-        "sky_v_s_per_m" => v(
-            "Ksky",
-            1.0,
-            "V·s/m",
-            -200.0..=200.0,
-            true,
-            2,
-            "Gain on the estimated absolute body velocity [V·s/m]; negative opposes the body's \
-             motion; default −3.",
-        ),
-        "leak_hz" => v(
-            "leak",
-            1.0,
-            "Hz",
-            0.01..=10.0,
-            true,
-            2,
-            "Corner of the leaky integrator that estimates the body velocity [Hz]; default 0.3.",
-        ),
-        "sky_cutoff_hz" => v(
-            "sky fc",
-            1.0,
-            "Hz",
-            0.5..=200.0,
-            true,
-            1,
-            "Corner of the low-pass on the body-velocity feedback [Hz]; default 6 Hz (keeps it \
-             off the valve's 80 Hz resonance).",
-        ),
-        _ => return None,
-    })
 }
 
 /// One-line description of a controller structure for the panel.
@@ -373,8 +257,8 @@ pub fn kind_summary(kind: ControllerKind) -> &'static str {
 }
 
 /// The controller panel: a structure combo box and the gain sliders of that structure. Like
-/// every control, a refused value (out of [`ControllerParams::range`] or invalid as a whole)
-/// never reaches `p`. Returns true if the controller changed.
+/// every control, a refused value (outside its range in the parameter table or invalid as a
+/// whole) never reaches `p`. Returns true if the controller changed.
 pub fn controller_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors) -> bool {
     let mut changed = false;
     let mut kind = p.controller.kind;
@@ -402,48 +286,10 @@ pub fn controller_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors
     }
     show_error(ui, errors, "structure");
     ui.weak(kind_summary(p.controller.kind));
-    for &key in p.controller.kind.keys() {
-        let (Some(view), Some((min, max, _))) = (gain_view(key), ControllerParams::range(key))
-        else {
-            continue;
-        };
-        let Some(value) = p.controller.get(key) else {
-            continue;
-        };
-        // Typed or dragged values must lie in the slider's span within the valid range, as
-        // for every control (a Kp of +5000 V/m is valid for a preset but only ever unstable).
-        let lo = (min * view.scale).max(*view.slider.start());
-        let hi = (max * view.scale).min(*view.slider.end());
-        let fmt = super::format::compact;
-        let hover = format!(
-            "{} Accepted here: {} … {} {}.",
-            view.hover,
-            fmt(lo),
-            fmt(hi),
-            view.unit
-        );
-        let suffix = format!(" {}", view.unit);
-        let slider = SliderView {
-            label: view.label,
-            suffix: &suffix,
-            span: view.slider.clone(),
-            logarithmic: view.logarithmic,
-            decimals: view.decimals,
-        };
-        if let Some(shown) = slider.ui(ui, value * view.scale, &hover) {
-            changed |= try_edit_with(
-                view.label,
-                (lo, hi),
-                view.unit,
-                p,
-                shown,
-                |c, v| {
-                    c.controller.set(key, v / view.scale);
-                },
-                errors,
-            );
+    for gain in &GAINS {
+        if gain.spec().applies_to(p.controller.kind) {
+            changed |= gain.ui(ui, p, errors);
         }
-        show_error(ui, errors, view.label);
     }
     changed
 }

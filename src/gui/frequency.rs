@@ -12,9 +12,8 @@ pub use dwell::Dwell;
 
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};
 use super::units::{db, deg};
-use crate::analysis::frequency_response::{
-    self as fr, Crossing, DwellOptions, LoopMargins, OpenLoop,
-};
+use crate::analysis::dwell::{self as sine_dwell, DwellOptions};
+use crate::analysis::frequency_response::{self as fr, Crossing, LoopMargins, OpenLoop};
 use crate::control::ControlLaw;
 use crate::model::ModelKind;
 use crate::params::{ControllerParams, Params};

@@ -97,7 +97,11 @@ fn typed_tau_in_ms_is_stored_in_seconds() {
         .set_value_accesskit(25.0);
     h.step();
     let p = h.state().params();
-    assert!((p.plant.valve.tau_s - 0.025).abs() < 1e-12, "{}", p.plant.valve.tau_s);
+    assert!(
+        (p.plant.valve.tau_s - 0.025).abs() < 1e-12,
+        "{}",
+        p.plant.valve.tau_s
+    );
     assert!((p.linear.tau_s - 0.025).abs() < 1e-12);
     step_until(&mut h, "the engine to run with τ = 25 ms", |a| {
         a.engine_params()
@@ -163,7 +167,8 @@ fn shipped_preset_opens_from_the_menu_after_the_discard_prompt() {
     assert_eq!(app.params().plant.valve.cd, 0.1074);
     assert!(!app.is_modified());
     step_until(&mut h, "the engine to run the preset", |a| {
-        a.engine_params().is_some_and(|p| p.plant.valve.cd == 0.1074)
+        a.engine_params()
+            .is_some_and(|p| p.plant.valve.cd == 0.1074)
     });
 }
 
@@ -434,7 +439,11 @@ fn typed_value_applies_on_enter_only() {
     assert!(field.is_focused());
     field.type_text("0.12");
     h.run_steps(2);
-    assert_eq!(h.state().params().plant.valve.cd, cd0, "applied while typing");
+    assert_eq!(
+        h.state().params().plant.valve.cd,
+        cd0,
+        "applied while typing"
+    );
     assert_eq!(
         h.state().curves().params.unwrap().plant.valve.cd,
         cd0,

@@ -172,7 +172,11 @@ impl SeatTwinApp {
         }
         ui.separator();
         ui.heading("Excitation");
-        match controls::excitation_ui(ui, &mut self.settings.excitation, self.params.plant.body.mass_kg) {
+        match controls::excitation_ui(
+            ui,
+            &mut self.settings.excitation,
+            self.params.plant.body.mass_kg,
+        ) {
             ExcitationAction::None => {}
             ExcitationAction::Apply => {
                 if let Some(p) = self.settings.excitation.problem() {

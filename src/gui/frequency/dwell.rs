@@ -98,9 +98,10 @@ impl Dwell {
                         return;
                     }
                     let r = std::panic::catch_unwind(|| {
-                        let t = fr::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
+                        let t =
+                            sine_dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
                         let b = if f <= BODE_DWELL_MAX_HZ {
-                            Some(fr::simulated_bode(
+                            Some(sine_dwell::simulated_bode(
                                 &p,
                                 ModelKind::Twin,
                                 f,
