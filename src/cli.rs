@@ -94,6 +94,17 @@ pub enum MethodArg {
     Linearised,
 }
 
+impl From<MethodArg> for crate::analysis::sweep::ResponseMethod {
+    fn from(m: MethodArg) -> Self {
+        use crate::analysis::sweep::ResponseMethod as R;
+        match m {
+            MethodArg::Exact => R::Exact,
+            MethodArg::Simulated => R::Simulated,
+            MethodArg::Linearised => R::Linearised,
+        }
+    }
+}
+
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {

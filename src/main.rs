@@ -4,9 +4,8 @@
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use seat_twin::analysis::frequency_response as fr;
-use seat_twin::cli::{
-    self, Cli, Command, MAX_DURATION_S, MethodArg, ScenarioArg, SeatTestArgs, check_range,
-};
+use seat_twin::analysis::sweep::{self, Response, ResponseMethod};
+use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, SeatTestArgs, check_range};
 use seat_twin::dataset::{self, RecordKind};
 use seat_twin::experiments;
 use seat_twin::fsutil::{self, OutputDir};
@@ -434,29 +433,9 @@ fn run(cmd: Command) -> Result<()> {
         } => {
             let params = load_params(&preset)?;
             let kind: ModelKind = model.into();
-            let method = method.unwrap_or(match kind {
-                ModelKind::Twin => MethodArg::Simulated,
-                _ => MethodArg::Exact,
-            });
-            let values: Vec<num_complex::Complex64> = match (kind, method) {
-                (ModelKind::Passive, _) => {
-                    bail!("the passive model has no valve: no Bode of u̇/V_in")
-                }
-                (ModelKind::Linear, MethodArg::Exact) => {
-                    freqs.iter().map(|&f| fr::linear_bode(&params, f)).collect()
-                }
-                (ModelKind::Twin, MethodArg::Linearised) => {
-                    let lin = fr::linearise_twin(&params);
-                    freqs.iter().map(|&f| lin.bode(f)).collect()
-                }
-                (_, MethodArg::Simulated) => {
-                    let opt = fr::DwellOptions::default();
-                    fr::sweep(&freqs, |&f| fr::simulated_bode(&params, kind, f, amp, &opt))
-                        .into_iter()
-                        .collect::<Result<_, _>>()?
-                }
-                (k, _) => bail!("method not available for the {} model", k.name()),
-            };
+            let method = method.map_or(ResponseMethod::default_for(kind), Into::into);
+            let what = Response::Bode { amplitude_v: amp };
+            let values = sweep::response(&params, kind, what, method, &freqs)?;
             check_response(&freqs, &values, &format!("--amp {} V", fmt_value(amp)))?;
             let rows = freqs
                 .iter()
@@ -485,38 +464,9 @@ fn run(cmd: Command) -> Result<()> {
         } => {
             let params = load_params(&preset)?;
             let kind: ModelKind = model.into();
-            let method = method.unwrap_or(match kind {
-                ModelKind::Twin => MethodArg::Simulated,
-                _ => MethodArg::Exact,
-            });
-            let values: Vec<num_complex::Complex64> = match (kind, method) {
-                (ModelKind::Linear, MethodArg::Exact) => freqs
-                    .iter()
-                    .map(|&f| fr::linear_transmissibility(&params, f))
-                    .collect(),
-                (ModelKind::Passive, MethodArg::Exact) => freqs
-                    .iter()
-                    .map(|&f| fr::passive_transmissibility(&params, f))
-                    .collect(),
-                (ModelKind::Twin, MethodArg::Linearised) => {
-                    let lin = fr::linearise_twin(&params);
-                    freqs
-                        .iter()
-                        .map(|&f| {
-                            lin.transmissibility(&seat_twin::control::ControlLaw::new(&params), f)
-                        })
-                        .collect()
-                }
-                (_, MethodArg::Simulated) => {
-                    let opt = fr::DwellOptions::default();
-                    fr::sweep(&freqs, |&f| {
-                        fr::simulated_transmissibility(&params, kind, f, &opt)
-                    })
-                    .into_iter()
-                    .collect::<Result<_, _>>()?
-                }
-                (k, _) => bail!("method not available for the {} model", k.name()),
-            };
+            let method = method.map_or(ResponseMethod::default_for(kind), Into::into);
+            let what = Response::Transmissibility;
+            let values = sweep::response(&params, kind, what, method, &freqs)?;
             check_response(&freqs, &values, &format!("preset {preset}"))?;
             let rows = freqs
                 .iter()

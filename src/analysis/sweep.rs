@@ -126,3 +126,171 @@ pub fn chirp_drive(amplitude_v: f64, f0_hz: f64, f1_hz: f64, duration_s: f64) ->
         duration_s,
     })
 }
+
+/// Which frequency response [`response`] computes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Response {
+    /// `u̇/V_in`, open loop, platform still; a simulated dwell drives the valve with this
+    /// command amplitude [V].
+    Bode {
+        /// Command amplitude of a simulated dwell [V].
+        amplitude_v: f64,
+    },
+    /// `ÿ/ẍ` with the controller in the loop.
+    Transmissibility,
+}
+
+/// How [`response`] computes it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResponseMethod {
+    /// Closed form (linear and passive models).
+    Exact,
+    /// Sine dwell by simulation, first harmonic.
+    Simulated,
+    /// Numerical linearisation at rest, evaluated on jω (twin).
+    Linearised,
+}
+
+impl ResponseMethod {
+    /// The usual method for a model: simulated for the twin, exact for the others.
+    pub fn default_for(kind: ModelKind) -> Self {
+        match kind {
+            ModelKind::Twin => ResponseMethod::Simulated,
+            _ => ResponseMethod::Exact,
+        }
+    }
+}
+
+/// Why [`response`] gave no response.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ResponseError {
+    /// The passive seat has no valve, so no `u̇/V_in`.
+    #[error("the passive model has no valve: no Bode of u̇/V_in")]
+    NoValve,
+    /// The method does not apply to the model.
+    #[error("method {method:?} not available for the {model} model")]
+    Unavailable {
+        /// The model's name.
+        model: &'static str,
+        /// The method asked for.
+        method: ResponseMethod,
+    },
+    /// A simulated dwell failed.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+}
+
+/// One entry point for a model's frequency response at `freqs_hz`, by `method` (closed form,
+/// linearisation or simulated dwells run in parallel).
+pub fn response(
+    params: &Params,
+    kind: ModelKind,
+    what: Response,
+    method: ResponseMethod,
+    freqs_hz: &[f64],
+) -> Result<Vec<Complex64>, ResponseError> {
+    use super::frequency_response as fr;
+    use ResponseMethod::{Exact, Linearised, Simulated};
+    let opt = DwellOptions::default();
+    let closed =
+        |g: fn(&Params, f64) -> Complex64| freqs_hz.iter().map(|&f| g(params, f)).collect();
+    Ok(match (what, kind, method) {
+        (Response::Bode { .. }, ModelKind::Passive, _) => return Err(ResponseError::NoValve),
+        (Response::Bode { .. }, ModelKind::Linear, Exact) => closed(fr::linear_bode),
+        (Response::Transmissibility, ModelKind::Linear, Exact) => {
+            closed(fr::linear_transmissibility)
+        }
+        (Response::Transmissibility, ModelKind::Passive, Exact) => {
+            closed(fr::passive_transmissibility)
+        }
+        (_, ModelKind::Twin, Linearised) => {
+            let lin = fr::linearise_twin(params);
+            let law = crate::control::ControlLaw::new(params);
+            freqs_hz
+                .iter()
+                .map(|&f| match what {
+                    Response::Bode { .. } => lin.bode(f),
+                    Response::Transmissibility => lin.transmissibility(&law, f),
+                })
+                .collect()
+        }
+        (Response::Bode { amplitude_v }, _, Simulated) => sweep(freqs_hz, |&f| {
+            simulated_bode(params, kind, f, amplitude_v, &opt)
+        })
+        .into_iter()
+        .collect::<Result<_, _>>()?,
+        (Response::Transmissibility, _, Simulated) => sweep(freqs_hz, |&f| {
+            simulated_transmissibility(params, kind, f, &opt)
+        })
+        .into_iter()
+        .collect::<Result<_, _>>()?,
+        (_, k, m) => {
+            return Err(ResponseError::Unavailable {
+                model: k.name(),
+                method: m,
+            });
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The entry point's exact and linearised answers are the closed forms they name, and it
+    /// refuses what does not exist.
+    #[test]
+    fn response_dispatches_to_the_named_method() {
+        let p = Params::paper();
+        let f = [1.0, 7.0];
+        let t = response(
+            &p,
+            ModelKind::Linear,
+            Response::Transmissibility,
+            ResponseMethod::Exact,
+            &f,
+        )
+        .unwrap();
+        for (v, &fi) in t.iter().zip(&f) {
+            assert_eq!(
+                *v,
+                super::super::frequency_response::linear_transmissibility(&p, fi)
+            );
+        }
+        let t = response(
+            &p,
+            ModelKind::Passive,
+            Response::Transmissibility,
+            ResponseMethod::Exact,
+            &f,
+        )
+        .unwrap();
+        let (k, m) = (p.body.stiffness_n_per_m, p.body.mass_kg);
+        let c = 2.0 * p.passive.zeta * (k * m).sqrt();
+        for (v, &fi) in t.iter().zip(&f) {
+            let s = Complex64::new(0.0, 2.0 * PI * fi);
+            let exact = (c * s + k) / (m * s * s + c * s + k);
+            assert!((*v - exact).norm() < 1e-12 * exact.norm(), "{v} vs {exact}");
+        }
+        assert_eq!(
+            response(
+                &p,
+                ModelKind::Passive,
+                Response::Bode { amplitude_v: 1.0 },
+                ResponseMethod::Exact,
+                &f
+            ),
+            Err(ResponseError::NoValve)
+        );
+        assert!(matches!(
+            response(
+                &p,
+                ModelKind::Twin,
+                Response::Transmissibility,
+                ResponseMethod::Exact,
+                &f
+            ),
+            Err(ResponseError::Unavailable { .. })
+        ));
+    }
+}
