@@ -5,7 +5,9 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use seat_twin::analysis::frequency_response as fr;
 use seat_twin::analysis::sweep::{self, Response, ResponseMethod};
-use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, SeatTestArgs, check_range};
+use seat_twin::cli::{
+    self, Cli, Command, MAX_DURATION_S, ScenarioArg, SeatTestArgs, TuneArgs, check_range,
+};
 use seat_twin::dataset::{self, RecordKind};
 use seat_twin::experiments;
 use seat_twin::fsutil::{self, OutputDir};
@@ -377,9 +379,15 @@ fn run(cmd: Command) -> Result<()> {
             ];
             comments.extend(warnings.into_iter().map(|w| ("warning".to_string(), w)));
             let run = || {
-                simulate_to_csv(
-                    &params, kind, drive, platform, duration, rate, &out, &comments,
-                )
+                let spec = RunSpec {
+                    params: &params,
+                    kind,
+                    drive,
+                    platform,
+                    duration,
+                    rate,
+                };
+                simulate_to_csv(spec, &out, &comments)
             };
             let heartbeat = (samples > 2_000_000).then(|| {
                 Heartbeat::start(
@@ -610,43 +618,32 @@ fn run(cmd: Command) -> Result<()> {
             println!("{text}");
             Ok(())
         }
-        Command::Tune {
-            preset,
-            controller,
-            objective,
-            excitation,
-            seeds,
-            duration,
-            robust,
-            evaluations,
-            out,
-        } => run_tune(
-            &preset,
-            controller.as_deref(),
-            &objective,
-            &excitation,
-            seeds,
-            duration,
-            robust,
-            evaluations,
-            &out,
-        ),
+        Command::Tune(args) => run_tune(&args),
     }
 }
 
 /// `seat-twin tune`.
-#[allow(clippy::too_many_arguments)]
-fn run_tune(
-    preset: &str,
-    controller: Option<&str>,
-    objective: &str,
-    excitation: &str,
-    seeds: i64,
-    duration: f64,
-    robust: bool,
-    evaluations: i64,
-    out: &Path,
-) -> Result<()> {
+fn run_tune(args: &TuneArgs) -> Result<()> {
+    let TuneArgs {
+        preset,
+        controller,
+        objective,
+        excitation,
+        seeds,
+        duration,
+        robust,
+        evaluations,
+        out,
+    } = args;
+    let (controller, seeds, duration, robust, evaluations) = (
+        controller.as_deref(),
+        *seeds,
+        *duration,
+        *robust,
+        *evaluations,
+    );
+    let (preset, objective, excitation) =
+        (preset.as_str(), objective.as_str(), excitation.as_str());
     use seat_twin::tune;
     let params = load_params(preset)?;
     let kind = match controller {
@@ -768,19 +765,32 @@ impl From<std::io::Error> for StreamError {
     }
 }
 
-/// Runs the simulation and writes its samples to `out` as they are made (atomically, with the
-/// columns the model has): memory does not grow with the duration.
-#[allow(clippy::too_many_arguments)]
-fn simulate_to_csv(
-    params: &Params,
+/// One run of `simulate`: a model with its drive and platform motion, for `duration` [s]
+/// recorded at `rate` [Hz].
+struct RunSpec<'a> {
+    params: &'a Params,
     kind: ModelKind,
     drive: Drive,
     platform: PlatformMotion,
     duration: f64,
     rate: f64,
+}
+
+/// Runs the simulation and writes its samples to `out` as they are made (atomically, with the
+/// columns the model has): memory does not grow with the duration.
+fn simulate_to_csv(
+    spec: RunSpec,
     out: &Path,
     comments: &[(String, String)],
 ) -> Result<RunSummary, StreamError> {
+    let RunSpec {
+        params,
+        kind,
+        drive,
+        platform,
+        duration,
+        rate,
+    } = spec;
     let hyd = kind.has_hydraulics();
     let cmd = kind.has_command();
     let mut header = vec!["t", "x", "xdd", "u", "ydd"];
