@@ -70,17 +70,17 @@ impl From<&Preset> for PresetFile {
         let q = &p.params;
         Self {
             preset: p.meta.clone(),
-            body: q.body,
-            cylinder: q.cylinder,
-            hose: q.hose,
-            supply: q.supply,
-            valve: q.valve,
-            fluid: q.fluid,
+            body: q.plant.body,
+            cylinder: q.plant.cylinder,
+            hose: q.plant.hose,
+            supply: q.plant.supply,
+            valve: q.plant.valve,
+            fluid: q.plant.fluid,
             controller: q.controller,
             passive: q.passive,
             linear: q.linear,
             numerics: q.numerics,
-            effects: q.effects,
+            effects: q.plant.effects,
         }
     }
 }
@@ -90,17 +90,17 @@ impl From<PresetFile> for Preset {
         Self {
             meta: f.preset,
             params: Params {
-                body: f.body,
-                cylinder: f.cylinder,
-                hose: f.hose,
-                supply: f.supply,
-                valve: f.valve,
-                fluid: f.fluid,
+                body: f.plant.body,
+                cylinder: f.plant.cylinder,
+                hose: f.plant.hose,
+                supply: f.plant.supply,
+                valve: f.plant.valve,
+                fluid: f.plant.fluid,
                 controller: f.controller,
                 passive: f.passive,
                 linear: f.linear,
                 numerics: f.numerics,
-                effects: f.effects,
+                effects: f.plant.effects,
             },
         }
     }
@@ -469,9 +469,9 @@ mod tests {
     #[test]
     fn round_trip() {
         let mut p = Preset::paper();
-        p.params.valve.cd = 0.12;
-        p.params.effects.friction.enabled = true;
-        p.params.effects.friction.coulomb_n = 12.5;
+        p.params.plant.valve.cd = 0.12;
+        p.params.plant.effects.friction.enabled = true;
+        p.params.plant.effects.friction.coulomb_n = 12.5;
         let back = Preset::from_toml(&p.to_toml(), Path::new("rt.toml")).unwrap();
         assert_eq!(back, p);
     }

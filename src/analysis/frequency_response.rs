@@ -246,7 +246,7 @@ pub fn linearise<M: Model<N>, const N: usize>(
 pub fn linearise_twin(params: &Params) -> LinearisedModel {
     let twin = Twin::new(*params);
     let y0 = twin.rest_state();
-    linearise(&twin, &y0, &twin.state_scales(), params.valve.tau_s)
+    linearise(&twin, &y0, &twin.state_scales(), params.plant.valve.tau_s)
 }
 
 impl LinearisedModel {

@@ -265,7 +265,7 @@ mod tests {
             &f,
         )
         .unwrap();
-        let (k, m) = (p.body.stiffness_n_per_m, p.body.mass_kg);
+        let (k, m) = (p.plant.body.stiffness_n_per_m, p.plant.body.mass_kg);
         let c = 2.0 * p.passive.zeta * (k * m).sqrt();
         for (v, &fi) in t.iter().zip(&f) {
             let s = Complex64::new(0.0, 2.0 * PI * fi);

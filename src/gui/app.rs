@@ -773,7 +773,7 @@ impl SeatTwinApp {
             ch("twin", Ch::TwinAcc, twin_c),
         ];
         let mut stroke = Panel::new("", "time [s]", "stroke u [mm]");
-        let lim = self.params.cylinder.stroke_m / 2.0 * MM_PER_M;
+        let lim = self.params.plant.cylinder.stroke_m / 2.0 * MM_PER_M;
         stroke.series = vec![
             ch("passive", Ch::PassiveU, pas_c),
             ch("linear", Ch::LinearU, lin_c),

@@ -102,8 +102,8 @@ fn knobs_valve() -> [Knob; 2] {
     [
         Knob {
             label: "Cd",
-            get: |p| p.valve.cd,
-            set: |p, v| p.valve.cd = v,
+            get: |p| p.plant.valve.cd,
+            set: |p, v| p.plant.valve.cd = v,
             scale: 1.0,
             range: 0.01..=0.5,
             suffix: "",
@@ -113,10 +113,10 @@ fn knobs_valve() -> [Knob; 2] {
         },
         Knob {
             label: "τ",
-            get: |p| p.valve.tau_s,
+            get: |p| p.plant.valve.tau_s,
             // The linear model's delay follows the twin's: one τ, as in the paper.
             set: |p, v| {
-                p.valve.tau_s = v;
+                p.plant.valve.tau_s = v;
                 p.linear.tau_s = v;
             },
             scale: MS_PER_S,
@@ -134,8 +134,8 @@ fn knobs_rig() -> [Knob; 4] {
     [
         Knob {
             label: "mass",
-            get: |p| p.body.mass_kg,
-            set: |p, v| p.body.mass_kg = v,
+            get: |p| p.plant.body.mass_kg,
+            set: |p, v| p.plant.body.mass_kg = v,
             scale: 1.0,
             range: 1.0..=200.0,
             suffix: " kg",
@@ -145,8 +145,8 @@ fn knobs_rig() -> [Knob; 4] {
         },
         Knob {
             label: "stiffness",
-            get: |p| p.body.stiffness_n_per_m,
-            set: |p, v| p.body.stiffness_n_per_m = v,
+            get: |p| p.plant.body.stiffness_n_per_m,
+            set: |p, v| p.plant.body.stiffness_n_per_m = v,
             scale: KN_PER_N,
             range: 0.1..=100.0,
             suffix: " kN/m",
@@ -156,8 +156,8 @@ fn knobs_rig() -> [Knob; 4] {
         },
         Knob {
             label: "supply",
-            get: |p| p.supply.supply_pressure_pa,
-            set: |p, v| p.supply.supply_pressure_pa = v,
+            get: |p| p.plant.supply.supply_pressure_pa,
+            set: |p, v| p.plant.supply.supply_pressure_pa = v,
             scale: BAR_PER_PA,
             range: 15.0..=250.0,
             suffix: " bar",

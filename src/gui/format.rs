@@ -121,7 +121,7 @@ fn minus(s: String) -> String {
 /// The model effects switched on in `p`, each with its main values, for people
 /// ("friction (F_c = 12.30 N, b = 150.0 N·s/m)"). Empty when none is on.
 pub fn active_effects(p: &Params) -> Vec<String> {
-    let e = &p.effects;
+    let e = &p.plant.effects;
     let mut out = Vec::new();
     let f = |name: &str, v: f64| fitted(name, v, f64::NAN);
     if e.friction.enabled {

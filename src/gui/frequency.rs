@@ -63,7 +63,7 @@ pub const PLATFORM: Color32 = Color32::from_rgb(127, 127, 127);
 fn plant_key(p: &Params) -> Params {
     let mut k = *p;
     k.controller = ControllerParams::paper(0.0, 0.0);
-    k.valve.tau_s = 0.0;
+    k.plant.valve.tau_s = 0.0;
     k.linear.tau_s = 0.0;
     k
 }
@@ -165,7 +165,7 @@ impl Analytic {
         let Some(plant) = self.plant.as_ref() else {
             return false;
         };
-        let tau = params.valve.tau_s;
+        let tau = params.plant.valve.tau_s;
         let f = &self.freqs;
         let lx: Vec<f64> = f.iter().map(|x| x.log10()).collect();
         let t_lin: Vec<Complex64> = f
@@ -956,7 +956,7 @@ mod tests {
         let mut p = Params::paper();
         p.controller.kp_v_per_m = -37.0;
         p.controller.ki_v_s_per_m = -3.0;
-        p.valve.tau_s = 0.021;
+        p.plant.valve.tau_s = 0.021;
         let freqs = fr::log_space(0.2, 50.0, 9);
         let cache = PlantCache::new(&p, &freqs);
         let lin = fr::linearise_twin(&p);

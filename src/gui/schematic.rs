@@ -22,8 +22,8 @@ pub fn color_range(seen_pa: Option<(f64, f64)>, params: &Params) -> (f64, f64) {
             (mid - half, mid + half)
         }
         _ => (
-            params.supply.return_pressure_pa,
-            params.supply.supply_pressure_pa,
+            params.plant.supply.return_pressure_pa,
+            params.plant.supply.supply_pressure_pa,
         ),
     }
 }
@@ -113,18 +113,18 @@ pub fn schematic_ui(
         ydd: 0.0,
         v_in: 0.0,
         xv: 0.0,
-        p1: 0.5 * (params.supply.supply_pressure_pa + params.supply.return_pressure_pa),
-        p2: 0.5 * (params.supply.supply_pressure_pa + params.supply.return_pressure_pa),
+        p1: 0.5 * (params.plant.supply.supply_pressure_pa + params.plant.supply.return_pressure_pa),
+        p2: 0.5 * (params.plant.supply.supply_pressure_pa + params.plant.supply.return_pressure_pa),
         q1: 0.0,
         q2: 0.0,
         contact: false,
     };
     let s = s.copied().unwrap_or(rest);
     let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
-    let half = params.cylinder.stroke_m / 2.0 * MM_PER_M;
+    let half = params.plant.cylinder.stroke_m / 2.0 * MM_PER_M;
     let x_mm = (finite(s.x) * MM_PER_M).clamp(-45.0, 45.0);
     let u_mm = (finite(s.u) * MM_PER_M).clamp(-half - 3.0, half + 3.0);
-    let xv_rel = (finite(s.xv) / params.valve.xv_max_m).clamp(-1.0, 1.0);
+    let xv_rel = (finite(s.xv) / params.plant.valve.xv_max_m).clamp(-1.0, 1.0);
 
     // Rig extent: x −120…215 mm, y 0…(300 + 2·half) mm.
     let extent_w = 335.0_f32;
@@ -279,7 +279,7 @@ pub fn schematic_ui(
     );
     label(
         f.p(75.0, seat0 + 22.0),
-        format!("m = {:.1} kg", params.body.mass_kg),
+        format!("m = {:.1} kg", params.plant.body.mass_kg),
         Align2::LEFT_CENTER,
     );
 

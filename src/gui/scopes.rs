@@ -187,7 +187,7 @@ pub fn scopes_ui(
         &|_, _| {},
     );
 
-    let limit_mm = params.cylinder.stroke_m / 2.0 * MM_PER_M;
+    let limit_mm = params.plant.cylinder.stroke_m / 2.0 * MM_PER_M;
     let contacts = traces.contacts();
     show(
         ui,

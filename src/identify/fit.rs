@@ -62,18 +62,18 @@ impl Knob {
 
     /// θ of the parameter's current value in `p`.
     pub fn theta(self, p: &Params) -> f64 {
-        let e = &p.effects;
+        let e = &p.plant.effects;
         match self {
-            Knob::Cd => p.valve.cd / 0.1,
-            Knob::Tau => p.valve.tau_s / 0.01,
-            Knob::Mass => p.body.mass_kg / 10.0,
+            Knob::Cd => p.plant.valve.cd / 0.1,
+            Knob::Tau => p.plant.valve.tau_s / 0.01,
+            Knob::Mass => p.plant.body.mass_kg / 10.0,
             Knob::FrictionCoulomb if e.friction.enabled => e.friction.coulomb_n / 10.0,
             Knob::FrictionViscous if e.friction.enabled => e.friction.viscous_n_s_per_m / 100.0,
             Knob::Overlap if e.valve_overlap.enabled => e.valve_overlap.overlap_m / 2e-5,
             Knob::Offset if e.valve_offset.enabled => e.valve_offset.bias_v / 0.02,
             Knob::Leakage if e.leakage.enabled => e.leakage.coefficient_m3_per_s_pa / 1e-12,
             Knob::Compliance if e.compliance.enabled => {
-                (p.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0).max(0.0)
+                (p.plant.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0).max(0.0)
             }
             Knob::SupplySag if e.supply_sag.enabled => e.supply_sag.droop_pa_per_m3_s / 1e10,
             _ => 0.0,
@@ -83,11 +83,11 @@ impl Knob {
     /// Sets the parameter from θ (clamped into its valid range) and enables its effect.
     pub fn set(self, p: &mut Params, theta: f64) {
         let a = theta.abs();
-        let e = &mut p.effects;
+        let e = &mut p.plant.effects;
         match self {
-            Knob::Cd => p.valve.cd = (0.1 * theta).clamp(1e-3, 1.0),
-            Knob::Tau => p.valve.tau_s = (0.01 * theta).clamp(0.0, 0.1),
-            Knob::Mass => p.body.mass_kg = (10.0 * theta).clamp(1.0, 500.0),
+            Knob::Cd => p.plant.valve.cd = (0.1 * theta).clamp(1e-3, 1.0),
+            Knob::Tau => p.plant.valve.tau_s = (0.01 * theta).clamp(0.0, 0.1),
+            Knob::Mass => p.plant.body.mass_kg = (10.0 * theta).clamp(1.0, 500.0),
             Knob::FrictionCoulomb => {
                 e.friction.enabled = true;
                 e.friction.coulomb_n = (10.0 * a).min(5000.0);
@@ -98,7 +98,7 @@ impl Knob {
             }
             Knob::Overlap => {
                 e.valve_overlap.enabled = true;
-                e.valve_overlap.overlap_m = (2e-5 * a).min(0.9 * p.valve.xv_max_m);
+                e.valve_overlap.overlap_m = (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m);
             }
             Knob::Offset => {
                 e.valve_offset.enabled = true;
@@ -111,7 +111,7 @@ impl Knob {
             Knob::Compliance => {
                 e.compliance.enabled = true;
                 e.compliance.effective_bulk_modulus_pa =
-                    (p.fluid.bulk_modulus_pa / (1.0 + a)).max(1e6);
+                    (p.plant.fluid.bulk_modulus_pa / (1.0 + a)).max(1e6);
             }
             Knob::SupplySag => {
                 e.supply_sag.enabled = true;
@@ -122,11 +122,11 @@ impl Knob {
 
     /// SI value of the parameter in `p`.
     pub fn value(self, p: &Params) -> f64 {
-        let e = &p.effects;
+        let e = &p.plant.effects;
         match self {
-            Knob::Cd => p.valve.cd,
-            Knob::Tau => p.valve.tau_s,
-            Knob::Mass => p.body.mass_kg,
+            Knob::Cd => p.plant.valve.cd,
+            Knob::Tau => p.plant.valve.tau_s,
+            Knob::Mass => p.plant.body.mass_kg,
             Knob::FrictionCoulomb => e.friction.coulomb_n,
             Knob::FrictionViscous => e.friction.viscous_n_s_per_m,
             Knob::Overlap => e.valve_overlap.overlap_m,

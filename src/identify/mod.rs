@@ -151,7 +151,7 @@ impl EffectId {
 
     /// Whether the effect is enabled in `p`.
     pub fn enabled(self, p: &Params) -> bool {
-        let e = &p.effects;
+        let e = &p.plant.effects;
         match self {
             EffectId::Friction => e.friction.enabled,
             EffectId::ValveOverlap => e.valve_overlap.enabled,
@@ -808,8 +808,8 @@ fn paper_baseline(
     if files.is_empty() || wsum == 0.0 {
         return None;
     }
-    let cd = (params.valve.cd * ratio_sum / wsum).clamp(1e-3, 1.0);
-    let tau = (params.valve.tau_s + sxy / sxx).clamp(0.0, 0.1);
+    let cd = (params.plant.valve.cd * ratio_sum / wsum).clamp(1e-3, 1.0);
+    let tau = (params.plant.valve.tau_s + sxy / sxx).clamp(0.0, 0.1);
     Some(PaperBaseline {
         files,
         cd,
@@ -1017,8 +1017,8 @@ pub fn calibrate(
     let mut start = fit_params;
     let mut error_baseline = None;
     if let Some(b) = &baseline {
-        start.valve.cd = b.cd;
-        start.valve.tau_s = b.tau_s;
+        start.plant.valve.cd = b.cd;
+        start.plant.valve.tau_s = b.tau_s;
         let reps = replay_all(&restore(start), &all)?;
         let w = weighted_of(&all, &reps);
         error_baseline = Some(summary(&all, &reps, &w));
@@ -1043,12 +1043,12 @@ pub fn calibrate(
             format!(
                 "mass not identifiable from these records (relative 1-σ ≈ {:.0} %): kept at {} kg",
                 100.0 * mass_rel_std,
-                params.body.mass_kg
+                params.plant.body.mass_kg
             )
         } else {
             format!(
                 "mass not identifiable from these records: kept at {} kg",
-                params.body.mass_kg
+                params.plant.body.mass_kg
             )
         });
         vec![Knob::Cd, Knob::Tau]

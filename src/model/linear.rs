@@ -22,8 +22,8 @@ impl LinearModel {
     pub fn new(params: &Params) -> Self {
         Self {
             lin: params.linear,
-            half_stroke_m: 0.5 * params.cylinder.stroke_m,
-            v_max_v: params.valve.v_max_v,
+            half_stroke_m: 0.5 * params.plant.cylinder.stroke_m,
+            v_max_v: params.plant.valve.v_max_v,
         }
     }
 

@@ -155,10 +155,10 @@ pub trait CommandPath {
 
 impl CommandPath for twin::Twin {
     fn command_delay(&self) -> f64 {
-        self.params().valve.tau_s
+        self.params().plant.valve.tau_s
     }
     fn command_limit(&self) -> f64 {
-        self.params().valve.v_max_v
+        self.params().plant.valve.v_max_v
     }
 }
 

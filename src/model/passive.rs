@@ -19,13 +19,13 @@ pub struct PassiveModel {
 impl PassiveModel {
     /// Builds the passive reference from the body parameters and `passive.zeta`.
     pub fn new(params: &Params) -> Self {
-        let m = params.body.mass_kg;
-        let k = params.body.stiffness_n_per_m;
+        let m = params.plant.body.mass_kg;
+        let k = params.plant.body.stiffness_n_per_m;
         Self {
             mass_kg: m,
             stiffness_n_per_m: k,
             damping_n_s_per_m: 2.0 * params.passive.zeta * (k * m).sqrt(),
-            half_stroke_m: 0.5 * params.cylinder.stroke_m,
+            half_stroke_m: 0.5 * params.plant.cylinder.stroke_m,
         }
     }
 
@@ -97,7 +97,7 @@ mod tests {
     #[test]
     fn simulated_passive_seat_crosses_unity_at_sqrt2_times_its_natural_frequency() {
         let params = Params::paper();
-        let (k, m) = (params.body.stiffness_n_per_m, params.body.mass_kg);
+        let (k, m) = (params.plant.body.stiffness_n_per_m, params.plant.body.mass_kg);
         let f_n = (k / m).sqrt() / (2.0 * std::f64::consts::PI);
         let opt = crate::analysis::sweep::DwellOptions::default();
         let gain = |f: f64| {
@@ -129,7 +129,7 @@ mod tests {
     fn passive_crossing_is_sqrt2_fn() {
         let params = Params::paper();
         let p = PassiveModel::new(&params);
-        let wn = (params.body.stiffness_n_per_m / params.body.mass_kg).sqrt();
+        let wn = (params.plant.body.stiffness_n_per_m / params.plant.body.mass_kg).sqrt();
         // |T| = 1 exactly at ω = √2·ωn for any damping (the closed form).
         assert!((p.transmissibility(2f64.sqrt() * wn).norm() - 1.0).abs() < 1e-12);
     }

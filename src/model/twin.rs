@@ -150,14 +150,14 @@ impl Twin {
     pub fn new(params: Params) -> Self {
         let d = derived(&params);
         let orifice_gain =
-            params.valve.cd * params.valve.ka_m * (2.0 / params.fluid.density_kg_m3).sqrt();
+            params.plant.valve.cd * params.plant.valve.ka_m * (2.0 / params.plant.fluid.density_kg_m3).sqrt();
         Self {
             params,
             d,
             orifice_gain,
-            core_sq: params.valve.laminar_core_pa.powi(2),
+            core_sq: params.plant.valve.laminar_core_pa.powi(2),
             inv: Reciprocals {
-                mass: 1.0 / params.body.mass_kg,
+                mass: 1.0 / params.plant.body.mass_kg,
                 c_chamber: 1.0 / d.c_chamber,
                 c_hose: 1.0 / d.c_hose,
                 inertance: 1.0 / d.inertance,
@@ -178,9 +178,9 @@ impl Twin {
     /// Valve opening seen by the orifices [m]: spool clamped to its travel, minus overlap.
     #[inline(always)]
     fn opening(&self, xv: f64) -> f64 {
-        let xmax = self.params.valve.xv_max_m;
+        let xmax = self.params.plant.valve.xv_max_m;
         let x = xv.clamp(-xmax, xmax);
-        let ov = &self.params.effects.valve_overlap;
+        let ov = &self.params.plant.effects.valve_overlap;
         if ov.enabled {
             x.signum() * (x.abs() - ov.overlap_m).max(0.0)
         } else {
@@ -192,8 +192,8 @@ impl Twin {
     /// orifice of gain `a = g·|x|` from a line at `p_line` (supply-sag effect).
     #[inline(always)]
     fn supply_pressure(&self, a: f64, p_line: f64) -> f64 {
-        let pa = self.params.supply.supply_pressure_pa;
-        let sag = &self.params.effects.supply_sag;
+        let pa = self.params.plant.supply.supply_pressure_pa;
+        let sag = &self.params.plant.effects.supply_sag;
         if !sag.enabled || sag.droop_pa_per_m3_s == 0.0 {
             return pa;
         }
@@ -212,7 +212,7 @@ impl Twin {
     #[inline(always)]
     pub fn valve_flows(&self, xv: f64, p1v: f64, p2v: f64) -> ValveFlows {
         let x = self.opening(xv);
-        let p0 = self.params.supply.return_pressure_pa;
+        let p0 = self.params.plant.supply.return_pressure_pa;
         let g = self.orifice_gain * x;
         let (d1, d2) = if x > 0.0 {
             (p1v - p0, self.supply_pressure(g, p2v) - p2v)
@@ -229,7 +229,7 @@ impl Twin {
     /// Friction force on the body, opposing `du` [N] (0 unless the effect is enabled).
     #[inline(always)]
     pub fn friction_force(&self, du: f64) -> f64 {
-        let f = &self.params.effects.friction;
+        let f = &self.params.plant.effects.friction;
         if !f.enabled {
             return 0.0;
         }
@@ -241,7 +241,7 @@ impl Twin {
     /// End-stop force on the body [N]: push-only spring–damper beyond ±Lc/2.
     #[inline(always)]
     pub fn end_stop_force(&self, u: f64, du: f64) -> f64 {
-        let c = &self.params.cylinder;
+        let c = &self.params.plant.cylinder;
         let pen = u.abs() - 0.5 * c.stroke_m;
         if pen <= 0.0 {
             return 0.0;
@@ -255,14 +255,14 @@ impl Twin {
     #[inline(always)]
     fn body_force(&self, s: &TwinState) -> f64 {
         let a = self.d.area;
-        -self.params.body.stiffness_n_per_m * s.u - s.p1 * a + s.p2 * a - self.friction_force(s.du)
+        -self.params.plant.body.stiffness_n_per_m * s.u - s.p1 * a + s.p2 * a - self.friction_force(s.du)
             + self.end_stop_force(s.u, s.du)
     }
 
     /// Internal leakage flow chamber 1 → chamber 2 [m³/s].
     #[inline(always)]
     fn leakage(&self, s: &TwinState) -> f64 {
-        let l = &self.params.effects.leakage;
+        let l = &self.params.plant.effects.leakage;
         if l.enabled {
             l.coefficient_m3_per_s_pa * (s.p1 - s.p2)
         } else {
@@ -273,7 +273,7 @@ impl Twin {
     /// Command at the spool after the offset effect [V].
     #[inline(always)]
     fn spool_command(&self, v_valve: f64) -> f64 {
-        let o = &self.params.effects.valve_offset;
+        let o = &self.params.plant.effects.valve_offset;
         if o.enabled {
             v_valve + o.bias_v
         } else {
@@ -306,7 +306,7 @@ impl Model<10> for Twin {
         let ydd = self.body_force(&s) * inv.mass;
         let flows = self.valve_flows(s.xv, s.p1v, s.p2v);
         let q_leak = self.leakage(&s);
-        let v = &self.params.valve;
+        let v = &self.params.plant.valve;
         let wn = v.omega_n_rad_s;
         let target = v.kv_m_per_v * self.spool_command(inputs.v_valve);
         TwinState {
@@ -326,7 +326,7 @@ impl Model<10> for Twin {
 
     fn rest_state(&self) -> [f64; 10] {
         let p_mid =
-            0.5 * (self.params.supply.supply_pressure_pa + self.params.supply.return_pressure_pa);
+            0.5 * (self.params.plant.supply.supply_pressure_pa + self.params.plant.supply.return_pressure_pa);
         TwinState {
             p1: p_mid,
             p2: p_mid,
@@ -342,7 +342,7 @@ impl Model<10> for Twin {
         Outputs {
             u: s.u,
             du: s.du,
-            ydd: self.body_force(&s) / self.params.body.mass_kg,
+            ydd: self.body_force(&s) / self.params.plant.body.mass_kg,
             xv: s.xv,
             p1: s.p1,
             p2: s.p2,
@@ -359,7 +359,7 @@ impl Model<10> for Twin {
 
     #[inline(always)]
     fn project(&self, y: &mut [f64; 10]) {
-        let xmax = self.params.valve.xv_max_m;
+        let xmax = self.params.plant.valve.xv_max_m;
         if y[8] > xmax {
             y[8] = xmax;
             y[9] = y[9].min(0.0);
@@ -370,7 +370,7 @@ impl Model<10> for Twin {
     }
 
     fn half_stroke(&self) -> f64 {
-        0.5 * self.params.cylinder.stroke_m
+        0.5 * self.params.plant.cylinder.stroke_m
     }
 
     #[inline(always)]
@@ -426,11 +426,11 @@ mod tests {
     fn full_opening_flow_matches_eq12_hand_value() {
         // Cd = 0.1074 at full opening and Δp = 100 bar gives the valve's 20 L/min (docs/model.md, correction 4).
         let mut p = Params::paper();
-        p.valve.cd = 0.1074;
-        p.supply.return_pressure_pa = 0.0;
+        p.plant.valve.cd = 0.1074;
+        p.plant.supply.return_pressure_pa = 0.0;
         let twin = Twin::new(p);
         // xv < 0 connects supply to line 1: drop pA − p1v = 100 bar with p1v = 0.
-        let f = twin.valve_flows(-p.valve.xv_max_m, 0.0, 0.0);
+        let f = twin.valve_flows(-p.plant.valve.xv_max_m, 0.0, 0.0);
         let l_per_min = -f.q1v * 60_000.0;
         assert!((l_per_min - 20.0).abs() < 0.1, "{l_per_min} L/min");
     }

@@ -293,7 +293,7 @@ pub fn write_report(params: &Params, preset_name: &str, out: &Path) -> Result<St
         }
     }
     let seed1 = &rides[0];
-    let sum_p = params.supply.supply_pressure_pa + params.supply.return_pressure_pa;
+    let sum_p = params.plant.supply.supply_pressure_pa + params.plant.supply.return_pressure_pa;
     let numbers = ReportNumbers {
         preset: preset_name.to_string(),
         passive_crossing_hz: fr::isolation_lower_edge(&dense, &passive_t),
@@ -371,9 +371,9 @@ pub fn write_report(params: &Params, preset_name: &str, out: &Path) -> Result<St
 /// Cd of Eq. (12) for the valve's nominal 20 L/min at full opening and a pressure drop `dp`.
 pub fn cd_eq12(params: &Params, dp_pa: f64) -> f64 {
     let q = 20.0 / 60_000.0;
-    q / (params.valve.ka_m
-        * params.valve.xv_max_m
-        * (2.0 * dp_pa / params.fluid.density_kg_m3).sqrt())
+    q / (params.plant.valve.ka_m
+        * params.plant.valve.xv_max_m
+        * (2.0 * dp_pa / params.plant.fluid.density_kg_m3).sqrt())
 }
 
 fn fmt_opt(v: Option<f64>, digits: usize) -> String {
@@ -527,8 +527,8 @@ fn markdown(n: &ReportNumbers, params: &Params) -> String {
          k in total). Parameters: Cd = {}, τ = {:.1} ms, Kp = {} V/m, Ki = {} V·s/m. Random-ride \
          statistics are over {} seeds of {:.0} s (the first 2 s fade-in excluded); they are \
          mean ± standard deviation (min–max).\n",
-        params.valve.cd,
-        params.valve.tau_s * 1e3,
+        params.plant.valve.cd,
+        params.plant.valve.tau_s * 1e3,
         params.controller.kp_v_per_m,
         params.controller.ki_v_s_per_m,
         RIDE_SEEDS.len(),

@@ -63,7 +63,7 @@ fn cd_of_eq12_returns_the_nominal_flow() {
     let p = Params::paper();
     for dp in [70e5, 100e5] {
         let cd = cd_eq12(&p, dp);
-        let q = cd * p.valve.ka_m * p.valve.xv_max_m * (2.0 * dp / p.fluid.density_kg_m3).sqrt();
+        let q = cd * p.plant.valve.ka_m * p.plant.valve.xv_max_m * (2.0 * dp / p.plant.fluid.density_kg_m3).sqrt();
         assert!((q * 60_000.0 - 20.0).abs() < 1e-9, "{} L/min", q * 60_000.0);
     }
     let ratio = cd_eq12(&p, 70e5) / cd_eq12(&p, 100e5);
@@ -75,10 +75,10 @@ fn cd_of_eq12_returns_the_nominal_flow() {
 #[test]
 fn crossing_sets_cross_unity_where_the_passive_closed_form_does() {
     let p = Params::paper();
-    let f_x = 2f64.sqrt() * (p.body.stiffness_n_per_m / p.body.mass_kg).sqrt() / (2.0 * PI);
+    let f_x = 2f64.sqrt() * (p.plant.body.stiffness_n_per_m / p.plant.body.mass_kg).sqrt() / (2.0 * PI);
     let (passive, linear, twin) = crossing_sets(&p, &[f_x, 20.0]);
     assert!((passive[0] - 1.0).abs() < 1e-9, "{}", passive[0]);
-    let (k, m) = (p.body.stiffness_n_per_m, p.body.mass_kg);
+    let (k, m) = (p.plant.body.stiffness_n_per_m, p.plant.body.mass_kg);
     let c = 2.0 * p.passive.zeta * (k * m).sqrt();
     let s = Complex64::new(0.0, 2.0 * PI * 20.0);
     let exact = ((c * s + k) / (m * s * s + c * s + k)).norm();

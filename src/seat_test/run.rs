@@ -155,7 +155,7 @@ pub fn run_seat_test(
 ) -> Result<SeatTestResult, SeatTestError> {
     let mut params = *params;
     if let Some(m) = opts.mass_kg {
-        params.body.mass_kg = m;
+        params.plant.body.mass_kg = m;
     }
     params.validate()?;
     let motion = ClassMotion {
@@ -201,7 +201,7 @@ pub fn run_seat_test(
         class: opts.class.name.to_string(),
         standard: opts.class.standard.citation().to_string(),
         model: opts.model.name().to_string(),
-        mass_kg: params.body.mass_kg,
+        mass_kg: params.plant.body.mass_kg,
         aw_floor: floor.aw,
         aw_seat: seat.aw,
         seat_percent: metrics::seat_percent(seat.aw, floor.aw),
@@ -211,8 +211,8 @@ pub fn run_seat_test(
         crest_factor_floor: floor.crest_factor,
         crest_factor_seat: seat.crest_factor,
         max_abs_u_mm: 1e3 * metrics::peak(&u),
-        half_stroke_mm: 1e3 * params.cylinder.stroke_m / 2.0,
-        spring_stiffness_n_per_m: params.body.stiffness_n_per_m,
+        half_stroke_mm: 1e3 * params.plant.cylinder.stroke_m / 2.0,
+        spring_stiffness_n_per_m: params.plant.body.stiffness_n_per_m,
         contacts: trace.contacts.len(),
         psd_error_percent: 100.0 * psd_check.max_error_of_peak,
         psd_within_tolerance: psd_check.within_tolerance(),

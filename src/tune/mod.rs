@@ -292,9 +292,9 @@ pub fn spread(params: &Params) -> Vec<Params> {
         for dt in [-0.003, 0.0, 0.003] {
             for dm in [-0.2, 0.0, 0.2] {
                 let mut p = *params;
-                p.valve.cd *= 1.0 + dc;
-                p.valve.tau_s = (p.valve.tau_s + dt).max(0.0);
-                p.body.mass_kg *= 1.0 + dm;
+                p.plant.valve.cd *= 1.0 + dc;
+                p.plant.valve.tau_s = (p.plant.valve.tau_s + dt).max(0.0);
+                p.plant.body.mass_kg *= 1.0 + dm;
                 out.push(p);
             }
         }
@@ -649,9 +649,9 @@ fn robustness_table(
             let (objective, max_u, contacts) =
                 score_rides(&p, rides, opts.duration_s, opts.objective);
             RobustnessRow {
-                cd: p.valve.cd,
-                tau_s: p.valve.tau_s,
-                mass_kg: p.body.mass_kg,
+                cd: p.plant.valve.cd,
+                tau_s: p.plant.valve.tau_s,
+                mass_kg: p.plant.body.mass_kg,
                 objective,
                 contacts,
                 max_abs_u_m: max_u,

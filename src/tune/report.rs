@@ -162,9 +162,9 @@ pub fn report_md(r: &TuneResult, params: &Params, wall_s: f64) -> String {
     let _ = writeln!(
         s,
         "Plant: Cd = {:.4}, τ = {:.1} ms, mass = {:.1} kg.\n",
-        params.valve.cd,
-        params.valve.tau_s * 1e3,
-        params.body.mass_kg
+        params.plant.valve.cd,
+        params.plant.valve.tau_s * 1e3,
+        params.plant.body.mass_kg
     );
     let _ = writeln!(s, "## Result\n");
     let _ = writeln!(

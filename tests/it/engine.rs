@@ -32,11 +32,11 @@ fn new_gains_reach_the_running_simulation() {
     until(&h, |e| matches!(e, Event::Samples(b) if !b.twin.is_empty()));
     let mut p = Params::paper();
     p.controller.kp_v_per_m = -20.0;
-    p.valve.cd = 0.12;
+    p.plant.valve.cd = 0.12;
     h.send(Command::SetParams(Box::new(p)));
     until(&h, |e| {
         matches!(e, Event::Status { params, .. }
-            if params.controller.kp_v_per_m == -20.0 && params.valve.cd == 0.12)
+            if params.controller.kp_v_per_m == -20.0 && params.plant.valve.cd == 0.12)
     });
 }
 
@@ -84,7 +84,7 @@ fn invalid_parameters_are_refused_by_name_and_the_engine_keeps_running() {
     let h = engine::spawn(Params::paper(), || {});
     h.send(Command::SetSpeed(Speed::Max));
     let mut p = Params::paper();
-    p.body.mass_kg = -1.0;
+    p.plant.body.mass_kg = -1.0;
     h.send(Command::SetParams(Box::new(p)));
     let events = until(&h, |e| matches!(e, Event::Error(_)));
     let Some(Event::Error(msg)) = events.last() else {
@@ -94,7 +94,7 @@ fn invalid_parameters_are_refused_by_name_and_the_engine_keeps_running() {
     // Still serving, with the old, valid parameters.
     until(
         &h,
-        |e| matches!(e, Event::Status { params, running: true, .. } if params.body.mass_kg == 11.7),
+        |e| matches!(e, Event::Status { params, running: true, .. } if params.plant.body.mass_kg == 11.7),
     );
     until(&h, |e| matches!(e, Event::Samples(_)));
 }

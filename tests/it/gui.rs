@@ -97,11 +97,11 @@ fn typed_tau_in_ms_is_stored_in_seconds() {
         .set_value_accesskit(25.0);
     h.step();
     let p = h.state().params();
-    assert!((p.valve.tau_s - 0.025).abs() < 1e-12, "{}", p.valve.tau_s);
+    assert!((p.plant.valve.tau_s - 0.025).abs() < 1e-12, "{}", p.plant.valve.tau_s);
     assert!((p.linear.tau_s - 0.025).abs() < 1e-12);
     step_until(&mut h, "the engine to run with τ = 25 ms", |a| {
         a.engine_params()
-            .is_some_and(|p| (p.valve.tau_s - 0.025).abs() < 1e-12)
+            .is_some_and(|p| (p.plant.valve.tau_s - 0.025).abs() < 1e-12)
     });
 }
 
@@ -160,10 +160,10 @@ fn shipped_preset_opens_from_the_menu_after_the_discard_prompt() {
     assert!(!h.state().is_confirm_open());
     let app = h.state();
     assert_eq!(app.preset().name, "paper-initial");
-    assert_eq!(app.params().valve.cd, 0.1074);
+    assert_eq!(app.params().plant.valve.cd, 0.1074);
     assert!(!app.is_modified());
     step_until(&mut h, "the engine to run the preset", |a| {
-        a.engine_params().is_some_and(|p| p.valve.cd == 0.1074)
+        a.engine_params().is_some_and(|p| p.plant.valve.cd == 0.1074)
     });
 }
 
@@ -316,7 +316,7 @@ fn frame_cost_with_full_scopes() {
         h.step();
         cd_ms.push(t0.elapsed().as_secs_f64() * 1e3);
         cd_curves_ms.push(h.state().curves().compute_ms);
-        assert_eq!(h.state().curves().params.unwrap().valve.cd, cd);
+        assert_eq!(h.state().curves().params.unwrap().plant.valve.cd, cd);
     }
     let (cd_drag, cd_curves) = (median(&mut cd_ms), median(&mut cd_curves_ms));
     println!(
@@ -388,7 +388,7 @@ fn demo_campaign_loads_from_the_menu_and_replays_with_the_live_parameters() {
     step_until(&mut h, "the replay with Cd = 0.10", |a| {
         a.measured()
             .view()
-            .is_some_and(|v| v.params.valve.cd == 0.10)
+            .is_some_and(|v| v.params.plant.valve.cd == 0.10)
     });
     let after = h.state().measured().view().unwrap().errors.du;
     assert!(
@@ -479,7 +479,7 @@ fn calibration_recovers_the_valve_gain_and_applies_it_to_the_live_twin() {
     let r = m.report().expect("a report");
     // The demo rig's truth is Cd = 0.1506 (tests/data/demo-campaign-truth.json); the
     // calibration starts from 0.12 and knows nothing of it.
-    let cd = r.params.valve.cd;
+    let cd = r.params.plant.valve.cd;
     assert!((cd - 0.1506).abs() < 0.006, "Cd = {cd}");
     assert!(r.error_before.value < r.error_nominal.value);
     h.run_steps(2);
@@ -487,9 +487,9 @@ fn calibration_recovers_the_valve_gain_and_applies_it_to_the_live_twin() {
     h.step();
     h.get_by_label("Apply to the live twin").click();
     h.step();
-    assert_eq!(h.state().params().valve.cd, cd);
+    assert_eq!(h.state().params().plant.valve.cd, cd);
     step_until(&mut h, "the engine to run the calibrated twin", |a| {
-        a.engine_params().is_some_and(|p| p.valve.cd == cd)
+        a.engine_params().is_some_and(|p| p.plant.valve.cd == cd)
     });
 }
 
@@ -609,7 +609,7 @@ fn number(s: &str) -> Option<f64> {
 fn typed_value_applies_on_enter_only() {
     let mut h = harness();
     h.step();
-    let cd0 = h.state().params().valve.cd;
+    let cd0 = h.state().params().plant.valve.cd;
     h.get_by_role_and_label(Role::SpinButton, "Cd").click();
     h.run_steps(2);
     // The field is in text mode, focused, all of its text selected.
@@ -617,9 +617,9 @@ fn typed_value_applies_on_enter_only() {
     assert!(field.is_focused());
     field.type_text("0.12");
     h.run_steps(2);
-    assert_eq!(h.state().params().valve.cd, cd0, "applied while typing");
+    assert_eq!(h.state().params().plant.valve.cd, cd0, "applied while typing");
     assert_eq!(
-        h.state().curves().params.unwrap().valve.cd,
+        h.state().curves().params.unwrap().plant.valve.cd,
         cd0,
         "curves follow a half-typed value"
     );
@@ -630,9 +630,9 @@ fn typed_value_applies_on_enter_only() {
     assert_eq!(knob, Some(cd0), "the slider knob moved while typing");
     h.key_press(egui::Key::Enter);
     h.run_steps(2);
-    assert_eq!(h.state().params().valve.cd, 0.12);
+    assert_eq!(h.state().params().plant.valve.cd, 0.12);
     step_until(&mut h, "the engine to run with Cd = 0.12", |a| {
-        a.engine_params().is_some_and(|p| p.valve.cd == 0.12)
+        a.engine_params().is_some_and(|p| p.plant.valve.cd == 0.12)
     });
 }
 
@@ -679,7 +679,7 @@ fn refused_values_reach_no_view() {
     h.get_by_role_and_label(Role::Slider, "mass")
         .set_value_accesskit(20.0);
     h.step();
-    assert_eq!(h.state().params().body.mass_kg, 20.0);
+    assert_eq!(h.state().params().plant.body.mass_kg, 20.0);
     assert!(h.state().field_errors().get("mass").is_none());
 }
 

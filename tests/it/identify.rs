@@ -370,8 +370,8 @@ fn summary(r: &CalibrationReport) -> String {
         r.error_nominal.value,
         r.error_before.value,
         r.error_after.value,
-        r.params.valve.cd,
-        r.params.valve.tau_s,
+        r.params.plant.valve.cd,
+        r.params.plant.valve.tau_s,
         c.join("; ")
     )
 }
@@ -409,10 +409,10 @@ fn check_single_with(
     assert_reduced_to_noise(&r, &s);
     // The declared mismatch is found: Cd −5 %, τ +1.5 ms.
     assert!(
-        (r.params.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
+        (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
         "{s}"
     );
-    assert!((r.params.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
+    assert!((r.params.plant.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
     r
 }
 
@@ -426,7 +426,7 @@ fn null_case_adds_nothing() {
     // The declared parameters are still re-fitted.
     assert!(r.error_before.value < r.error_nominal.value, "{s}");
     assert!(
-        (r.params.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.02,
+        (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.02,
         "{s}"
     );
 }
@@ -627,9 +627,9 @@ fn demo_campaign_finds_its_hidden_effect() {
     let cd = decl["Cd"].as_f64().expect("Cd");
     let tau = decl["tau_s"].as_f64().expect("tau_s");
     let m = decl["m_kg"].as_f64().expect("m_kg");
-    assert!((r.params.valve.cd / cd - 1.0).abs() < 0.02, "{s}");
-    assert!((r.params.valve.tau_s - tau).abs() < 0.5e-3, "{s}");
-    assert!((r.params.body.mass_kg / m - 1.0).abs() < 0.05, "{s}");
+    assert!((r.params.plant.valve.cd / cd - 1.0).abs() < 0.02, "{s}");
+    assert!((r.params.plant.valve.tau_s - tau).abs() < 0.5e-3, "{s}");
+    assert!((r.params.plant.body.mass_kg / m - 1.0).abs() < 0.05, "{s}");
     if hidden[0] == "compliance" {
         // The rig has separate hose and chamber moduli; the library fits one effective value,
         // which must lie between them.
@@ -652,8 +652,8 @@ fn demo_campaign_finds_its_hidden_effect() {
 /// hidden effect, this is the right model of the rig.
 fn true_params() -> Params {
     let mut p = Params::paper();
-    p.valve.cd = 0.95 * 0.1506;
-    p.valve.tau_s = 0.0175 + 0.0015;
+    p.plant.valve.cd = 0.95 * 0.1506;
+    p.plant.valve.tau_s = 0.0175 + 0.0015;
     p
 }
 

@@ -35,7 +35,7 @@ fn chamber_pressures_stay_symmetric_and_flows_equal() {
         1000.0,
     )
     .unwrap();
-    let sum = p.supply.supply_pressure_pa + p.supply.return_pressure_pa;
+    let sum = p.plant.supply.supply_pressure_pa + p.plant.supply.return_pressure_pa;
     let mut max_dp: f64 = 0.0;
     let mut max_dq: f64 = 0.0;
     let mut max_q: f64 = 0.0;
@@ -62,7 +62,7 @@ fn linearised_modes_match_hand_derivation() {
     let p = Params::paper();
     let d = derived(&p);
     let k_oil = 2.0 * d.area.powi(2) / (d.c_chamber + d.c_hose);
-    let w_body = ((k_oil + p.body.stiffness_n_per_m) / p.body.mass_kg).sqrt();
+    let w_body = ((k_oil + p.plant.body.stiffness_n_per_m) / p.plant.body.mass_kg).sqrt();
     let c_series = d.c_hose * d.c_chamber / (d.c_hose + d.c_chamber);
     let w_hose = 1.0 / (d.inertance * c_series).sqrt();
     let lin = fr::linearise_twin(&p);
@@ -97,9 +97,9 @@ fn linearised_modes_match_hand_derivation() {
 fn twin_static_gain_matches_g_and_delay_is_counted_twice() {
     let p = Params::paper();
     let d = derived(&p);
-    let dp = 0.5 * (p.supply.supply_pressure_pa - p.supply.return_pressure_pa);
+    let dp = 0.5 * (p.plant.supply.supply_pressure_pa - p.plant.supply.return_pressure_pa);
     let kq =
-        p.valve.cd * p.valve.ka_m * p.valve.kv_m_per_v * (2.0 / p.fluid.density_kg_m3 * dp).sqrt();
+        p.plant.valve.cd * p.plant.valve.ka_m * p.plant.valve.kv_m_per_v * (2.0 / p.plant.fluid.density_kg_m3 * dp).sqrt();
     let lin = fr::linearise_twin(&p);
     let low = lin.bode(0.5).norm();
     assert!(
@@ -113,7 +113,7 @@ fn twin_static_gain_matches_g_and_delay_is_counted_twice() {
     let freqs: Vec<f64> = (1..=20).map(|i| i as f64).collect();
     let phases: Vec<f64> = freqs.iter().map(|&f| lin.bode(f).arg()).collect();
     let tau = fr::delay_from_phase_slope(&freqs, &phases);
-    let expected = p.valve.tau_s + 2.0 * p.valve.zeta / p.valve.omega_n_rad_s;
+    let expected = p.plant.valve.tau_s + 2.0 * p.plant.valve.zeta / p.plant.valve.omega_n_rad_s;
     assert!((tau - expected).abs() < 0.5e-3, "{tau} vs {expected}");
 }
 

@@ -25,12 +25,12 @@ fn every_file_in_presets_loads_and_validates() {
 fn shipped_presets_hold_the_papers_values() {
     let paper = resolve("paper").unwrap().params;
     assert_eq!(paper, Params::paper());
-    assert_eq!(paper.valve.cd, 0.1506);
-    assert_eq!(paper.valve.tau_s, 0.0175);
+    assert_eq!(paper.plant.valve.cd, 0.1506);
+    assert_eq!(paper.plant.valve.tau_s, 0.0175);
     let initial = resolve("paper-initial").unwrap().params;
-    assert_eq!(initial.valve.cd, 0.1074);
+    assert_eq!(initial.plant.valve.cd, 0.1074);
     let consistent = resolve("consistent-delay").unwrap().params;
-    assert!((consistent.valve.tau_s - 0.0143).abs() < 0.0005);
+    assert!((consistent.plant.valve.tau_s - 0.0143).abs() < 0.0005);
 }
 
 #[test]
@@ -38,8 +38,8 @@ fn a_preset_survives_a_save_and_load_round_trip() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("round.toml");
     let mut p = Preset::paper();
-    p.params.valve.cd = 0.1234;
-    p.params.effects.friction.coulomb_n = 12.0;
+    p.params.plant.valve.cd = 0.1234;
+    p.params.plant.effects.friction.coulomb_n = 12.0;
     p.save(&path).unwrap();
     let back = Preset::load(&path).unwrap();
     assert_eq!(back.params, p.params);

@@ -81,7 +81,7 @@ fn tune_improves_the_paper_gains_within_every_constraint() {
     // 27 rows over Cd ±10 %, τ ±3 ms, mass ±20 %.
     assert_eq!(r.robustness.len(), 27);
     let cds: Vec<f64> = r.robustness.iter().map(|row| row.cd).collect();
-    assert!((cds.iter().cloned().fold(f64::INFINITY, f64::min) - 0.9 * p.valve.cd).abs() < 1e-12);
+    assert!((cds.iter().cloned().fold(f64::INFINITY, f64::min) - 0.9 * p.plant.valve.cd).abs() < 1e-12);
 }
 
 #[test]
