@@ -204,35 +204,39 @@ pub enum Command {
     /// Tune a controller's gains on the nonlinear twin (ISO 2631-1 objective of the body,
     /// no end-stop contact, max |u| ≤ 30 mm, GM ≥ 6 dB, PM ≥ 45°); writes tuned.toml,
     /// report.md, report.json and plots to DIR.
-    Tune {
-        /// Preset file or shipped preset name (its plant, and its gains as the start).
-        #[arg(long, default_value = "paper")]
-        preset: String,
-        /// Controller structure: paper, predictive, skyhook or smith (default: the preset's).
-        #[arg(long)]
-        controller: Option<String>,
-        /// Objective: aw (Wk-weighted RMS), vdv or seat.
-        #[arg(long, default_value = "aw")]
-        objective: String,
-        /// Tuning input: `ride` (the paper's random ride) or `class:NAME` (a seat-test input class).
-        #[arg(long, default_value = "ride")]
-        excitation: String,
-        /// Number of tuning rides (seeds 1..=N); as many held-out rides use seeds 101...
-        #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
-        seeds: i64,
-        /// Duration of each ride [s], 5..=600.
-        #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
-        duration: f64,
-        /// Optimise the worst case over Cd ±10 %, τ ±3 ms, mass ±20 %.
-        #[arg(long)]
-        robust: bool,
-        /// Budget of objective evaluations, 10..=10000.
-        #[arg(long, default_value_t = 120, allow_negative_numbers = true)]
-        evaluations: i64,
-        /// Output directory.
-        #[arg(long)]
-        out: PathBuf,
-    },
+    Tune(TuneArgs),
+}
+
+/// Arguments of `seat-twin tune`.
+#[derive(Debug, clap::Args)]
+pub struct TuneArgs {
+    /// Preset file or shipped preset name (its plant, and its gains as the start).
+    #[arg(long, default_value = "paper")]
+    pub preset: String,
+    /// Controller structure: paper, predictive, skyhook or smith (default: the preset's).
+    #[arg(long)]
+    pub controller: Option<String>,
+    /// Objective: aw (Wk-weighted RMS), vdv or seat.
+    #[arg(long, default_value = "aw")]
+    pub objective: String,
+    /// Tuning input: `ride` (the paper's random ride) or `class:NAME` (a seat-test input class).
+    #[arg(long, default_value = "ride")]
+    pub excitation: String,
+    /// Number of tuning rides (seeds 1..=N); as many held-out rides use seeds 101...
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
+    pub seeds: i64,
+    /// Duration of each ride [s], 5..=600.
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
+    pub duration: f64,
+    /// Optimise the worst case over Cd ±10 %, τ ±3 ms, mass ±20 %.
+    #[arg(long)]
+    pub robust: bool,
+    /// Budget of objective evaluations, 10..=10000.
+    #[arg(long, default_value_t = 120, allow_negative_numbers = true)]
+    pub evaluations: i64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// Arguments of `seat-twin seat-test`.
@@ -340,7 +344,7 @@ pub fn validate(cmd: &Command) -> Result<(), OptionError> {
         | Command::Calibrate { .. }
         | Command::SeatTest(_)
         | Command::Bench { .. }
-        | Command::Tune { .. } => Ok(()),
+        | Command::Tune(_) => Ok(()),
     }
 }
 

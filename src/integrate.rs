@@ -46,6 +46,84 @@ pub fn rk4_step<const N: usize>(
     }
 }
 
+/// A fixed-step method for a problem `dy/dt = f(t, y)` on `[f64; N]`: the solver half of a
+/// simulation, kept apart from the problem (model, command path, excitation) that supplies
+/// `f`, as [`crate::simulation::Simulation`] does. Every method here evaluates `f` at the
+/// stage times `t`, `t + h/2` (twice) and `t + h`, so a problem can prepare its inputs at
+/// those three times once per step.
+pub trait Stepper<const N: usize> {
+    /// The step [s].
+    fn step_size(&self) -> f64;
+
+    /// One step from `(t, y)`, in place; `f(t, y)` returns `dy/dt`.
+    fn step(&self, t: f64, y: &mut [f64; N], f: impl FnMut(f64, &[f64; N]) -> [f64; N]);
+}
+
+/// Classical RK4 at a fixed step ([`rk4_step`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rk4 {
+    /// The step [s].
+    pub h: f64,
+}
+
+impl<const N: usize> Stepper<N> for Rk4 {
+    fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    #[inline(always)]
+    fn step(&self, t: f64, y: &mut [f64; N], f: impl FnMut(f64, &[f64; N]) -> [f64; N]) {
+        rk4_step(t, self.h, y, f)
+    }
+}
+
+impl<const N: usize> Stepper<N> for Etd4<N> {
+    fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    #[inline(always)]
+    fn step(&self, t: f64, y: &mut [f64; N], f: impl FnMut(f64, &[f64; N]) -> [f64; N]) {
+        Etd4::step(self, t, y, f)
+    }
+}
+
+/// The method a [`crate::simulation::Simulation`] steps with, chosen when it is built.
+#[derive(Debug, Clone)]
+pub enum Method<const N: usize> {
+    /// Classical RK4.
+    Rk4(Rk4),
+    /// Exponential RK4 (its coefficients are large, hence boxed).
+    Exponential(Box<Etd4<N>>),
+}
+
+impl<const N: usize> Method<N> {
+    /// The exponential integrator, if this is it.
+    pub fn exponential(&self) -> Option<&Etd4<N>> {
+        match self {
+            Method::Rk4(_) => None,
+            Method::Exponential(e) => Some(e),
+        }
+    }
+}
+
+impl<const N: usize> Stepper<N> for Method<N> {
+    fn step_size(&self) -> f64 {
+        match self {
+            Method::Rk4(m) => <Rk4 as Stepper<N>>::step_size(m),
+            Method::Exponential(m) => m.h,
+        }
+    }
+
+    #[inline(always)]
+    fn step(&self, t: f64, y: &mut [f64; N], f: impl FnMut(f64, &[f64; N]) -> [f64; N]) {
+        match self {
+            Method::Rk4(m) => m.step(t, y, f),
+            Method::Exponential(m) => Etd4::step(m, t, y, f),
+        }
+    }
+}
+
 /// Column-major `N×N` matrix: `m[j]` is column `j`.
 type Columns<const N: usize> = [[f64; N]; N];
 

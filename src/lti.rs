@@ -28,8 +28,8 @@ use crate::model::{Inputs, Model};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::PlatformMotion;
 use crate::simulation::{
-    CommandPath, ContactEvent, Drive, RunSummary, Sample, SimError, Trace, closed_loop_controller,
-    track_contact,
+    CommandPath, ContactEvent, Drive, RunSummary, Sample, SimError, Stream, Trace,
+    closed_loop_controller, stream, trace_buffer, track_contact,
 };
 use nalgebra::{DMatrix, SMatrix};
 
@@ -299,8 +299,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
     /// Runs from rest to `t_end` [s] and returns the trace recorded at `rate_hz` (a whole
     /// number of steps per sample, as in [`crate::simulation::Simulation::run_trace`]).
     pub fn run_trace(self, t_end: f64, rate_hz: f64) -> Result<Trace, SimError> {
-        let n = crate::simulation::sample_count(t_end, rate_hz, self.h);
-        let mut samples = Vec::with_capacity(usize::try_from(n).unwrap_or(0).min(1 << 24));
+        let mut samples = trace_buffer(t_end, rate_hz, self.h);
         let summary = self.run_streaming(t_end, rate_hz, |s| {
             samples.push(s);
             true
@@ -314,28 +313,10 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
         mut self,
         t_end: f64,
         rate_hz: f64,
-        mut record: impl FnMut(Sample) -> bool,
+        record: impl FnMut(Sample) -> bool,
     ) -> Result<RunSummary, SimError> {
         let every = crate::simulation::record_every(self.h, rate_hz);
-        let n_end = (t_end / self.h - 1e-9).ceil() as u64;
-        let mut samples = 1u64;
-        let mut stopped = !record(self.sample());
-        // A countdown rather than `steps % every`: a division per step is a fair share of a
-        // step this cheap.
-        let mut to_record = every;
-        while !stopped && self.steps < n_end {
-            to_record -= 1;
-            if to_record == 0 {
-                to_record = every;
-                // A recorded step: read the platform's whole motion once, for both.
-                let p = self.platform.at_grid(self.steps + 1, self.h, self.stride);
-                self.advance(p.xdd)?;
-                samples += 1;
-                stopped = !record(self.sample_with(p));
-            } else {
-                self.step()?;
-            }
-        }
+        let (samples, stopped) = stream(&mut self, t_end, every, record)?;
         Ok(RunSummary {
             model: M::KIND,
             samples,
@@ -346,6 +327,36 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
                 rhs_evals: 0,
             },
         })
+    }
+}
+
+impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> Stream
+    for LtiSimulation<M, N>
+{
+    fn steps_taken(&self) -> u64 {
+        self.steps
+    }
+
+    fn grid_step(&self) -> f64 {
+        self.h
+    }
+
+    #[inline(always)]
+    fn advance_one(&mut self) -> Result<(), SimError> {
+        self.step()
+    }
+
+    #[inline(always)]
+    fn sample_now(&self) -> Sample {
+        self.sample()
+    }
+
+    /// A recorded step reads the platform's whole motion once, for both.
+    #[inline(always)]
+    fn advance_sampled(&mut self) -> Result<Sample, SimError> {
+        let p = self.platform.at_grid(self.steps + 1, self.h, self.stride);
+        self.advance(p.xdd)?;
+        Ok(self.sample_with(p))
     }
 }
 

@@ -5,7 +5,7 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use seat_twin::analysis::dwell;
 use seat_twin::analysis::response::{Method, Response, ResponseError, response};
-use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, SeatTestArgs, check_range};
+use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, check_range};
 use seat_twin::dataset::{self, RecordKind};
 use seat_twin::experiments;
 use seat_twin::fsutil::{self, OutputDir};
@@ -20,66 +20,8 @@ use seat_twin::simulation::{
 };
 use std::path::Path;
 
-fn find_class(name: &str) -> Result<&'static seat_twin::seat_test::InputClass> {
-    seat_twin::seat_test::find(name).with_context(|| {
-        format!(
-            "unknown input class `{name}`; the classes are {}",
-            seat_twin::seat_test::classes::names()
-        )
-    })
-}
-
-fn run_seat_test_command(a: SeatTestArgs) -> Result<()> {
-    use seat_twin::seat_test::{SeatTestOptions, report, run_seat_test};
-    let class = find_class(&a.class)?;
-    let params = load_params(&a.preset)?;
-    if let Some(m) = a.mass {
-        check_range("--mass", m, 1.0, 500.0, "kg")?;
-    }
-    let opts = SeatTestOptions {
-        mass_kg: a.mass,
-        duration_s: a.duration,
-        seed: a.seed,
-        ..SeatTestOptions::new(class, a.model)
-    };
-    let result = run_seat_test(&params, &opts).with_context(|| {
-        format!(
-            "seat test {} on the {} model",
-            class.name,
-            opts.model.name()
-        )
-    })?;
-    report::write_seat_test(&result, class, &a.preset, &a.out)
-        .with_context(|| format!("writing the seat-test report to {}", a.out.display()))?;
-    let n = &result.numbers;
-    println!(
-        "{} on the {} model, {:.1} kg: a_w floor {:.3} m/s², seat {:.3} m/s², SEAT {:.1} %, \
-         VDV seat {:.3} m/s^1.75, max |u| {:.1} mm, {} contact(s), PSD error {:.1} % of peak{}",
-        n.class,
-        n.model,
-        n.mass_kg,
-        n.aw_floor,
-        n.aw_seat,
-        n.seat_percent,
-        n.vdv_seat,
-        n.max_abs_u_mm,
-        n.contacts,
-        n.psd_error_percent,
-        if n.psd_within_tolerance {
-            ""
-        } else {
-            " (outside the ±10 % tolerance)"
-        }
-    );
-    if n.contacts > 0 {
-        eprintln!(
-            "warning: the seat reached its ±{:.0} mm stops {} time(s)",
-            n.half_stroke_mm, n.contacts
-        );
-    }
-    println!("report written to {}", a.out.join("report.md").display());
-    Ok(())
-}
+mod commands;
+use commands::{find_class, run_seat_test_command, run_tune};
 
 fn main() {
     let cli = Cli::parse();
@@ -377,9 +319,15 @@ fn run(cmd: Command) -> Result<()> {
             ];
             comments.extend(warnings.into_iter().map(|w| ("warning".to_string(), w)));
             let run = || {
-                simulate_to_csv(
-                    &params, kind, drive, platform, duration, rate, &out, &comments,
-                )
+                let spec = RunSpec {
+                    params: &params,
+                    kind,
+                    drive,
+                    platform,
+                    duration,
+                    rate,
+                };
+                simulate_to_csv(spec, &out, &comments)
             };
             let heartbeat = (samples > 2_000_000).then(|| {
                 Heartbeat::start(
@@ -569,113 +517,8 @@ fn run(cmd: Command) -> Result<()> {
             println!("{text}");
             Ok(())
         }
-        Command::Tune {
-            preset,
-            controller,
-            objective,
-            excitation,
-            seeds,
-            duration,
-            robust,
-            evaluations,
-            out,
-        } => run_tune(
-            &preset,
-            controller.as_deref(),
-            &objective,
-            &excitation,
-            seeds,
-            duration,
-            robust,
-            evaluations,
-            &out,
-        ),
+        Command::Tune(args) => run_tune(&args),
     }
-}
-
-/// `seat-twin tune`.
-#[allow(clippy::too_many_arguments)]
-fn run_tune(
-    preset: &str,
-    controller: Option<&str>,
-    objective: &str,
-    excitation: &str,
-    seeds: i64,
-    duration: f64,
-    robust: bool,
-    evaluations: i64,
-    out: &Path,
-) -> Result<()> {
-    use seat_twin::tune;
-    let params = load_params(preset)?;
-    let kind = match controller {
-        Some(k) => k.parse().map_err(anyhow::Error::msg)?,
-        None => params.controller.kind,
-    };
-    let objective: tune::Objective = objective.parse().map_err(anyhow::Error::msg)?;
-    let input = match excitation {
-        "ride" => tune::TuneInput::Ride,
-        other => match other.strip_prefix("class:") {
-            Some(name) => tune::TuneInput::Class(find_class(name)?),
-            None => bail!(
-                "--excitation {other}: expected `ride` or `class:NAME` (classes: {})",
-                seat_twin::seat_test::classes::names()
-            ),
-        },
-    };
-    check_range("--seeds", seeds as f64, 1.0, 20.0, "")?;
-    check_range("--duration", duration, 5.0, 600.0, "s")?;
-    check_range("--evaluations", evaluations as f64, 10.0, 10_000.0, "")?;
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let n = seeds as u64;
-    let opts = tune::TuneOptions {
-        kind,
-        objective,
-        input,
-        tune_seeds: (1..=n).collect(),
-        heldout_seeds: (101..101 + n).collect(),
-        duration_s: duration,
-        robust,
-        max_evaluations: evaluations as usize,
-    };
-    let started = std::time::Instant::now();
-    eprintln!(
-        "tuning {kind} for {} on {n} ride(s) of {duration:.0} s of {} (held out: {n}){}",
-        objective.name(),
-        input.describe(),
-        if robust {
-            ", worst case over the spread"
-        } else {
-            ""
-        }
-    );
-    let result = tune::tune(&params, &opts, None)?;
-    let wall = started.elapsed().as_secs_f64();
-    let mut start = params;
-    start.controller.kind = kind;
-    let files = tune::report::write_outputs(&result, &start, out, wall)?;
-    let unit = objective.unit();
-    println!(
-        "{}: start {:.4} {unit} -> tuned {:.4} {unit} (held out {:.4} -> {:.4}); {} evaluations in {wall:.1} s",
-        objective.name(),
-        result.baseline.objective,
-        result.tuned.objective,
-        result.baseline_heldout.objective,
-        result.tuned_heldout.objective,
-        result.evaluations
-    );
-    for (k, v) in &result.tuned.gains {
-        println!("  {k} = {v:.4}");
-    }
-    println!(
-        "  GM {:.1} dB, PM {:.1} deg, max |u| {:.1} mm, contacts {}",
-        result.tuned.gain_margin_db,
-        result.tuned.phase_margin_deg,
-        result.tuned.max_abs_u_m * 1e3,
-        result.tuned.contacts
-    );
-    println!("wrote {} files to {}", files.len(), out.display());
-    Ok(())
 }
 
 /// `bode` and `transmissibility`: the response by its entry point, then one CSV file. A
@@ -752,19 +595,32 @@ impl From<std::io::Error> for StreamError {
     }
 }
 
-/// Runs the simulation and writes its samples to `out` as they are made (atomically, with the
-/// columns the model has): memory does not grow with the duration.
-#[allow(clippy::too_many_arguments)]
-fn simulate_to_csv(
-    params: &Params,
+/// One run of `simulate`: a model with its drive and platform motion, for `duration` [s]
+/// recorded at `rate` [Hz].
+struct RunSpec<'a> {
+    params: &'a Params,
     kind: ModelKind,
     drive: Drive,
     platform: PlatformMotion,
     duration: f64,
     rate: f64,
+}
+
+/// Runs the simulation and writes its samples to `out` as they are made (atomically, with the
+/// columns the model has): memory does not grow with the duration.
+fn simulate_to_csv(
+    spec: RunSpec,
     out: &Path,
     comments: &[(String, String)],
 ) -> Result<RunSummary, StreamError> {
+    let RunSpec {
+        params,
+        kind,
+        drive,
+        platform,
+        duration,
+        rate,
+    } = spec;
     let hyd = kind.has_hydraulics();
     let cmd = kind.has_command();
     let mut header = vec!["t", "x", "xdd", "u", "ydd"];

@@ -131,6 +131,37 @@ fn catmull_rom(v: &[f64], s: f64) -> f64 {
 }
 
 impl SampledMotion {
+    /// The motion sampled at step `dt` [s] from `x`, `ẋ`, `ẍ` (SI, equal lengths), each
+    /// instant passed through `shape(t, sample)` (a fade in, or in and out).
+    pub fn shaped(
+        dt: f64,
+        x: &[f64],
+        xd: &[f64],
+        xdd: &[f64],
+        shape: impl Fn(f64, PlatformSample) -> PlatformSample,
+    ) -> Self {
+        let n = x.len().min(xd.len()).min(xdd.len());
+        let (mut fx, mut fxd, mut fxdd) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        for i in 0..n {
+            let m = shape(
+                i as f64 * dt,
+                PlatformSample {
+                    x: x[i],
+                    xd: xd[i],
+                    xdd: xdd[i],
+                },
+            );
+            fx.push(m.x);
+            fxd.push(m.xd);
+            fxdd.push(m.xdd);
+        }
+        SampledMotion::new(dt, fx, fxd, fxdd)
+    }
+
     /// From uniformly sampled `x`, `ẋ`, `ẍ` (equal lengths, ≥ 2 samples) with step `dt` [s].
     pub fn new(dt: f64, x: Vec<f64>, xd: Vec<f64>, xdd: Vec<f64>) -> Self {
         Self {
@@ -428,24 +459,7 @@ impl RandomRide {
         let xd = inverse(&mut spec_v);
         let x = inverse(&mut spec_x);
         let dt = 1.0 / fs;
-        let mut fx = Vec::with_capacity(n);
-        let mut fxd = Vec::with_capacity(n);
-        let mut fxdd = Vec::with_capacity(n);
-        for i in 0..n {
-            let m = faded(
-                i as f64 * dt,
-                self.fade_in_s,
-                PlatformSample {
-                    x: x[i],
-                    xd: xd[i],
-                    xdd: xdd[i],
-                },
-            );
-            fx.push(m.x);
-            fxd.push(m.xd);
-            fxdd.push(m.xdd);
-        }
-        SampledMotion::new(dt, fx, fxd, fxdd)
+        SampledMotion::shaped(dt, &x, &xd, &xdd, |t, m| faded(t, self.fade_in_s, m))
     }
 }
 

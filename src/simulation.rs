@@ -10,7 +10,7 @@
 
 use crate::control::{ControlLaw, Controller, Measurement};
 use crate::delay::{DelayLine, Tap};
-use crate::integrate::{Etd4, StepStats, rk4_step};
+use crate::integrate::{Etd4, Method, Rk4, StepStats, Stepper};
 pub use crate::model::CommandPath;
 use crate::model::{Inputs, Model, ModelKind, Outputs};
 use crate::params::MAX_DELAY_S;
@@ -232,9 +232,10 @@ pub struct Simulation<M: Model<N>, const N: usize> {
     stats: StepStats,
     contacts: Vec<ContactEvent>,
     in_contact: bool,
-    /// Exponential integrator coefficients when stepping with
+    /// The stepper (the solver; everything above is the problem it solves): RK4, or the
+    /// exponential integrator for
     /// [`Integrator::Exponential`](crate::params::Integrator::Exponential).
-    exponential: Option<Box<Etd4<N>>>,
+    method: Method<N>,
 }
 
 impl Simulation<crate::model::twin::Twin, 10> {
@@ -285,7 +286,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             stats: StepStats::default(),
             contacts: Vec::new(),
             in_contact: false,
-            exponential: None,
+            method: Method::Rk4(Rk4 { h }),
         };
         sim.start_controller();
         let v0 = sim.command_now();
@@ -346,8 +347,8 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         self.v_max = model.command_limit();
         self.taps = stage_taps(&self.history, self.tau, self.h);
         self.model = model;
-        if self.exponential.is_some() && self.use_exponential().is_err() {
-            self.exponential = None;
+        if self.is_exponential() && self.use_exponential().is_err() {
+            self.method = Method::Rk4(Rk4 { h: self.h });
         }
     }
 
@@ -365,18 +366,18 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         let etd = Etd4::new(self.h, &a, rest, &scales, |y| {
             self.model.derivatives(0.0, y, &inputs)
         })?;
-        self.exponential = Some(Box::new(etd));
+        self.method = Method::Exponential(Box::new(etd));
         Ok(())
     }
 
     /// Rows of the right-hand side the exponential integrator treats explicitly, if in use.
     pub fn exponential_rows(&self) -> Option<&[usize]> {
-        self.exponential.as_deref().map(|e| e.nonlinear_rows())
+        self.method.exponential().map(|e| e.nonlinear_rows())
     }
 
     /// Whether the exponential integrator is in use.
     pub fn is_exponential(&self) -> bool {
-        self.exponential.is_some()
+        self.method.exponential().is_some()
     }
 
     /// The drive in use.
@@ -487,10 +488,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             let inputs = Inputs { v_valve, xdd: xdds };
             this.model.derivatives(ts, ys, &inputs)
         };
-        match &self.exponential {
-            Some(etd) => etd.step(t, &mut y, rhs),
-            None => rk4_step(t, h, &mut y, rhs),
-        }
+        self.method.step(t, &mut y, rhs);
         self.model.project(&mut y);
         self.stats.steps += 1;
         self.stats.rhs_evals += 4;
@@ -597,28 +595,16 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         every: u64,
         mut record: impl FnMut(Sample),
     ) -> Result<(), SimError> {
-        let every = every.max(1);
-        if self.steps == 0 {
-            record(self.sample());
-        }
-        let n_end = (t_end / self.h - 1e-9).ceil() as u64;
-        // Steps until the next multiple of `every` (a countdown, not a division per step).
-        let mut to_record = every - self.steps % every;
-        while self.steps < n_end {
-            self.step()?;
-            to_record -= 1;
-            if to_record == 0 {
-                to_record = every;
-                record(self.sample());
-            }
-        }
-        Ok(())
+        stream(self, t_end, every, |s| {
+            record(s);
+            true
+        })
+        .map(|_| ())
     }
 
     /// Runs from the current state to `t_end` and returns the recorded trace at `rate_hz`.
     pub fn run_trace(&mut self, t_end: f64, rate_hz: f64) -> Result<Trace, SimError> {
-        let n = sample_count(t_end, rate_hz, self.h);
-        let mut samples = Vec::with_capacity(usize::try_from(n).unwrap_or(0).min(1 << 24));
+        let mut samples = trace_buffer(t_end, rate_hz, self.h);
         let summary = self.run_streaming(t_end, rate_hz, |s| {
             samples.push(s);
             true
@@ -633,18 +619,10 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         &mut self,
         t_end: f64,
         rate_hz: f64,
-        mut record: impl FnMut(Sample) -> bool,
+        record: impl FnMut(Sample) -> bool,
     ) -> Result<RunSummary, SimError> {
         let every = record_every(self.h, rate_hz);
-        let mut samples = 0u64;
-        let mut stopped = false;
-        let mut go = true;
-        self.run_until_while(t_end, every, |s| {
-            samples += 1;
-            go = record(s);
-            stopped = !go;
-            go
-        })?;
+        let (samples, stopped) = stream(self, t_end, every, record)?;
         Ok(RunSummary {
             model: M::KIND,
             samples,
@@ -653,32 +631,90 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             stats: self.stats,
         })
     }
+}
 
-    /// [`Self::run_until`], stopping early when `record` returns `false`.
-    fn run_until_while(
-        &mut self,
-        t_end: f64,
-        every: u64,
-        mut record: impl FnMut(Sample) -> bool,
-    ) -> Result<(), SimError> {
-        let every = every.max(1);
-        if self.steps == 0 && !record(self.sample()) {
-            return Ok(());
-        }
-        let n_end = (t_end / self.h - 1e-9).ceil() as u64;
-        let mut to_record = every - self.steps % every;
-        while self.steps < n_end {
-            self.step()?;
-            to_record -= 1;
-            if to_record == 0 {
-                to_record = every;
-                if !record(self.sample()) {
-                    return Ok(());
-                }
-            }
-        }
-        Ok(())
+impl<M: Model<N> + CommandPath, const N: usize> Stream for Simulation<M, N> {
+    fn steps_taken(&self) -> u64 {
+        self.steps
     }
+
+    fn grid_step(&self) -> f64 {
+        self.h
+    }
+
+    #[inline(always)]
+    fn advance_one(&mut self) -> Result<(), SimError> {
+        self.step()
+    }
+
+    #[inline(always)]
+    fn sample_now(&self) -> Sample {
+        self.sample()
+    }
+}
+
+/// A run advanced on a fixed grid and sampled: what [`stream`] drives ([`Simulation`] and
+/// [`crate::lti::LtiSimulation`]).
+pub(crate) trait Stream {
+    /// Steps taken so far.
+    fn steps_taken(&self) -> u64;
+    /// The grid step [s].
+    fn grid_step(&self) -> f64;
+    /// Advances one step.
+    fn advance_one(&mut self) -> Result<(), SimError>;
+    /// The current instant as a recorded sample.
+    fn sample_now(&self) -> Sample;
+    /// Advances one step whose end is recorded and returns that sample (a run may share work
+    /// between the two).
+    #[inline(always)]
+    fn advance_sampled(&mut self) -> Result<Sample, SimError> {
+        self.advance_one()?;
+        Ok(self.sample_now())
+    }
+}
+
+/// The stepping loop of every run: steps `run` until `t_end` [s], passing a sample to
+/// `record` every `every` steps (and at the start when no step has been taken yet), and stops
+/// early when `record` returns `false`. Returns the samples passed and whether it stopped.
+#[inline(always)]
+pub(crate) fn stream(
+    run: &mut impl Stream,
+    t_end: f64,
+    every: u64,
+    mut record: impl FnMut(Sample) -> bool,
+) -> Result<(u64, bool), SimError> {
+    let every = every.max(1);
+    let mut samples = 0u64;
+    if run.steps_taken() == 0 {
+        samples += 1;
+        if !record(run.sample_now()) {
+            return Ok((samples, true));
+        }
+    }
+    let n_end = (t_end / run.grid_step() - 1e-9).ceil() as u64;
+    // Steps until the next multiple of `every`: a countdown rather than a division per step,
+    // which is a fair share of a step as cheap as the exact hold's.
+    let mut to_record = every - run.steps_taken() % every;
+    while run.steps_taken() < n_end {
+        to_record -= 1;
+        if to_record == 0 {
+            to_record = every;
+            let s = run.advance_sampled()?;
+            samples += 1;
+            if !record(s) {
+                return Ok((samples, true));
+            }
+        } else {
+            run.advance_one()?;
+        }
+    }
+    Ok((samples, false))
+}
+
+/// An empty sample buffer sized for a run to `t_end` [s] at `rate_hz` with step `h` [s].
+pub(crate) fn trace_buffer(t_end: f64, rate_hz: f64, h: f64) -> Vec<Sample> {
+    let n = sample_count(t_end, rate_hz, h);
+    Vec::with_capacity(usize::try_from(n).unwrap_or(0).min(1 << 24))
 }
 
 /// The controller a drive runs, if it is closed loop.

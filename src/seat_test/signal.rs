@@ -196,28 +196,9 @@ impl ClassMotion {
         let x = inverse(&spec_x);
         let dt = 1.0 / fs;
         let t_end = (n - 1) as f64 * dt;
-        let (mut fx, mut fxd, mut fxdd) = (
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-        );
-        for i in 0..n {
-            let t = i as f64 * dt;
-            let m = faded_both_ends(
-                t,
-                t_end,
-                self.fade_s,
-                PlatformSample {
-                    x: x[i],
-                    xd: xd[i],
-                    xdd: xdd[i],
-                },
-            );
-            fx.push(m.x);
-            fxd.push(m.xd);
-            fxdd.push(m.xdd);
-        }
-        Ok(SampledMotion::new(dt, fx, fxd, fxdd))
+        Ok(SampledMotion::shaped(dt, &x, &xd, &xdd, |t, m| {
+            faded_both_ends(t, t_end, self.fade_s, m)
+        }))
     }
 
     /// Drive equalisation, as a shaker's random-vibration controller does it: estimate the

@@ -329,5 +329,47 @@ fn report_writes_markdown_numbers_and_plots() {
     assert!(md.contains("| paper"), "the paper-vs-twin table");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("numbers.json")).unwrap()).unwrap();
-    assert!(json.is_object());
+    let num = |key: &str| {
+        json[key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("numbers.json: `{key}` is a number"))
+    };
+    // The passive seat crosses |T| = 1 at √2·√(k/m)/2π for the paper's k = 3680 N/m and
+    // m = 11.7 kg, whatever its damping.
+    let fc = 2f64.sqrt() * (3680.0f64 / 11.7).sqrt() / (2.0 * std::f64::consts::PI);
+    let passive = num("passive_crossing_hz");
+    assert!(
+        (passive / fc - 1.0).abs() < 5e-3,
+        "passive crossing {passive} vs {fc}"
+    );
+    // Section 4: the twin's low-frequency gain u̇/V is Kg = 133.25 mm/(s·V) within a few %.
+    let gain = num("twin_gain_m_per_s_v");
+    assert!((gain / 0.13325 - 1.0).abs() < 0.03, "twin gain {gain}");
+    // G(s)'s phase slope is its delay τ = 17.5 ms plus the lag of its poles: more than τ,
+    // and the twin's (the same valve and delay) within a few ms of it.
+    let (lin_delay, twin_delay) = (num("linear_phase_delay_s"), num("twin_phase_delay_s"));
+    assert!(lin_delay > 0.0175 && lin_delay < 0.05, "{lin_delay}");
+    assert!(
+        (twin_delay - lin_delay).abs() < 0.005,
+        "{twin_delay} vs {lin_delay}"
+    );
+    // Table 1: the paper's 69 valve tests, each with the twin's |u̇/V| within 30 % of Kg at
+    // 0.5–2 Hz (the flat part of G).
+    let table = json["table1"].as_array().expect("table1 rows");
+    assert_eq!(table.len(), 69);
+    for row in table {
+        let r: Vec<f64> = row
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        if r[0] <= 2.0 {
+            assert!((r[2] / 0.13325 - 1.0).abs() < 0.3, "Table 1 row {r:?}");
+        }
+    }
+    // Eq. (12) solved for Cd: Cd ∝ 1/√Δp between 70 and 100 bar.
+    let cd = json["cd_from_eq12"].as_array().unwrap();
+    let ratio = cd[0].as_f64().unwrap() / cd[1].as_f64().unwrap();
+    assert!((ratio - (100.0f64 / 70.0).sqrt()).abs() < 1e-9, "{ratio}");
 }

@@ -4,6 +4,7 @@
 
 mod cli;
 mod cli_hardening;
+mod cli_input;
 mod control;
 mod dataset_props;
 mod engine;
