@@ -1,0 +1,130 @@
+//! Read access to the app's state, for tests and the debug overlay.
+
+use super::*;
+
+impl SeatTwinApp {
+    /// The parameters being edited (SI).
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// The parameters the engine last reported running with.
+    pub fn engine_params(&self) -> Option<&Params> {
+        self.engine_view.params.as_ref()
+    }
+
+    /// What the engine last reported.
+    pub fn engine_view(&self) -> &EngineView {
+        &self.engine_view
+    }
+
+    /// Whether the user wants the simulation running (space bar / Run button).
+    pub fn wants_running(&self) -> bool {
+        self.want_running
+    }
+
+    /// The engine's error, if it stopped.
+    pub fn engine_error(&self) -> Option<&str> {
+        self.engine_error.as_deref()
+    }
+
+    /// The analytic frequency curves shown.
+    pub fn curves(&self) -> &Curves {
+        self.analytic.curves()
+    }
+
+    /// The live traces.
+    pub fn traces(&self) -> &Traces {
+        &self.traces
+    }
+
+    /// The current preset.
+    pub fn preset(&self) -> &PresetInfo {
+        &self.preset
+    }
+
+    /// Whether the parameters differ from the preset's.
+    pub fn is_modified(&self) -> bool {
+        self.params != self.preset.baseline
+    }
+
+    /// The message line.
+    pub fn notice(&self) -> Option<&Notice> {
+        self.notice.as_ref()
+    }
+
+    /// Whether the "discard unsaved changes?" prompt is showing.
+    pub fn is_confirm_open(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    /// Frame timing.
+    pub fn frame_stats(&self) -> &FrameStats {
+        &self.frame_stats
+    }
+
+    /// Refused parameter values, by control label (shown next to the control).
+    pub fn field_errors(&self) -> &controls::FieldErrors {
+        &self.field_errors
+    }
+
+    /// Curves switched off in the legends (`plot/name`).
+    pub fn hidden_curves(&self) -> &BTreeSet<String> {
+        &self.hidden_curves
+    }
+
+    /// The last gains with which both loops were stable.
+    pub fn last_stable_gains(&self) -> Option<ControllerParams> {
+        self.last_stable
+    }
+
+    /// The scopes' data areas drawn last frame, top to bottom.
+    pub fn scope_frames(&self) -> &[egui::Rect] {
+        &self.scope_frames
+    }
+
+    /// The typed-path prompt shown when no file dialog is available: purpose and text.
+    pub fn path_prompt(&self) -> Option<&(Purpose, String)> {
+        self.path_prompt.as_ref()
+    }
+
+    /// The text of the toolbar clock (simulated time and real-time factor).
+    pub fn clock_text(&self) -> String {
+        let v = &self.engine_view;
+        if self.engine_error.is_some() {
+            format!("t = {:8.2} s   stopped", v.t)
+        } else if !v.running {
+            format!("t = {:8.2} s   paused", v.t)
+        } else {
+            format!(
+                "t = {:8.2} s   ×{:.2} real time",
+                v.t,
+                v.realtime_factor.max(0.0)
+            )
+        }
+    }
+
+    /// TEST HOOK: makes the engine's next step panic (see `Command::InjectFault`). The UI
+    /// never calls it.
+    #[doc(hidden)]
+    pub fn inject_engine_fault(&mut self) {
+        self.send(Command::InjectFault);
+    }
+
+    /// Puts back the last gains with which both loops were stable and restarts the
+    /// simulation from rest with them.
+    pub fn reset_to_last_stable_gains(&mut self) {
+        if let Some(g) = self.last_stable {
+            self.params.controller = g;
+            self.field_errors.remove("Kp");
+            self.field_errors.remove("Ki");
+            self.apply_params();
+        }
+        self.reset();
+    }
+
+    /// The shipped presets `(name, file)` in the Presets menu.
+    pub fn shipped_presets(&self) -> &[(String, PathBuf)] {
+        &self.shipped
+    }
+}

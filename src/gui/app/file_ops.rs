@@ -1,0 +1,235 @@
+//! The app's files: presets (open, apply, save, save as, the discard guard), platform
+//! records, the dialog results and the typed-path prompt.
+
+use super::*;
+
+impl SeatTwinApp {
+    /// Loads a preset file; a bad file leaves everything as it was and says why.
+    pub fn open_preset_file(&mut self, path: &Path) {
+        match Preset::load(path) {
+            Ok(p) => {
+                let shipped = self.shipped.iter().any(|(_, f)| f == path);
+                self.set_preset(p, Some(path.to_path_buf()), !shipped);
+                self.settings.last_preset = Some(path.to_path_buf());
+                self.info(format!("preset loaded from {}", path.display()));
+            }
+            Err(e) => self.error(format!("preset not loaded: {e}")),
+        }
+    }
+
+    pub(super) fn set_preset(&mut self, p: Preset, path: Option<PathBuf>, user_file: bool) {
+        let name = if p.meta.name.is_empty() {
+            path.as_deref()
+                .and_then(|f| f.file_stem())
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "unnamed".into())
+        } else {
+            p.meta.name.clone()
+        };
+        self.params = p.params;
+        self.preset = PresetInfo {
+            name,
+            description: p.meta.description,
+            path,
+            user_file,
+            baseline: p.params,
+        };
+        self.apply_params();
+    }
+
+    /// Saves the parameters as a preset file.
+    pub fn save_preset_file(&mut self, path: &Path) {
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| self.preset.name.clone());
+        let p = Preset {
+            meta: PresetMeta {
+                name: name.clone(),
+                description: self.preset.description.clone(),
+                ..Default::default()
+            },
+            params: self.params,
+        };
+        match p.save(path) {
+            Ok(()) => {
+                self.preset = PresetInfo {
+                    name,
+                    description: p.meta.description,
+                    path: Some(path.to_path_buf()),
+                    user_file: true,
+                    baseline: self.params,
+                };
+                self.settings.last_preset = Some(path.to_path_buf());
+                self.info(format!("preset saved to {}", path.display()));
+            }
+            Err(e) => self.error(format!("preset not saved: {e}")),
+        }
+    }
+
+    /// Loads a CSV platform record and switches the excitation to it.
+    pub fn load_record_file(&mut self, path: &Path) {
+        match files::read_platform_record(path) {
+            Ok(motion) => {
+                let name = path
+                    .file_name()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                self.settings.excitation.record = Some(LoadedRecord { name, motion });
+                self.settings.excitation.kind = ExcitationKind::Record;
+                self.apply_excitation();
+                self.info(format!("record loaded from {}", path.display()));
+            }
+            Err(e) => self.error(format!("record not loaded: {e:#}")),
+        }
+    }
+
+    /// Switches the excitation editor to `kind` and applies it (restarts from rest).
+    pub fn set_excitation_kind(&mut self, kind: ExcitationKind) {
+        self.settings.excitation.kind = kind;
+        if let Some(p) = self.settings.excitation.problem() {
+            self.error(format!("excitation not applied: {p}"));
+        } else {
+            self.apply_excitation();
+        }
+    }
+
+    pub(super) fn apply_excitation(&mut self) {
+        if let Some(e) = self.settings.excitation.excitation() {
+            self.send(Command::SetExcitation(Box::new(e)));
+            self.traces.clear();
+            self.engine_error = None;
+        }
+    }
+
+    /// Runs `action` now, or asks first if there are unsaved changes.
+    pub(super) fn guarded(&mut self, action: Pending, ctx: &egui::Context) {
+        if self.is_modified() {
+            self.pending = Some(action);
+        } else {
+            self.run_pending(action, ctx);
+        }
+    }
+
+    pub(super) fn run_pending(&mut self, action: Pending, ctx: &egui::Context) {
+        match action {
+            Pending::OpenDialog => self.dialogs.request(Purpose::OpenPreset, "", ctx),
+            Pending::LoadFile(p) => self.open_preset_file(&p),
+            Pending::Quit => {
+                self.quit_confirmed = true;
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+        }
+    }
+
+    pub(super) fn save(&mut self, ctx: &egui::Context) {
+        match (&self.preset.path, self.preset.user_file) {
+            (Some(p), true) => {
+                let p = p.clone();
+                self.save_preset_file(&p);
+            }
+            _ => self.save_as(ctx),
+        }
+    }
+
+    pub(super) fn save_as(&mut self, ctx: &egui::Context) {
+        let name = format!("{}.toml", self.preset.name);
+        self.dialogs.request(Purpose::SavePreset, &name, ctx);
+    }
+
+    pub(super) fn poll_files(&mut self, ctx: &egui::Context) {
+        while let Some((purpose, paths)) = self.dialogs.poll() {
+            if paths.is_empty() {
+                // Cancelled, or no dialog on this desktop: offer a typed path instead.
+                let suggested = match purpose {
+                    Purpose::ExportCsv => "traces.csv",
+                    Purpose::ExportPng => "plots.png",
+                    Purpose::SavePreset => "preset.toml",
+                    _ => "",
+                };
+                self.path_prompt = Some((purpose, suggested.to_string()));
+                self.info("no file chosen (dialog cancelled, or no file dialog on this desktop): type a path below");
+                continue;
+            }
+            self.use_paths(purpose, paths, ctx);
+        }
+        while let Some(r) = self.writer.poll() {
+            match r {
+                Ok(m) => self.info(m),
+                Err(e) => self.error(format!("export failed: {e}")),
+            }
+        }
+    }
+
+    /// Opens the typed-path prompt for `purpose` (the fallback when no file dialog shows).
+    pub fn prompt_path(&mut self, purpose: Purpose, suggested: &str) {
+        self.path_prompt = Some((purpose, suggested.to_string()));
+    }
+
+    pub(super) fn path_prompt_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
+        let Some((purpose, mut text)) = self.path_prompt.clone() else {
+            return;
+        };
+        let mut done: Option<bool> = None;
+        ui.horizontal(|ui| {
+            ui.label(format!("{} — file path:", purpose.title()));
+            let r = ui.add(
+                egui::TextEdit::singleline(&mut text)
+                    .id(egui::Id::unique("path_prompt"))
+                    .desired_width(360.0)
+                    .hint_text("path/to/file"),
+            );
+            let enter = r.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
+            if ui.button("OK").clicked() || enter {
+                done = Some(true);
+            }
+            if ui.button("Cancel").clicked() {
+                done = Some(false);
+            }
+        });
+        match done {
+            Some(true) if !text.trim().is_empty() => {
+                self.path_prompt = None;
+                let path = PathBuf::from(text.trim());
+                self.use_paths(purpose, vec![path], ctx);
+            }
+            Some(true) => self.error("type a file path first"),
+            Some(false) => self.path_prompt = None,
+            None => self.path_prompt = Some((purpose, text)),
+        }
+    }
+
+    pub(super) fn use_paths(
+        &mut self,
+        purpose: Purpose,
+        mut paths: Vec<PathBuf>,
+        ctx: &egui::Context,
+    ) {
+        {
+            if purpose == Purpose::LoadMeasured {
+                self.measured.load_files(paths);
+                return;
+            }
+            let path = paths.swap_remove(0);
+            match purpose {
+                Purpose::LoadMeasured => {}
+                Purpose::OpenPreset => self.open_preset_file(&path),
+                Purpose::SavePreset => self.save_preset_file(&path),
+                Purpose::LoadRecord => self.load_record_file(&path),
+                Purpose::ExportCsv => {
+                    let table = self.traces_table();
+                    if table.rows.is_empty() {
+                        self.error("nothing to export yet: run the simulation first");
+                    } else {
+                        self.writer.write_csv(ctx, path, table);
+                    }
+                }
+                Purpose::ExportPng => {
+                    let stem = path.with_extension("");
+                    let figs = self.plot_figures();
+                    self.writer.write_figures(ctx, stem, figs);
+                }
+            }
+        }
+    }
+}
