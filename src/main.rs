@@ -197,15 +197,8 @@ fn run(cmd: Command) -> Result<()> {
                         warnings.push(w.clone());
                     }
                     peak_input = record_peak(&rec);
-                    let dt = rec.dt;
-                    let motion = match (rec.xdd.clone(), rec.x.clone()) {
-                        (Some(xdd), Some(x)) => {
-                            // xdd drives the dynamics; x is only reported.
-                            SampledMotion::from_acceleration(dt, xdd).with_reported_position(x)
-                        }
-                        (Some(xdd), None) => SampledMotion::from_acceleration(dt, xdd),
-                        (None, Some(x)) => SampledMotion::from_position(dt, x),
-                        (None, None) => bail!("{}: no `x` or `xdd` column", path.display()),
+                    let Some(motion) = SampledMotion::from_record(&rec) else {
+                        bail!("{}: no `x` or `xdd` column", path.display())
                     };
                     let d = motion.duration_s();
                     (

@@ -172,6 +172,19 @@ impl SampledMotion {
         }
     }
 
+    /// The platform motion of a record (measured or excitation CSV): its `xdd` column drives
+    /// the dynamics when there is one (an `x` column beside it is only reported), else its
+    /// `x` column does; `None` for a record with neither.
+    pub fn from_record(rec: &crate::dataset::Record) -> Option<Self> {
+        let dt = rec.dt;
+        Some(match (rec.xdd.clone(), rec.x.clone()) {
+            (Some(xdd), Some(x)) => Self::from_acceleration(dt, xdd).with_reported_position(x),
+            (Some(xdd), None) => Self::from_acceleration(dt, xdd),
+            (None, Some(x)) => Self::from_position(dt, x),
+            (None, None) => return None,
+        })
+    }
+
     /// From a sampled acceleration only: velocity and position by trapezoidal integration
     /// from rest.
     pub fn from_acceleration(dt: f64, xdd: Vec<f64>) -> Self {

@@ -126,13 +126,8 @@ impl Dialogs {
 /// Reads a platform record (CSV with `t` and `x` and/or `xdd`, SI) for the live simulation.
 pub fn read_platform_record(path: &Path) -> anyhow::Result<SampledMotion> {
     let rec = dataset::read_record(path, RecordKind::Excitation)?;
-    let dt = rec.dt;
-    Ok(match (rec.xdd, rec.x) {
-        (Some(xdd), Some(x)) => SampledMotion::from_acceleration(dt, xdd).with_reported_position(x),
-        (Some(xdd), None) => SampledMotion::from_acceleration(dt, xdd),
-        (None, Some(x)) => SampledMotion::from_position(dt, x),
-        (None, None) => anyhow::bail!("{}: no `x` or `xdd` column", path.display()),
-    })
+    SampledMotion::from_record(&rec)
+        .ok_or_else(|| anyhow::anyhow!("{}: no `x` or `xdd` column", path.display()))
 }
 
 /// A CSV table ready to be written.
