@@ -13,6 +13,7 @@ use super::ab::{AbAction, AbView};
 use super::controls::{self, ExcitationAction, ExcitationEditor, ExcitationKind, LoadedRecord};
 use super::files::{self, CsvTable, Dialogs, Purpose, Writer};
 use super::frequency::{self, Analytic, Curves, Dwell, FreqAction, FreqView};
+use super::job::Waker;
 use super::measured::{MeasuredAction, MeasuredData};
 use super::schematic;
 use super::scopes;
@@ -182,8 +183,6 @@ impl FrameStats {
     }
 }
 
-type Waker = Arc<dyn Fn() + Send + Sync>;
-
 /// The seat-twin desktop app.
 pub struct SeatTwinApp {
     /// Persisted settings.
@@ -261,14 +260,14 @@ impl SeatTwinApp {
             },
             shipped: preset::shipped_presets(),
             engine,
-            waker,
+            waker: waker.clone(),
             engine_view: EngineView::default(),
             engine_error: None,
             engine_alive: true,
             want_running: true,
             traces: Traces::new(),
             analytic: Analytic::default(),
-            dwell: Dwell::default(),
+            dwell: Dwell::new(waker),
             dialogs: Dialogs::default(),
             writer: Writer::default(),
             notice,
@@ -673,7 +672,7 @@ impl SeatTwinApp {
         {
             self.notice = None;
         }
-        if dwell_busy || self.writer.busy > 0 || self.notice.is_some() || self.measured.busy() {
+        if dwell_busy || self.writer.busy() > 0 || self.notice.is_some() || self.measured.busy() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
         self.frame_stats.record(t0.elapsed().as_secs_f64() * 1e3);

@@ -1,12 +1,13 @@
-//! File dialogs and file work off the UI thread: rfd's async dialogs run to completion on
-//! their own thread (a cancelled or unavailable dialog gives `None`), and exports are written
-//! by a worker thread. Results come back over channels, polled each frame.
+//! File dialogs and file work off the UI thread, each a background [`Job`]: rfd's async
+//! dialogs run to completion on the job's thread (a cancelled or unavailable dialog gives no
+//! file), and exports are written by a job. Results are polled each frame.
 
+use super::job::{Job, Waker};
 use crate::dataset::{self, RecordKind};
 use crate::plot::{Figure, save_figure};
 use crate::scenario::SampledMotion;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::Arc;
 
 /// What a file dialog is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -54,24 +55,22 @@ impl Purpose {
     }
 }
 
-/// The file dialog in flight (one at a time) and its result channel.
-pub struct Dialogs {
-    tx: Sender<(Purpose, Vec<PathBuf>)>,
-    rx: Receiver<(Purpose, Vec<PathBuf>)>,
-    open: Option<Purpose>,
+/// A repaint waker for a job started from the UI.
+fn waker_of(ctx: &egui::Context) -> Waker {
+    let ctx = ctx.clone();
+    Arc::new(move || ctx.request_repaint())
 }
 
-impl Default for Dialogs {
-    fn default() -> Self {
-        let (tx, rx) = channel();
-        Self { tx, rx, open: None }
-    }
+/// The file dialog in flight (one at a time), as a background [`Job`].
+#[derive(Default)]
+pub struct Dialogs {
+    open: Option<(Purpose, Job<Vec<PathBuf>>)>,
 }
 
 impl Dialogs {
     /// The dialog currently open, if any.
     pub fn open(&self) -> Option<Purpose> {
-        self.open
+        self.open.as_ref().map(|(p, _)| *p)
     }
 
     /// Opens a dialog on its own thread; ignored while another is open.
@@ -79,47 +78,39 @@ impl Dialogs {
         if self.open.is_some() {
             return;
         }
-        let tx = self.tx.clone();
-        let ctx = ctx.clone();
         let name = suggested_name.to_owned();
-        let spawned = std::thread::Builder::new()
-            .name("seat-twin-dialog".into())
-            .spawn(move || {
-                let (fname, ext) = purpose.filter();
-                let mut dialog = rfd::AsyncFileDialog::new()
-                    .set_title(purpose.title())
-                    .add_filter(fname, ext);
-                if let Ok(dir) = std::env::current_dir() {
-                    dialog = dialog.set_directory(dir);
-                }
-                let picked: Vec<PathBuf> = if purpose.saves() {
-                    pollster::block_on(dialog.set_file_name(name).save_file())
-                        .into_iter()
-                        .collect::<Vec<_>>()
-                } else if purpose == Purpose::LoadMeasured {
-                    pollster::block_on(dialog.pick_files()).unwrap_or_default()
-                } else {
-                    pollster::block_on(dialog.pick_file())
-                        .into_iter()
-                        .collect::<Vec<_>>()
-                }
-                .into_iter()
-                .map(|h| h.path().to_path_buf())
-                .collect();
-                let _ = tx.send((purpose, picked));
-                ctx.request_repaint();
-            });
-        if spawned.is_ok() {
-            self.open = Some(purpose);
-        }
+        let job = Job::spawn("seat-twin-dialog", waker_of(ctx), move |_| {
+            let (fname, ext) = purpose.filter();
+            let mut dialog = rfd::AsyncFileDialog::new()
+                .set_title(purpose.title())
+                .add_filter(fname, ext);
+            if let Ok(dir) = std::env::current_dir() {
+                dialog = dialog.set_directory(dir);
+            }
+            let picked = if purpose.saves() {
+                pollster::block_on(dialog.set_file_name(name).save_file())
+                    .into_iter()
+                    .collect::<Vec<_>>()
+            } else if purpose == Purpose::LoadMeasured {
+                pollster::block_on(dialog.pick_files()).unwrap_or_default()
+            } else {
+                pollster::block_on(dialog.pick_file())
+                    .into_iter()
+                    .collect::<Vec<_>>()
+            };
+            Ok(picked.into_iter().map(|h| h.path().to_path_buf()).collect())
+        });
+        self.open = Some((purpose, job));
     }
 
-    /// A finished dialog: its purpose and the chosen files (empty: cancelled or no dialog
-    /// available on this desktop).
+    /// A finished dialog: its purpose and the chosen files (empty: cancelled, no dialog
+    /// available on this desktop, or the dialog's thread failed).
     pub fn poll(&mut self) -> Option<(Purpose, Vec<PathBuf>)> {
-        let r = self.rx.try_recv().ok()?;
+        let (purpose, job) = self.open.as_ref()?;
+        let picked = job.poll()?.unwrap_or_default();
+        let purpose = *purpose;
         self.open = None;
-        Some(r)
+        Some((purpose, picked))
     }
 }
 
@@ -140,19 +131,11 @@ pub struct CsvTable {
     pub rows: Vec<Vec<f64>>,
 }
 
-/// Background file writer: each job reports one message (success or error) when done.
+/// Background file writer: each write is a [`Job`] that reports one message (success or
+/// error) when done.
+#[derive(Default)]
 pub struct Writer {
-    tx: Sender<Result<String, String>>,
-    rx: Receiver<Result<String, String>>,
-    /// Jobs in flight.
-    pub busy: usize,
-}
-
-impl Default for Writer {
-    fn default() -> Self {
-        let (tx, rx) = channel();
-        Self { tx, rx, busy: 0 }
-    }
+    jobs: Vec<Job<String>>,
 }
 
 impl Writer {
@@ -161,22 +144,15 @@ impl Writer {
         ctx: &egui::Context,
         job: impl FnOnce() -> Result<String, String> + Send + 'static,
     ) {
-        let tx = self.tx.clone();
-        let ctx = ctx.clone();
-        let spawned = std::thread::Builder::new()
-            .name("seat-twin-writer".into())
-            .spawn(move || {
-                let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(job))
-                    .unwrap_or_else(|_| Err("internal error while writing".into()));
-                let _ = tx.send(r);
-                ctx.request_repaint();
-            });
-        match spawned {
-            Ok(_) => self.busy += 1,
-            Err(e) => {
-                let _ = self.tx.send(Err(format!("could not start a thread: {e}")));
-            }
-        }
+        self.jobs
+            .push(Job::spawn("seat-twin-writer", waker_of(ctx), move |_| {
+                job()
+            }));
+    }
+
+    /// Writes in flight.
+    pub fn busy(&self) -> usize {
+        self.jobs.len()
     }
 
     /// Writes a CSV table atomically.
@@ -212,10 +188,14 @@ impl Writer {
         });
     }
 
-    /// A finished job's message.
+    /// A finished write's message.
     pub fn poll(&mut self) -> Option<Result<String, String>> {
-        let r = self.rx.try_recv().ok()?;
-        self.busy = self.busy.saturating_sub(1);
+        let (i, r) = self
+            .jobs
+            .iter()
+            .enumerate()
+            .find_map(|(i, j)| j.poll().map(|r| (i, r)))?;
+        self.jobs.remove(i);
         Some(r)
     }
 }

@@ -6,9 +6,13 @@
 //! The analytic curves are recomputed on the frame the parameters change (the twin's
 //! linearisation only when a plant parameter changes, not for a gain).
 
+mod curves;
 mod dwell;
+mod stability;
 
+pub use curves::{Analytic, Curve, Curves, PlantCache};
 pub use dwell::Dwell;
+pub use stability::{remedy, stability_ui};
 
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};
 use super::units::{db, deg};
@@ -22,9 +26,6 @@ use egui_plot::{Line, LineStyle, MarkerShape, Plot, PlotPoint, PlotPoints, Point
 use num_complex::Complex64;
 use std::collections::BTreeSet;
 use std::f64::consts::PI;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
 /// Frequency range of the plots [Hz].
@@ -35,6 +36,8 @@ pub const N_POINTS: usize = 240;
 pub const DWELL_RANGE_HZ: (f64, f64) = (0.3, 30.0);
 /// Number of dwell points.
 pub const N_DWELL: usize = 14;
+/// Legend of the simulated transmissibility points.
+const T_DWELL_NAME: &str = "twin simulated (dwell)";
 /// Legend of the simulated u̇/V_in points.
 const BODE_DWELL_NAME: &str = "twin simulated (sine dwell, ≤ 1.1 V)";
 /// Highest frequency of the simulated u̇/V_in points [Hz] (Table 1's range: above it the
@@ -60,168 +63,6 @@ pub const LINEAR: Color32 = Color32::from_rgb(255, 127, 14);
 pub const PASSIVE: Color32 = Color32::from_rgb(44, 160, 44);
 /// Platform colour.
 pub const PLATFORM: Color32 = Color32::from_rgb(127, 127, 127);
-
-/// The plant part of the parameters: the linearisation's cache key. The gains and the delay
-/// act outside the linearised plant, so dragging Kp, Ki or τ reuses it.
-fn plant_key(p: &Params) -> Params {
-    let mut k = *p;
-    k.controller = ControllerParams::paper(0.0, 0.0);
-    k.plant.valve.tau_s = 0.0;
-    k.linear.tau_s = 0.0;
-    k
-}
-
-/// The linearised twin's open-loop responses on the plot grid and the margin grid.
-pub struct PlantCache {
-    key: Params,
-    /// On the plot frequencies (delay excluded).
-    pub points: Vec<OpenLoop>,
-    margin_freqs: Vec<f64>,
-    margin_points: Vec<OpenLoop>,
-}
-
-impl PlantCache {
-    /// Linearises the twin (delay-free) and evaluates it on both grids.
-    pub fn new(params: &Params, freqs: &[f64]) -> Self {
-        let key = plant_key(params);
-        let lin0 = fr::linearise_twin(&key);
-        let points = freqs.iter().map(|&f| lin0.open_loop(f)).collect();
-        let margin_freqs = fr::margin_frequencies();
-        let margin_points = margin_freqs.iter().map(|&f| lin0.open_loop(f)).collect();
-        Self {
-            key,
-            points,
-            margin_freqs,
-            margin_points,
-        }
-    }
-
-    /// Loop margins of the twin for a controller and delay (as [`fr::twin_margins`]).
-    pub fn margins(&self, law: &ControlLaw, tau_s: f64) -> LoopMargins {
-        fr::law_margins_on(
-            &self.margin_freqs,
-            self.margin_points.iter().copied(),
-            law,
-            tau_s,
-        )
-    }
-}
-
-/// One curve in plot coordinates `(log10 f, value)`.
-pub type Curve = Vec<PlotPoint>;
-
-/// The analytic frequency responses for one parameter set.
-#[derive(Debug, Clone, Default)]
-pub struct Curves {
-    /// Parameters they were computed for.
-    pub params: Option<Params>,
-    /// |T| [dB] of linear, twin (linearised), passive.
-    pub t_mag: [Curve; 3],
-    /// Phase of T [deg] of linear, twin, passive (unwrapped).
-    pub t_phase: [Curve; 3],
-    /// |u̇/V_in| [dB re 1 (mm/s)/V] of twin (linearised) and G(s).
-    pub bode_mag: [Curve; 2],
-    /// Phase of `u̇/V_in` [deg] of twin and G(s).
-    pub bode_phase: [Curve; 2],
-    /// |T| = 1 crossings of linear and twin.
-    pub crossings: [Vec<Crossing>; 2],
-    /// Position-loop margins of linear and twin.
-    pub margins: [Option<LoopMargins>; 2],
-    /// Time the last recomputation took [ms].
-    pub compute_ms: f64,
-}
-
-impl Curves {
-    /// Whether either active loop is unstable.
-    pub fn unstable(&self) -> bool {
-        self.margins.iter().flatten().any(|m| !m.stable())
-    }
-}
-
-/// Cached analytic curves plus the linearised twin.
-#[derive(Default)]
-pub struct Analytic {
-    curves: Curves,
-    plant: Option<PlantCache>,
-    freqs: Vec<f64>,
-}
-
-impl Analytic {
-    /// The current curves.
-    pub fn curves(&self) -> &Curves {
-        &self.curves
-    }
-
-    /// Recomputes if `params` differ from the last call; returns true if it did.
-    pub fn update(&mut self, params: &Params) -> bool {
-        if self.curves.params.as_ref() == Some(params) {
-            return false;
-        }
-        let t0 = Instant::now();
-        if self.freqs.is_empty() {
-            self.freqs = fr::log_space(F_RANGE_HZ.0, F_RANGE_HZ.1, N_POINTS);
-        }
-        let key = plant_key(params);
-        if self.plant.as_ref().is_none_or(|c| c.key != key) {
-            self.plant = Some(PlantCache::new(params, &self.freqs));
-        }
-        let Some(plant) = self.plant.as_ref() else {
-            return false;
-        };
-        let tau = params.plant.valve.tau_s;
-        let f = &self.freqs;
-        let lx: Vec<f64> = f.iter().map(|x| x.log10()).collect();
-        let t_lin: Vec<Complex64> = f
-            .iter()
-            .map(|&x| fr::linear_transmissibility(params, x))
-            .collect();
-        let t_twin: Vec<Complex64> = plant
-            .points
-            .iter()
-            .map(|p| p.transmissibility(&ControlLaw::new(params), tau))
-            .collect();
-        let t_pas: Vec<Complex64> = f
-            .iter()
-            .map(|&x| fr::passive_transmissibility(params, x))
-            .collect();
-        let b_twin: Vec<Complex64> = plant.points.iter().map(|p| p.bode(tau)).collect();
-        let b_g: Vec<Complex64> = f.iter().map(|&x| fr::linear_bode(params, x)).collect();
-        let mag = |v: &[Complex64], scale: f64| -> Curve {
-            lx.iter()
-                .zip(v)
-                .map(|(&x, c)| PlotPoint::new(x, db(c.norm() * scale)))
-                .filter(|p| p.y.is_finite())
-                .collect()
-        };
-        let phase = |v: &[Complex64]| -> Curve {
-            let ph = fr::unwrap_phase(&v.iter().map(|c| c.arg()).collect::<Vec<_>>());
-            lx.iter()
-                .zip(ph)
-                .map(|(&x, p)| PlotPoint::new(x, deg(p)))
-                .filter(|p| p.y.is_finite())
-                .collect()
-        };
-        let mags = |v: &[Complex64]| v.iter().map(|c| c.norm()).collect::<Vec<_>>();
-        self.curves = Curves {
-            params: Some(*params),
-            t_mag: [mag(&t_lin, 1.0), mag(&t_twin, 1.0), mag(&t_pas, 1.0)],
-            t_phase: [phase(&t_lin), phase(&t_twin), phase(&t_pas)],
-            bode_mag: [mag(&b_twin, 1e3), mag(&b_g, 1e3)],
-            bode_phase: [phase(&b_twin), phase(&b_g)],
-            crossings: [
-                fr::unity_crossings(f, &mags(&t_lin)),
-                fr::unity_crossings(f, &mags(&t_twin)),
-            ],
-            margins: [
-                Some(fr::linear_margins(params)),
-                Some(plant.margins(&ControlLaw::new(params), tau)),
-            ],
-            compute_ms: 0.0,
-        };
-        self.curves.compute_ms = t0.elapsed().as_secs_f64() * 1e3;
-        true
-    }
-}
 
 /// Formats a log10-frequency axis mark as Hz.
 fn hz_axis(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
@@ -341,6 +182,189 @@ pub fn shown_phase(c: &[PlotPoint], unwrapped: bool) -> Vec<Vec<PlotPoint>> {
     out
 }
 
+/// One analytic curve of a frequency plot: its legend name, colour and stroke.
+#[derive(Clone, Copy)]
+struct CurveStyle {
+    name: &'static str,
+    color: Color32,
+    width: f32,
+    style: LineStyle,
+}
+
+/// Each curve with its style.
+fn styled<'a>(styles: &[CurveStyle], curves: &'a [Curve]) -> Vec<(CurveStyle, &'a [PlotPoint])> {
+    styles
+        .iter()
+        .zip(curves)
+        .map(|(s, c)| (*s, c.as_slice()))
+        .collect()
+}
+
+/// What one of the four frequency plots shows: its lines (with their styles), the simulated
+/// dwell points if shown, and whether the y axis is a phase (wrapped unless unwrapped).
+struct FreqPanel<'a> {
+    id: &'static str,
+    y_label: &'static str,
+    unit: &'static str,
+    lines: Vec<(CurveStyle, &'a [PlotPoint])>,
+    dwell: Option<(&'static str, Color32, &'a [PlotPoint])>,
+    phase: bool,
+}
+
+impl FreqPanel<'_> {
+    /// The legend row (one clickable entry per line and the dwell points), then the plot;
+    /// `extra` draws what belongs to this plot only (reference lines, markers). The plot
+    /// takes its share of the height left once its legend is drawn (`remaining` plots,
+    /// this one included, each with a legend row), so a legend that wraps to two rows never
+    /// pushes the last plot out of the window.
+    fn ui(
+        &self,
+        ui: &mut egui::Ui,
+        remaining: usize,
+        unwrapped: bool,
+        hidden: &mut BTreeSet<String>,
+        extra: impl FnOnce(&mut egui_plot::PlotUi<'_>),
+    ) {
+        let mut items: Vec<LegendItem<'_>> = self
+            .lines
+            .iter()
+            .map(|(c, _)| LegendItem {
+                name: c.name,
+                color: c.color,
+                swatch: Swatch::Line(c.width, c.style),
+            })
+            .collect();
+        if let Some((name, color, _)) = self.dwell {
+            items.push(LegendItem {
+                name,
+                color,
+                swatch: Swatch::Marker,
+            });
+        }
+        legend_ui(ui, self.id, &items, hidden);
+        let legend_h = 18.0 + ui.spacing().item_spacing.y;
+        let n = remaining.max(1) as f32;
+        let height = ((ui.available_height() - 12.0 - (n - 1.0) * legend_h) / n).max(80.0);
+        let shown = |name: &str| !plotkit::hidden(hidden, self.id, name);
+        let segments = |c: &[PlotPoint]| {
+            if self.phase {
+                shown_phase(c, unwrapped)
+            } else {
+                vec![c.to_vec()]
+            }
+        };
+        freq_plot(self.id, self.y_label, self.unit, height).show(ui, |pu| {
+            for (c, points) in self.lines.iter().filter(|(c, _)| shown(c.name)) {
+                for seg in segments(points) {
+                    pu.line(
+                        Line::new(c.name, PlotPoints::Owned(seg))
+                            .color(c.color)
+                            .width(c.width)
+                            .style(c.style),
+                    );
+                }
+            }
+            if let Some((name, color, points)) = self.dwell.filter(|(n, ..)| shown(n)) {
+                pu.points(
+                    Points::new(name, PlotPoints::Owned(segments(points).concat()))
+                        .color(color)
+                        .shape(MarkerShape::Diamond)
+                        .radius(5.0)
+                        .filled(true),
+                );
+            }
+            extra(pu);
+        });
+    }
+}
+
+/// The dwell progress row: progress and Cancel, "up to date", or why nothing is shown.
+fn dwell_status_ui(ui: &mut egui::Ui, dwell: &mut Dwell, params: &Params, unstable: bool) {
+    ui.label(RichText::new("Simulated twin (sine dwell):").strong());
+    match dwell.progress() {
+        _ if unstable => {
+            ui.label("not shown: the closed loop is unstable");
+        }
+        Some((done, total)) => {
+            ui.add(
+                egui::ProgressBar::new(done as f32 / total.max(1) as f32)
+                    .desired_width(120.0)
+                    .text(format!("{done}/{total}")),
+            );
+            if ui.button("Cancel").clicked() {
+                dwell.cancel();
+            }
+        }
+        None if dwell.is_current(params) => {
+            ui.label(format!("{} points, up to date", dwell.mag.len()));
+        }
+        None if dwell.cancelled => {
+            ui.label("cancelled");
+            if ui.button("Recompute").clicked() {
+                dwell.start(params);
+            }
+        }
+        None => {
+            ui.label("waiting for the sliders to settle…");
+        }
+    }
+    if !unstable && !dwell.failures.is_empty() {
+        ui.colored_label(
+            Color32::from_rgb(200, 60, 40),
+            format!("{} point(s) diverged", dwell.failures.len()),
+        )
+        .on_hover_text(
+            dwell
+                .failures
+                .iter()
+                .map(|(f, r)| format!("{f:.2} Hz: {r}"))
+                .collect::<Vec<_>>()
+                .join("\n"),
+        );
+    }
+}
+
+/// The |T| = 1 crossings (end of the isolation band) of the linear model and the twin: a
+/// dotted line and a label each, at the top of the plot.
+fn crossing_marks(pu: &mut egui_plot::PlotUi<'_>, curves: &Curves, colors: [Color32; 2]) {
+    let top = curves.t_mag[0]
+        .iter()
+        .chain(&curves.t_mag[1])
+        .map(|p| p.y)
+        .fold(f64::NEG_INFINITY, f64::max)
+        .max(0.0);
+    for (i, cs) in curves.crossings.iter().enumerate() {
+        for c in cs.iter().filter(|c| c.rising).take(1) {
+            let x = c.freq_hz.log10();
+            pu.vline(
+                VLine::new("", x)
+                    .color(colors[i].gamma_multiply(0.8))
+                    .style(LineStyle::dotted_dense()),
+            );
+            // Linear to the right of its line, twin to the left.
+            let (text, anchor) = if i == 0 {
+                (
+                    format!(" |T|=1 @ {:.2} Hz", c.freq_hz),
+                    egui::Align2::LEFT_TOP,
+                )
+            } else {
+                (
+                    format!("|T|=1 @ {:.2} Hz ", c.freq_hz),
+                    egui::Align2::RIGHT_TOP,
+                )
+            };
+            pu.text(
+                egui_plot::Text::new(
+                    "",
+                    PlotPoint::new(x, top),
+                    RichText::new(text).color(colors[i]).small(),
+                )
+                .anchor(anchor),
+            );
+        }
+    }
+}
+
 /// Draws the stability banner (if needed), the four frequency plots and the dwell progress.
 pub fn frequency_ui(
     ui: &mut egui::Ui,
@@ -351,49 +375,9 @@ pub fn frequency_ui(
 ) -> FreqAction {
     let action = stability_ui(ui, curves, view.last_stable);
     let unstable = curves.unstable();
-    ui.horizontal(|ui| {
-        ui.label(RichText::new("Simulated twin (sine dwell):").strong());
-        match dwell.progress() {
-            _ if unstable => {
-                ui.label("not shown: the closed loop is unstable");
-            }
-            Some((done, total)) => {
-                ui.add(
-                    egui::ProgressBar::new(done as f32 / total.max(1) as f32)
-                        .desired_width(120.0)
-                        .text(format!("{done}/{total}")),
-                );
-                if ui.button("Cancel").clicked() {
-                    dwell.cancel();
-                }
-            }
-            None if dwell.is_current(params) => {
-                ui.label(format!("{} points, up to date", dwell.mag.len()));
-            }
-            None if dwell.cancelled => {
-                ui.label("cancelled");
-                if ui.button("Recompute").clicked() {
-                    dwell.start(params);
-                }
-            }
-            None => {
-                ui.label("waiting for the sliders to settle…");
-            }
-        }
-        if !unstable && !dwell.failures.is_empty() {
-            ui.colored_label(
-                Color32::from_rgb(200, 60, 40),
-                format!("{} point(s) diverged", dwell.failures.len()),
-            )
-            .on_hover_text(
-                dwell
-                    .failures
-                    .iter()
-                    .map(|(f, r)| format!("{f:.2} Hz: {r}"))
-                    .collect::<Vec<_>>()
-                    .join("\n"),
-            );
-        }
+    // Wrapped, so that a long status (progress, failures) never widens the column.
+    ui.horizontal_wrapped(|ui| {
+        dwell_status_ui(ui, dwell, params, unstable);
         ui.separator();
         ui.checkbox(&mut *view.phase_unwrapped, "unwrapped phase")
             .on_hover_text("Off: phase wrapped into ±180°. On: continuous (unwrapped) phase.");
@@ -402,416 +386,107 @@ pub fn frequency_ui(
     let show_dwell = !unstable && (dwell.is_current(params) || dwell.progress().is_some());
     let hidden = view.hidden;
     let unwrapped = *view.phase_unwrapped;
-    let legend_h = 18.0 + ui.spacing().item_spacing.y;
-    let h = ((ui.available_height() - 12.0 - 4.0 * legend_h) / 4.0).max(80.0);
-    let crossings = curves.crossings.clone();
     // Unstable: the active curves are faint (not a steady state).
     let active = |c: Color32| if unstable { c.gamma_multiply(0.45) } else { c };
-    let names = ["linear active", "twin active (linearised)", "passive"];
-    let colors = [active(LINEAR), active(TWIN), PASSIVE];
-    let styles = [
-        (1.8, LineStyle::dashed_dense()),
-        (2.4, LineStyle::Solid),
-        (1.6, LineStyle::dotted_dense()),
+    let t_styles = [
+        CurveStyle {
+            name: "linear active",
+            color: active(LINEAR),
+            width: 1.8,
+            style: LineStyle::dashed_dense(),
+        },
+        CurveStyle {
+            name: "twin active (linearised)",
+            color: active(TWIN),
+            width: 2.4,
+            style: LineStyle::Solid,
+        },
+        CurveStyle {
+            name: "passive",
+            color: PASSIVE,
+            width: 1.6,
+            style: LineStyle::dotted_dense(),
+        },
     ];
-    let dwell_name = "twin simulated (dwell)";
-    let dwell_c = dwell_color(ui);
-    let reference = view.reference;
     let (ref_w, ref_style) = super::scopes::style_of(super::scopes::Model::Reference);
-    let t_items = |ui: &mut egui::Ui, id: &str, hidden: &mut BTreeSet<String>| {
-        let mut items: Vec<LegendItem<'_>> = (0..3)
-            .map(|i| LegendItem {
-                name: names[i],
-                color: colors[i],
-                swatch: Swatch::Line(styles[i].0, styles[i].1),
-            })
-            .collect();
-        if reference.is_some() {
-            items.push(LegendItem {
-                name: REFERENCE_NAME,
-                color: super::scopes::REFERENCE,
-                swatch: Swatch::Line(ref_w, ref_style),
-            });
-        }
-        if show_dwell {
-            items.push(LegendItem {
-                name: dwell_name,
-                color: dwell_c,
-                swatch: Swatch::Marker,
-            });
-        }
-        legend_ui(ui, id, &items, hidden);
+    let reference_style = CurveStyle {
+        name: REFERENCE_NAME,
+        color: super::scopes::REFERENCE,
+        width: ref_w,
+        style: ref_style,
     };
-
-    t_items(ui, "t_mag", hidden);
-    let hid = hidden.clone();
-    freq_plot("t_mag", "|T| [dB]", "dB", h).show(ui, |pu| {
+    let dwell_c = dwell_color(ui);
+    let t_mag = FreqPanel {
+        id: "t_mag",
+        y_label: "|T| [dB]",
+        unit: "dB",
+        lines: styled(&t_styles, &curves.t_mag)
+            .into_iter()
+            .chain(
+                view.reference
+                    .map(|r| (reference_style, r.t_mag[1].as_slice())),
+            )
+            .collect(),
+        dwell: show_dwell.then_some((T_DWELL_NAME, dwell_c, dwell.mag.as_slice())),
+        phase: false,
+    };
+    let t_phase = FreqPanel {
+        id: "t_phase",
+        y_label: "phase T [deg]",
+        unit: "°",
+        lines: styled(&t_styles, &curves.t_phase)
+            .into_iter()
+            .chain(
+                view.reference
+                    .map(|r| (reference_style, r.t_phase[1].as_slice())),
+            )
+            .collect(),
+        dwell: show_dwell.then_some((T_DWELL_NAME, dwell_c, dwell.phase.as_slice())),
+        phase: true,
+    };
+    let b_styles = [
+        CurveStyle {
+            name: "twin (linearised)",
+            color: TWIN,
+            width: 2.4,
+            style: LineStyle::Solid,
+        },
+        CurveStyle {
+            name: "G(s)",
+            color: LINEAR,
+            width: 1.8,
+            style: LineStyle::dashed_dense(),
+        },
+    ];
+    let bode_mag = FreqPanel {
+        id: "bode_mag",
+        y_label: "|du/dt / V_in| [dB]",
+        unit: "dB re (mm/s)/V",
+        lines: styled(&b_styles, &curves.bode_mag),
+        dwell: show_dwell.then_some((BODE_DWELL_NAME, dwell_c, dwell.bode_mag.as_slice())),
+        phase: false,
+    };
+    let bode_phase = FreqPanel {
+        id: "bode_phase",
+        y_label: "phase [deg]",
+        unit: "°",
+        lines: styled(&b_styles, &curves.bode_phase),
+        dwell: show_dwell.then_some((BODE_DWELL_NAME, dwell_c, dwell.bode_phase.as_slice())),
+        phase: true,
+    };
+    t_mag.ui(ui, 4, unwrapped, hidden, |pu| {
         pu.hline(
             egui_plot::HLine::new("|T| = 1", 0.0)
                 .color(Color32::GRAY)
                 .style(LineStyle::dashed_dense()),
         );
-        for (i, c) in curves.t_mag.iter().enumerate() {
-            if plotkit::hidden(&hid, "t_mag", names[i]) {
-                continue;
-            }
-            pu.line(
-                Line::new(names[i], c.as_slice())
-                    .color(colors[i])
-                    .width(styles[i].0)
-                    .style(styles[i].1),
-            );
-        }
-        if let Some(r) = reference
-            && !plotkit::hidden(&hid, "t_mag", REFERENCE_NAME)
-        {
-            pu.line(
-                Line::new(REFERENCE_NAME, r.t_mag[1].as_slice())
-                    .color(super::scopes::REFERENCE)
-                    .width(ref_w)
-                    .style(ref_style),
-            );
-        }
-        if show_dwell && !plotkit::hidden(&hid, "t_mag", dwell_name) {
-            pu.points(
-                Points::new(dwell_name, dwell.mag.as_slice())
-                    .color(dwell_c)
-                    .shape(MarkerShape::Diamond)
-                    .radius(5.0)
-                    .filled(true),
-            );
-        }
-        if unstable {
-            // The |T| = 1 crossings of an unstable loop mean nothing.
-            return;
-        }
-        // |T| = 1 crossings (end of the isolation band): a dotted line and a label.
-        let top = curves.t_mag[0]
-            .iter()
-            .chain(&curves.t_mag[1])
-            .map(|p| p.y)
-            .fold(f64::NEG_INFINITY, f64::max)
-            .max(0.0);
-        for (i, cs) in crossings.iter().enumerate() {
-            for c in cs.iter().filter(|c| c.rising).take(1) {
-                let x = c.freq_hz.log10();
-                pu.vline(
-                    VLine::new("", x)
-                        .color(colors[i].gamma_multiply(0.8))
-                        .style(LineStyle::dotted_dense()),
-                );
-                pu.text(
-                    egui_plot::Text::new(
-                        "",
-                        PlotPoint::new(x, top),
-                        RichText::new(if i == 0 {
-                            format!(" |T|=1 @ {:.2} Hz", c.freq_hz)
-                        } else {
-                            format!("|T|=1 @ {:.2} Hz ", c.freq_hz)
-                        })
-                        .color(colors[i])
-                        .small(),
-                    )
-                    // Linear to the right of its line, twin to the left.
-                    .anchor(if i == 0 {
-                        egui::Align2::LEFT_TOP
-                    } else {
-                        egui::Align2::RIGHT_TOP
-                    }),
-                );
-            }
+        // The |T| = 1 crossings of an unstable loop mean nothing.
+        if !unstable {
+            crossing_marks(pu, curves, [t_styles[0].color, t_styles[1].color]);
         }
     });
-    t_items(ui, "t_phase", hidden);
-    let hid = hidden.clone();
-    freq_plot("t_phase", "phase T [deg]", "°", h).show(ui, |pu| {
-        for (i, c) in curves.t_phase.iter().enumerate() {
-            if plotkit::hidden(&hid, "t_phase", names[i]) {
-                continue;
-            }
-            for seg in shown_phase(c, unwrapped) {
-                pu.line(
-                    Line::new(names[i], PlotPoints::Owned(seg))
-                        .color(colors[i])
-                        .width(styles[i].0)
-                        .style(styles[i].1),
-                );
-            }
-        }
-        if let Some(r) = reference
-            && !plotkit::hidden(&hid, "t_phase", REFERENCE_NAME)
-        {
-            for seg in shown_phase(&r.t_phase[1], unwrapped) {
-                pu.line(
-                    Line::new(REFERENCE_NAME, PlotPoints::Owned(seg))
-                        .color(super::scopes::REFERENCE)
-                        .width(ref_w)
-                        .style(ref_style),
-                );
-            }
-        }
-        if show_dwell && !plotkit::hidden(&hid, "t_phase", dwell_name) {
-            let pts: Vec<PlotPoint> = shown_phase(&dwell.phase, unwrapped).concat();
-            pu.points(
-                Points::new(dwell_name, PlotPoints::Owned(pts))
-                    .color(dwell_c)
-                    .shape(MarkerShape::Diamond)
-                    .radius(5.0)
-                    .filled(true),
-            );
-        }
-    });
-    let b_names = ["twin (linearised)", "G(s)", BODE_DWELL_NAME];
-    let b_items = |ui: &mut egui::Ui, id: &str, hidden: &mut BTreeSet<String>| {
-        let mut items = vec![
-            LegendItem {
-                name: b_names[0],
-                color: TWIN,
-                swatch: Swatch::Line(2.4, LineStyle::Solid),
-            },
-            LegendItem {
-                name: b_names[1],
-                color: LINEAR,
-                swatch: Swatch::Line(1.8, LineStyle::dashed_dense()),
-            },
-        ];
-        if show_dwell {
-            items.push(LegendItem {
-                name: b_names[2],
-                color: dwell_c,
-                swatch: Swatch::Marker,
-            });
-        }
-        legend_ui(ui, id, &items, hidden);
-    };
-    let bode = |ui: &mut egui::Ui,
-                id: &str,
-                y_label: &str,
-                unit: &'static str,
-                lines: &[Curve; 2],
-                points: &[PlotPoint],
-                phase: bool,
-                hid: &BTreeSet<String>| {
-        freq_plot(id, y_label, unit, h).show(ui, |pu| {
-            let seg = |c: &[PlotPoint]| {
-                if phase {
-                    shown_phase(c, unwrapped)
-                } else {
-                    vec![c.to_vec()]
-                }
-            };
-            if !plotkit::hidden(hid, id, b_names[0]) {
-                for s in seg(&lines[0]) {
-                    pu.line(
-                        Line::new(b_names[0], PlotPoints::Owned(s))
-                            .color(TWIN)
-                            .width(2.4),
-                    );
-                }
-            }
-            if !plotkit::hidden(hid, id, b_names[1]) {
-                for s in seg(&lines[1]) {
-                    pu.line(
-                        Line::new(b_names[1], PlotPoints::Owned(s))
-                            .color(LINEAR)
-                            .width(1.8)
-                            .style(LineStyle::dashed_dense()),
-                    );
-                }
-            }
-            if show_dwell && !plotkit::hidden(hid, id, b_names[2]) {
-                pu.points(
-                    Points::new(b_names[2], PlotPoints::Owned(seg(points).concat()))
-                        .color(dwell_c)
-                        .shape(MarkerShape::Diamond)
-                        .radius(5.0)
-                        .filled(true),
-                );
-            }
-        });
-    };
-    b_items(ui, "bode_mag", hidden);
-    let hid = hidden.clone();
-    bode(
-        ui,
-        "bode_mag",
-        "|du/dt / V_in| [dB]",
-        "dB re (mm/s)/V",
-        &curves.bode_mag,
-        &dwell.bode_mag,
-        false,
-        &hid,
-    );
-    b_items(ui, "bode_phase", hidden);
-    let hid = hidden.clone();
-    bode(
-        ui,
-        "bode_phase",
-        "phase [deg]",
-        "°",
-        &curves.bode_phase,
-        &dwell.bode_phase,
-        true,
-        &hid,
-    );
+    t_phase.ui(ui, 3, unwrapped, hidden, |_| {});
+    bode_mag.ui(ui, 2, unwrapped, hidden, |_| {});
+    bode_phase.ui(ui, 1, unwrapped, hidden, |_| {});
     action
-}
-
-fn margin_text(m: &LoopMargins) -> String {
-    let gm = if m.gain_margin.is_finite() && m.gain_margin <= 0.0 {
-        // No gain keeps it stable (positive feedback).
-        "−∞ dB".into()
-    } else if m.gain_margin.is_finite() {
-        format!("{:.1} dB", db(m.gain_margin))
-    } else {
-        "∞".into()
-    };
-    let pm = if m.phase_margin_deg.is_finite() {
-        format!("{:.0}°", m.phase_margin_deg)
-    } else if m.phase_margin_deg > 0.0 {
-        "∞".into()
-    } else {
-        "−∞".into()
-    };
-    format!("GM {gm}, PM {pm}")
-}
-
-/// What to change to make the loop stable, from the stability condition itself: a positive
-/// Kp is positive feedback at any gain (the margins are those of `V = Kp·u` with
-/// `Kp < 0`); otherwise the smallest gain margin says how far |Kp| must come down.
-pub fn remedy(curves: &Curves) -> String {
-    let Some(p) = curves.params else {
-        return String::new();
-    };
-    let kp = p.controller.kp_v_per_m;
-    if kp > 0.0 {
-        return format!(
-            "Kp = {kp:.1} V/m feeds the stroke back with the wrong sign (positive feedback, \
-             unstable at any gain): use a negative Kp."
-        );
-    }
-    let unstable: Vec<&LoopMargins> = curves
-        .margins
-        .iter()
-        .flatten()
-        .filter(|m| !m.stable())
-        .collect();
-    let gm = unstable
-        .iter()
-        .map(|m| m.gain_margin)
-        .filter(|g| g.is_finite() && *g > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    if gm < 1.0 {
-        let limit = kp.abs() * gm;
-        format!(
-            "|Kp| = {:.1} V/m is above the stability limit: keep Kp between −{limit:.1} and 0 V/m \
-             (less |Kp| or a shorter τ).",
-            kp.abs()
-        )
-    } else {
-        "The phase margin is negative: reduce |Kp| or τ.".into()
-    }
-}
-
-/// The stability line: margins, and a red banner with the remedy when a loop is unstable.
-/// Returns the button the user pressed.
-pub fn stability_ui(
-    ui: &mut egui::Ui,
-    curves: &Curves,
-    last_stable: Option<ControllerParams>,
-) -> FreqAction {
-    let mut action = FreqAction::None;
-    let [lin, twin] = &curves.margins;
-    let (Some(lin), Some(twin)) = (lin, twin) else {
-        return action;
-    };
-    if curves.unstable() {
-        egui::Frame::new()
-            .fill(Color32::from_rgb(180, 30, 30))
-            .inner_margin(6.0)
-            .corner_radius(4.0)
-            .show(ui, |ui| {
-                ui.set_width(ui.available_width());
-                ui.label(
-                    RichText::new(format!(
-                        "UNSTABLE closed loop — twin: {}; linear: {}. {} The faint active \
-                         curves are not a steady state.",
-                        margin_text(twin),
-                        margin_text(lin),
-                        remedy(curves),
-                    ))
-                    .color(Color32::WHITE)
-                    .strong(),
-                );
-                if let Some(g) = last_stable
-                    && ui
-                        .button("Reset to last stable gains")
-                        .on_hover_text(format!(
-                            "{}, and the simulation from rest",
-                            super::format::controller_text(&g)
-                        ))
-                        .clicked()
-                {
-                    action = FreqAction::ResetToStableGains;
-                }
-            });
-    } else {
-        let edge = |cs: &[Crossing]| {
-            cs.iter()
-                .find(|c| c.rising)
-                .map(|c| format!("{:.2} Hz", c.freq_hz))
-                .unwrap_or_else(|| "none".into())
-        };
-        ui.label(format!(
-            "Stable. Twin {}, isolation up to {}; linear {}, up to {}.",
-            margin_text(twin),
-            edge(&curves.crossings[1]),
-            margin_text(lin),
-            edge(&curves.crossings[0]),
-        ));
-    }
-    action
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The cached plant responses reproduce the engine's linearised-twin responses for any
-    /// gains and delay (the fast path used while dragging Kp, Ki, τ).
-    #[test]
-    fn cached_plant_matches_the_linearised_twin() {
-        let mut p = Params::paper();
-        p.controller.kp_v_per_m = -37.0;
-        p.controller.ki_v_s_per_m = -3.0;
-        p.plant.valve.tau_s = 0.021;
-        let freqs = fr::log_space(0.2, 50.0, 9);
-        let cache = PlantCache::new(&p, &freqs);
-        let lin = fr::linearise_twin(&p);
-        for (pt, &f) in cache.points.iter().zip(&freqs) {
-            let (a, b) = (
-                pt.transmissibility(&ControlLaw::new(&p), 0.021),
-                lin.transmissibility(&ControlLaw::new(&p), f),
-            );
-            assert!(
-                (a - b).norm() <= 1e-6 * b.norm().max(1e-3),
-                "T at {f} Hz: {a} vs {b}"
-            );
-            let (a, b) = (pt.bode(0.021), lin.bode(f));
-            assert!(
-                (a - b).norm() <= 1e-6 * b.norm(),
-                "bode at {f} Hz: {a} vs {b}"
-            );
-        }
-        let law = ControlLaw::new(&p);
-        let (a, b) = (cache.margins(&law, 0.021), fr::twin_margins(&lin, &law));
-        assert!(
-            (a.gain_margin - b.gain_margin).abs() <= 1e-6 * b.gain_margin.abs(),
-            "{a:?} {b:?}"
-        );
-        assert!(
-            (a.phase_margin_deg - b.phase_margin_deg).abs() < 1e-6,
-            "{a:?} {b:?}"
-        );
-    }
 }

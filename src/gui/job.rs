@@ -1,30 +1,46 @@
-//! One background job: a worker thread with progress, cancel and a result polled each frame.
-//! A panic inside the work is caught and reported as the job's error, never taking the UI
-//! down.
+//! One background job: a worker thread with progress, cancel, streamed partial results and a
+//! final result, polled each frame. A panic inside the work is caught and reported as the
+//! job's error, never taking the UI down. Every background task of the app runs on it: the
+//! sine dwell (streams its points), the file dialogs and writers, the measured-record loader,
+//! replays and calibration, and Tune.
 //!
 //! ```text
 //!   Job::spawn(work) ──► thread: work(&ctx) ──► Result<T, String> ──► poll() (once)
 //!        │                 ctx.report(done, total) ──► progress()
-//!        └── cancel() ──► ctx.cancelled() / ctx.cancel_flag() (the work stops itself)
+//!        │                 ctx.send(part)          ──► drain() (each frame)
+//!        └── cancel() / drop ──► ctx.cancelled() / ctx.cancel_flag() (the work stops itself)
 //! ```
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 
 /// Called when the job reported progress or finished (the app repaints).
 pub type Waker = Arc<dyn Fn() + Send + Sync>;
 
-/// What the work sees of its job: the cancel flag and the progress counters.
-#[derive(Clone)]
-pub struct JobCtx {
+/// What the work sees of its job: the cancel flag, the progress counters and the channel of
+/// partial results `P` (none by default).
+pub struct JobCtx<P = ()> {
     cancel: Arc<AtomicBool>,
     done: Arc<AtomicUsize>,
     total: Arc<AtomicUsize>,
+    parts: Sender<P>,
     waker: Waker,
 }
 
-impl JobCtx {
+impl<P> Clone for JobCtx<P> {
+    fn clone(&self) -> Self {
+        Self {
+            cancel: self.cancel.clone(),
+            done: self.done.clone(),
+            total: self.total.clone(),
+            parts: self.parts.clone(),
+            waker: self.waker.clone(),
+        }
+    }
+}
+
+impl<P> JobCtx<P> {
     /// Reports `done` of `total` steps.
     pub fn report(&self, done: usize, total: usize) {
         self.done.store(done, Ordering::Relaxed);
@@ -32,7 +48,15 @@ impl JobCtx {
         (self.waker)();
     }
 
-    /// Whether the UI asked the job to stop.
+    /// Hands a partial result to the UI (read with [`Job::drain`]). Returns false when nobody
+    /// will read it any more (the job was dropped): the work should stop.
+    pub fn send(&self, part: P) -> bool {
+        let sent = self.parts.send(part).is_ok();
+        (self.waker)();
+        sent
+    }
+
+    /// Whether the UI asked the job to stop (or dropped it).
     pub fn cancelled(&self) -> bool {
         self.cancel.load(Ordering::Relaxed)
     }
@@ -43,25 +67,35 @@ impl JobCtx {
     }
 }
 
-/// A job running (or finished) on its own thread, producing a `T`.
-pub struct Job<T> {
-    ctx: JobCtx,
+/// A job running (or finished) on its own thread, producing partial results `P` and then a
+/// `T`. Dropping it cancels the work (nobody will read its result).
+pub struct Job<T, P = ()> {
+    ctx: JobCtx<P>,
     result: Receiver<Result<T, String>>,
+    parts: Receiver<P>,
     finished: std::cell::Cell<bool>,
 }
 
-impl<T: Send + 'static> Job<T> {
+impl<T, P> Drop for Job<T, P> {
+    fn drop(&mut self) {
+        self.ctx.cancel.store(true, Ordering::Relaxed);
+    }
+}
+
+impl<T: Send + 'static, P: Send + 'static> Job<T, P> {
     /// Starts `work` on a thread named `name`. Its `Err` (or a panic, as text) is the job's
     /// error.
     pub fn spawn(
         name: &str,
         waker: Waker,
-        work: impl FnOnce(&JobCtx) -> Result<T, String> + Send + 'static,
+        work: impl FnOnce(&JobCtx<P>) -> Result<T, String> + Send + 'static,
     ) -> Self {
+        let (parts_tx, parts) = channel();
         let ctx = JobCtx {
             cancel: Arc::new(AtomicBool::new(false)),
             done: Arc::new(AtomicUsize::new(0)),
             total: Arc::new(AtomicUsize::new(0)),
+            parts: parts_tx,
             waker,
         };
         let (tx, rx) = channel();
@@ -92,16 +126,24 @@ impl<T: Send + 'static> Job<T> {
         Self {
             ctx,
             result,
+            parts,
             finished: std::cell::Cell::new(false),
         }
     }
+}
 
+impl<T, P> Job<T, P> {
     /// `(done, total)` as last reported.
     pub fn progress(&self) -> (usize, usize) {
         (
             self.ctx.done.load(Ordering::Relaxed),
             self.ctx.total.load(Ordering::Relaxed),
         )
+    }
+
+    /// The partial results sent since the last call, in order.
+    pub fn drain(&self) -> impl Iterator<Item = P> + '_ {
+        self.parts.try_iter()
     }
 
     /// Asks the work to stop (it checks the flag itself).
@@ -119,7 +161,8 @@ impl<T: Send + 'static> Job<T> {
         self.finished.get()
     }
 
-    /// The result, once, when the work has ended; `None` while it runs (or after).
+    /// The result, once, when the work has ended; `None` while it runs (or after). Partial
+    /// results sent before the end are still there for [`Job::drain`].
     pub fn poll(&self) -> Option<Result<T, String>> {
         if self.finished.get() {
             return None;
@@ -143,7 +186,7 @@ mod tests {
     use super::*;
     use std::time::{Duration, Instant};
 
-    fn wait<T: Send + 'static>(job: &Job<T>) -> Result<T, String> {
+    fn wait<T, P>(job: &Job<T, P>) -> Result<T, String> {
         let t0 = Instant::now();
         loop {
             if let Some(r) = job.poll() {
@@ -157,7 +200,7 @@ mod tests {
     #[test]
     fn result_progress_cancel_and_panic() {
         let noop: Waker = Arc::new(|| {});
-        let ok = Job::spawn("t", noop.clone(), |ctx| {
+        let ok: Job<i32> = Job::spawn("t", noop.clone(), |ctx| {
             ctx.report(3, 4);
             Ok(7)
         });
@@ -165,7 +208,7 @@ mod tests {
         assert_eq!(ok.progress(), (3, 4));
         assert!(ok.poll().is_none(), "the result comes once");
 
-        let stop = Job::spawn("t", noop.clone(), |ctx| {
+        let stop: Job<()> = Job::spawn("t", noop.clone(), |ctx| {
             while !ctx.cancelled() {
                 std::thread::sleep(Duration::from_millis(1));
             }
@@ -174,8 +217,39 @@ mod tests {
         stop.cancel();
         assert_eq!(wait(&stop), Err("cancelled".into()));
 
-        let boom = Job::spawn("t", noop, |_| -> Result<(), String> { panic!("kaboom") });
+        let boom: Job<()> = Job::spawn("t", noop, |_| panic!("kaboom"));
         let e = wait(&boom).unwrap_err();
         assert!(e.contains("kaboom"), "{e}");
+    }
+
+    #[test]
+    fn partial_results_arrive_in_order_and_a_dropped_job_is_cancelled() {
+        let noop: Waker = Arc::new(|| {});
+        let job: Job<usize, usize> = Job::spawn("t", noop.clone(), |ctx| {
+            for i in 0..5 {
+                ctx.send(i * i);
+            }
+            Ok(5)
+        });
+        assert_eq!(wait(&job), Ok(5));
+        assert_eq!(job.drain().collect::<Vec<_>>(), vec![0, 1, 4, 9, 16]);
+        assert_eq!(job.drain().count(), 0, "each part comes once");
+
+        // A job nobody holds stops: its work sees the cancel flag.
+        let (tx, rx) = std::sync::mpsc::channel();
+        let dropped: Job<(), ()> = Job::spawn("t", noop, move |ctx| {
+            let t0 = Instant::now();
+            while !ctx.cancelled() {
+                if t0.elapsed() > Duration::from_secs(10) {
+                    let _ = tx.send(false);
+                    return Ok(());
+                }
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            let _ = tx.send(true);
+            Ok(())
+        });
+        drop(dropped);
+        assert_eq!(rx.recv_timeout(Duration::from_secs(20)), Ok(true));
     }
 }

@@ -9,6 +9,7 @@
 mod views;
 
 use super::frequency::TWIN;
+use super::job::{Job, Waker};
 use super::units::MM_PER_M;
 use crate::dataset::{self, Record, RecordKind};
 use crate::identify::diagnose::{self, FeatureCorrelation, Whiteness};
@@ -20,7 +21,6 @@ use crate::params::Params;
 use egui::{Color32, RichText};
 use egui_plot::{Corner, Legend, Line, Plot, PlotPoints};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// Measured channel colour.
@@ -33,33 +33,6 @@ const RESIDUAL: Color32 = Color32::from_rgb(214, 39, 40);
 const MAX_PLOT_POINTS: usize = 3000;
 /// Lags of the whiteness test.
 const WHITENESS_LAGS: usize = 20;
-
-type Waker = Arc<dyn Fn() + Send + Sync>;
-
-/// A job on a worker thread ([`super::job::Job`]: the app's one background-job type); its
-/// result (or its error message, a panic's included) arrives once.
-struct Job<T>(super::job::Job<T>);
-
-impl<T: Send + 'static> Job<T> {
-    /// Runs `work` on a named thread; a panic in it becomes an error message.
-    fn spawn(
-        name: &str,
-        waker: &Waker,
-        work: impl FnOnce() -> Result<T, String> + Send + 'static,
-    ) -> Result<Job<T>, String> {
-        Ok(Job(super::job::Job::spawn(
-            name,
-            waker.clone(),
-            move |_| work(),
-        )))
-    }
-}
-
-impl<T: Send + 'static> Job<T> {
-    fn poll(&self) -> Option<Result<T, String>> {
-        self.0.poll()
-    }
-}
 
 /// A record loaded in the window, with its metric preparation.
 pub struct LoadedMeasured {
@@ -159,10 +132,10 @@ fn replay_view(params: &Params, rec: &PreparedRecord, index: usize) -> Result<Re
 }
 
 /// A calibration running in the background.
+/// Cancel is the job's own flag, which `identify::calibrate_with` checks at each replay.
 struct Calibration {
     job: Job<CalibrationReport>,
     progress: Arc<Mutex<Option<Progress>>>,
-    cancel: Arc<AtomicBool>,
     started: std::time::Instant,
 }
 
@@ -234,15 +207,12 @@ impl MeasuredData {
             return;
         }
         let metric = self.options.metric;
-        match Job::spawn("seat-twin-load", &self.waker, move || {
-            read_measured(&paths, &metric)
-        }) {
-            Ok(j) => {
-                self.loading = Some(j);
-                self.last_error = None;
-            }
-            Err(e) => self.last_error = Some(e),
-        }
+        self.loading = Some(Job::spawn(
+            "seat-twin-load",
+            self.waker.clone(),
+            move |_| read_measured(&paths, &metric),
+        ));
+        self.last_error = None;
     }
 
     /// The demo campaign shipped in `assets/demo-campaign/`, if found.
@@ -315,41 +285,36 @@ impl MeasuredData {
             return;
         }
         let progress = Arc::new(Mutex::new(None));
-        let cancel = Arc::new(AtomicBool::new(false));
-        let (p2, c2, w2) = (progress.clone(), cancel.clone(), self.waker.clone());
+        let (p2, w2) = (progress.clone(), self.waker.clone());
         let params = *params;
         let options = self.options.clone();
-        let job = Job::spawn("seat-twin-calibrate", &self.waker, move || {
+        let job = Job::spawn("seat-twin-calibrate", self.waker.clone(), move |ctx| {
             let cb = move |p: &Progress| {
                 if let Ok(mut g) = p2.lock() {
                     *g = Some(p.clone());
                 }
                 w2();
             };
-            identify::calibrate_with(&params, &records, &options, &c2, &cb).map_err(|e| match e {
-                IdentifyError::Cancelled => "calibration cancelled".to_string(),
-                e => format!("calibration failed: {e}"),
-            })
+            identify::calibrate_with(&params, &records, &options, &ctx.cancel_flag(), &cb).map_err(
+                |e| match e {
+                    IdentifyError::Cancelled => "calibration cancelled".to_string(),
+                    e => format!("calibration failed: {e}"),
+                },
+            )
         });
-        match job {
-            Ok(job) => {
-                self.calibration = Some(Calibration {
-                    job,
-                    progress,
-                    cancel,
-                    started: std::time::Instant::now(),
-                });
-                self.last_error = None;
-                self.last_info = None;
-            }
-            Err(e) => self.last_error = Some(e),
-        }
+        self.calibration = Some(Calibration {
+            job,
+            progress,
+            started: std::time::Instant::now(),
+        });
+        self.last_error = None;
+        self.last_info = None;
     }
 
     /// Asks the running calibration to stop (it ends at its next replay).
     pub fn cancel_calibration(&mut self) {
         if let Some(c) = &self.calibration {
-            c.cancel.store(true, Ordering::Relaxed);
+            c.job.cancel();
         }
     }
 
@@ -436,22 +401,19 @@ impl MeasuredData {
         let running = self.replaying.as_ref().map(|(i, p, _)| (*i, p));
         if stale(current) && running.is_none() {
             let (p, rec, i) = (*params, rec.prepared.clone(), self.selected);
-            match Job::spawn("seat-twin-replay", &self.waker, move || {
+            let job = Job::spawn("seat-twin-replay", self.waker.clone(), move |_| {
                 replay_view(&p, &rec, i)
-            }) {
-                Ok(j) => self.replaying = Some((i, p, j)),
-                Err(e) => self.last_error = Some(e),
-            }
+            });
+            self.replaying = Some((i, p, job));
         }
         if let Some(rep) = &self.report {
             let have = self.calibrated_view.as_ref().map(|v| v.record);
             if have != Some(self.selected) && self.calibrated_job.is_none() {
                 let (p, rec, i) = (rep.params, rec.prepared.clone(), self.selected);
-                if let Ok(j) = Job::spawn("seat-twin-replay", &self.waker, move || {
+                let job = Job::spawn("seat-twin-replay", self.waker.clone(), move |_| {
                     replay_view(&p, &rec, i)
-                }) {
-                    self.calibrated_job = Some((i, j));
-                }
+                });
+                self.calibrated_job = Some((i, job));
             }
         }
     }
@@ -581,10 +543,10 @@ impl MeasuredData {
                     ),
                     None => "starting…".into(),
                 });
-                if c.cancel.load(Ordering::Relaxed) {
+                if c.job.is_cancelled() {
                     ui.weak("cancelling…");
                 } else if ui.button("Cancel calibration").clicked() {
-                    c.cancel.store(true, Ordering::Relaxed);
+                    c.job.cancel();
                 }
             });
         } else {

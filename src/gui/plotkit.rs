@@ -116,8 +116,13 @@ pub fn hidden(hidden: &BTreeSet<String>, plot: &str, name: &str) -> bool {
     hidden.contains(&key(plot, name))
 }
 
+/// Width of a legend swatch [px].
+const SWATCH_W: f32 = 22.0;
+
 /// A legend row above a plot: each entry a toggle (click hides or shows the curve), with a
-/// swatch of its colour and style. Hidden entries are drawn faint.
+/// swatch of its colour and style. Hidden entries are drawn faint. Each entry is one widget
+/// of a known size, so the row wraps within the column however many entries it has (a
+/// nested layout per entry would not wrap, and would widen the column instead).
 pub fn legend_ui(
     ui: &mut egui::Ui,
     plot: &str,
@@ -129,34 +134,76 @@ pub fn legend_ui(
         for it in items {
             let k = key(plot, it.name);
             let shown = !hidden_set.contains(&k);
-            let text = egui::RichText::new(it.name).small();
-            let text = if shown {
-                text
-            } else {
-                text.weak().strikethrough()
-            };
-            ui.horizontal(|ui| {
-                ui.spacing_mut().item_spacing.x = 2.0;
-                let (rect, _) = ui.allocate_exact_size(vec2(22.0, 12.0), Sense::hover());
-                let c = if shown {
-                    it.color
+            if legend_entry(ui, it, shown)
+                .on_hover_text("click to hide or show this curve")
+                .clicked()
+            {
+                if shown {
+                    hidden_set.insert(k);
                 } else {
-                    it.color.gamma_multiply(0.3)
-                };
-                paint_swatch(ui, rect, c, it.swatch);
-                let r = ui
-                    .add(egui::Button::selectable(shown, text).small())
-                    .on_hover_text("click to hide or show this curve");
-                if r.clicked() {
-                    if shown {
-                        hidden_set.insert(k);
-                    } else {
-                        hidden_set.remove(&k);
-                    }
+                    hidden_set.remove(&k);
                 }
-            });
+            }
         }
     });
+}
+
+/// One legend entry: swatch and name in a selectable frame, allocated at its full size.
+fn legend_entry(ui: &mut egui::Ui, it: &LegendItem<'_>, shown: bool) -> egui::Response {
+    let text = egui::RichText::new(it.name).small();
+    let text = if shown {
+        text
+    } else {
+        text.weak().strikethrough()
+    };
+    let galley = egui::WidgetText::from(text).into_galley(
+        ui,
+        Some(egui::TextWrapMode::Extend),
+        f32::INFINITY,
+        egui::TextStyle::Small,
+    );
+    let pad = vec2(4.0, 1.0);
+    let gap = 2.0;
+    let size = vec2(
+        SWATCH_W + gap + galley.size().x + 2.0 * pad.x,
+        galley.size().y.max(12.0) + 2.0 * pad.y,
+    );
+    let (rect, response) = ui.allocate_exact_size(size, Sense::click());
+    response.widget_info(|| {
+        egui::WidgetInfo::selected(
+            egui::accesskit::Role::Button,
+            ui.is_enabled(),
+            shown,
+            it.name,
+        )
+    });
+    if ui.is_rect_visible(rect) {
+        let visuals = ui.style().interact_selectable(&response, shown);
+        let text_rect = egui::Rect::from_min_size(
+            pos2(rect.left() + SWATCH_W + gap, rect.top()),
+            vec2(galley.size().x + 2.0 * pad.x, rect.height()),
+        );
+        if shown || response.hovered() {
+            ui.painter()
+                .rect_filled(text_rect, visuals.corner_radius, visuals.weak_bg_fill);
+        }
+        let c = if shown {
+            it.color
+        } else {
+            it.color.gamma_multiply(0.3)
+        };
+        let swatch = egui::Rect::from_min_size(
+            pos2(rect.left(), rect.center().y - 6.0),
+            vec2(SWATCH_W, 12.0),
+        );
+        paint_swatch(ui, swatch, c, it.swatch);
+        let text_pos = pos2(
+            text_rect.left() + pad.x,
+            text_rect.center().y - galley.size().y / 2.0,
+        );
+        ui.painter().galley(text_pos, galley, visuals.text_color());
+    }
+    response
 }
 
 fn paint_swatch(ui: &egui::Ui, rect: egui::Rect, c: Color32, s: Swatch) {

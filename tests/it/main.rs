@@ -10,6 +10,7 @@ mod dataset_props;
 mod engine;
 mod fuzz;
 mod gui;
+mod gui_edges;
 mod gui_lab;
 mod gui_measured;
 mod identify;

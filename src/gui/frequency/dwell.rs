@@ -2,9 +2,10 @@
 //! dwell frequency and streams the points back; cancelled when superseded.
 
 use super::*;
+use crate::gui::job::{Job, Waker};
 
-/// A message from the dwell thread.
-enum DwellMsg {
+/// One simulated dwell frequency, streamed back by the dwell job.
+enum DwellPoint {
     Point {
         freq_hz: f64,
         value: Complex64,
@@ -14,27 +15,19 @@ enum DwellMsg {
         freq_hz: f64,
         reason: String,
     },
-    Finished,
 }
 
-/// A running sine-dwell sweep of the twin.
+/// A running sine-dwell sweep of the twin (the app's [`Job`]: dropped, it stops after its
+/// current point).
 struct DwellJob {
     params: Params,
-    cancel: Arc<AtomicBool>,
-    rx: Receiver<DwellMsg>,
+    job: Job<(), DwellPoint>,
     total: usize,
     done: usize,
 }
 
-impl Drop for DwellJob {
-    fn drop(&mut self) {
-        self.cancel.store(true, Ordering::Relaxed);
-    }
-}
-
 /// The simulated (sine dwell) points of the twin: transmissibility, and u̇/V_in up to
 /// [`BODE_DWELL_MAX_HZ`].
-#[derive(Default)]
 pub struct Dwell {
     job: Option<DwellJob>,
     /// Parameters of the shown points.
@@ -53,9 +46,27 @@ pub struct Dwell {
     pending: Option<(Params, Instant)>,
     /// Whether the user cancelled the sweep for the current parameters.
     pub cancelled: bool,
+    /// Repaints the app when a point arrives.
+    waker: Waker,
 }
 
 impl Dwell {
+    /// No points yet; `waker` repaints the app when a point arrives.
+    pub fn new(waker: Waker) -> Self {
+        Self {
+            job: None,
+            shown_for: None,
+            mag: Curve::new(),
+            phase: Curve::new(),
+            bode_mag: Curve::new(),
+            bode_phase: Curve::new(),
+            failures: Vec::new(),
+            pending: None,
+            cancelled: false,
+            waker,
+        }
+    }
+
     /// Progress `(done, total)` of a running sweep.
     pub fn progress(&self) -> Option<(usize, usize)> {
         self.job.as_ref().map(|j| (j.done, j.total))
@@ -84,70 +95,56 @@ impl Dwell {
         self.failures.clear();
         self.shown_for = Some(*params);
         let freqs = fr::log_space(DWELL_RANGE_HZ.0, DWELL_RANGE_HZ.1, N_DWELL);
-        let cancel = Arc::new(AtomicBool::new(false));
-        let (tx, rx) = channel();
         let p = *params;
-        let stop = cancel.clone();
         let total = freqs.len();
-        let spawned = std::thread::Builder::new()
-            .name("seat-twin-dwell".into())
-            .spawn(move || {
-                let opt = DwellOptions::default();
-                for &f in &freqs {
-                    if stop.load(Ordering::Relaxed) {
-                        return;
-                    }
-                    let r = std::panic::catch_unwind(|| {
-                        let t =
-                            sine_dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
-                        let b = if f <= BODE_DWELL_MAX_HZ {
-                            Some(sine_dwell::simulated_bode(
-                                &p,
-                                ModelKind::Twin,
-                                f,
-                                bode_dwell_amplitude_v(f),
-                                &opt,
-                            )?)
-                        } else {
-                            None
-                        };
-                        Ok::<_, crate::simulation::SimError>((t, b))
-                    });
-                    let msg = match r {
-                        Ok(Ok((value, bode))) => DwellMsg::Point {
-                            freq_hz: f,
-                            value,
-                            bode,
-                        },
-                        Ok(Err(e)) => DwellMsg::Failed {
-                            freq_hz: f,
-                            reason: e.to_string(),
-                        },
-                        Err(_) => DwellMsg::Failed {
-                            freq_hz: f,
-                            reason: "internal error in the simulation".into(),
-                        },
-                    };
-                    if tx.send(msg).is_err() {
-                        return;
-                    }
+        let job = Job::spawn("seat-twin-dwell", self.waker.clone(), move |ctx| {
+            let opt = DwellOptions::default();
+            for &f in &freqs {
+                if ctx.cancelled() {
+                    return Err("cancelled".into());
                 }
-                let _ = tx.send(DwellMsg::Finished);
-            });
-        match spawned {
-            Ok(_) => {
-                self.job = Some(DwellJob {
-                    params: p,
-                    cancel,
-                    rx,
-                    total,
-                    done: 0,
-                })
+                let r = std::panic::catch_unwind(|| {
+                    let t = sine_dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
+                    let b = if f <= BODE_DWELL_MAX_HZ {
+                        Some(sine_dwell::simulated_bode(
+                            &p,
+                            ModelKind::Twin,
+                            f,
+                            bode_dwell_amplitude_v(f),
+                            &opt,
+                        )?)
+                    } else {
+                        None
+                    };
+                    Ok::<_, crate::simulation::SimError>((t, b))
+                });
+                let point = match r {
+                    Ok(Ok((value, bode))) => DwellPoint::Point {
+                        freq_hz: f,
+                        value,
+                        bode,
+                    },
+                    Ok(Err(e)) => DwellPoint::Failed {
+                        freq_hz: f,
+                        reason: e.to_string(),
+                    },
+                    Err(_) => DwellPoint::Failed {
+                        freq_hz: f,
+                        reason: "internal error in the simulation".into(),
+                    },
+                };
+                if !ctx.send(point) {
+                    return Err("cancelled".into());
+                }
             }
-            Err(e) => self
-                .failures
-                .push((0.0, format!("could not start a thread: {e}"))),
-        }
+            Ok(())
+        });
+        self.job = Some(DwellJob {
+            params: p,
+            job,
+            total,
+            done: 0,
+        });
     }
 
     /// Follows the parameters (debounced restart) and collects finished points. Returns
@@ -168,16 +165,18 @@ impl Dwell {
         {
             self.start(&p);
         }
-        let mut finished = false;
         if let Some(job) = self.job.as_mut() {
-            for msg in job.rx.try_iter() {
-                match msg {
-                    DwellMsg::Point {
+            // The end first, then the points: every point is sent before the end, so none
+            // sent before it is missed.
+            let end = job.job.poll();
+            for point in job.job.drain() {
+                job.done += 1;
+                match point {
+                    DwellPoint::Point {
                         freq_hz,
                         value,
                         bode,
                     } => {
-                        job.done += 1;
                         let x = freq_hz.log10();
                         if value.norm().is_finite() {
                             self.mag.push(PlotPoint::new(x, db(value.norm())));
@@ -188,14 +187,23 @@ impl Dwell {
                             self.bode_phase.push(PlotPoint::new(x, deg(b.arg())));
                         }
                     }
-                    DwellMsg::Failed { freq_hz, reason } => {
-                        job.done += 1;
+                    DwellPoint::Failed { freq_hz, reason } => {
                         self.failures.push((freq_hz, reason));
                     }
-                    DwellMsg::Finished => finished = true,
                 }
             }
-            if finished || job.done >= job.total {
+            // An error at the end is a thread that could not start, or ended early.
+            let ended = match end {
+                Some(Ok(())) => true,
+                Some(Err(reason)) => {
+                    if job.done < job.total {
+                        self.failures.push((0.0, reason));
+                    }
+                    true
+                }
+                None => false,
+            };
+            if ended || job.done >= job.total {
                 self.shown_for = Some(job.params);
                 self.job = None;
                 self.unwrap_phase_points();
