@@ -462,3 +462,56 @@ fn an_injected_engine_panic_shows_the_banner_and_reset_recovers() {
     });
 }
 
+/// Regression: with A/B on, the transmissibility legends have one entry more and wrap to a
+/// second row. Each legend entry used to be a nested layout that did not wrap, so the row
+/// widened the frequency column past the window's central panel (the plots stopped near
+/// 20 Hz) and the extra row pushed the last plot out of the window. Now every frequency
+/// axis shows its "100" (Hz) label left of the side panel, and all four axis titles are
+/// inside the window.
+#[test]
+fn frequency_plots_stay_in_the_window_when_a_legend_wraps() {
+    let mut h = harness();
+    h.run_steps(2);
+    h.get_by_label("A/B: compare with a reference twin").click();
+    // The dwell points add the last legend entry.
+    super::gui_measured::step_until_long(
+        &mut h,
+        "the sine-dwell points",
+        Duration::from_secs(120),
+        |a| a.dwell().progress().is_none() && a.dwell().mag.len() >= 10,
+    );
+    h.run_steps(2);
+    let texts = painted_texts(&h);
+    let side_left = texts
+        .iter()
+        .find(|(t, _)| t == "Metrics")
+        .map(|(_, r)| r.left())
+        .expect("the side panel's Metrics heading");
+    let axis_titles: Vec<egui::Rect> = texts
+        .iter()
+        .filter(|(t, _)| t == "frequency [Hz]")
+        .map(|(_, r)| *r)
+        .collect();
+    assert_eq!(axis_titles.len(), 4, "{axis_titles:?}");
+    for r in &axis_titles {
+        assert!(
+            r.bottom() <= 1000.0,
+            "an axis title below the window: {r:?}"
+        );
+    }
+    let hundreds: Vec<egui::Rect> = texts
+        .iter()
+        .filter(|(t, r)| t == "100" && r.left() > side_left * 0.5)
+        .map(|(_, r)| *r)
+        .collect();
+    assert!(
+        hundreds.len() >= 4,
+        "every frequency axis labels 100 Hz: {hundreds:?}"
+    );
+    for r in &hundreds {
+        assert!(
+            r.right() <= side_left,
+            "the 100 Hz label at {r:?} runs under the side panel (left edge {side_left})"
+        );
+    }
+}
