@@ -136,14 +136,11 @@ pub fn metrics_ui(ui: &mut egui::Ui, m: Option<AbMetrics>, contacts: (usize, usi
             "–".into()
         }
     };
-    egui::Grid::new("ab_metrics")
-        .striped(true)
-        .num_columns(4)
-        .show(ui, |ui| {
-            for h in ["", "A (live)", "B (ref)", "A vs B"] {
-                ui.strong(h);
-            }
-            ui.end_row();
+    crate::gui::plotkit::table_ui(
+        ui,
+        "ab_metrics",
+        &["", "A (live)", "B (ref)", "A vs B"],
+        |ui| {
             let rows = [
                 ("a_w [m/s²]", m.a.aw, m.b.aw, 3),
                 ("VDV [m/s^1.75]", m.a.vdv, m.b.vdv, 3),
@@ -162,5 +159,6 @@ pub fn metrics_ui(ui: &mut egui::Ui, m: Option<AbMetrics>, contacts: (usize, usi
                 ui.monospace(pct(a, b));
                 ui.end_row();
             }
-        });
+        },
+    );
 }

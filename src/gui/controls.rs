@@ -648,16 +648,10 @@ pub fn excitation_ui(
                 };
             });
             ui.horizontal(|ui| {
-                ui.label("or path:");
-                let r = ui.add(
-                    egui::TextEdit::singleline(&mut ed.typed_path)
-                        .desired_width(170.0)
-                        .hint_text("record.csv"),
-                );
-                let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-                if (ui.button("Load").clicked() || enter) && !ed.typed_path.trim().is_empty() {
-                    action =
-                        ExcitationAction::LoadRecordPath(ed.typed_path.trim().to_string().into());
+                if let Some(p) =
+                    super::files::typed_path_ui(ui, &mut ed.typed_path, "record.csv", 170.0)
+                {
+                    action = ExcitationAction::LoadRecordPath(p);
                 }
             });
         }

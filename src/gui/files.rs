@@ -114,6 +114,25 @@ impl Dialogs {
     }
 }
 
+/// "or path: [____] Load": a typed path, for desktops without a file dialog. Returns the
+/// path when Load is clicked or Enter pressed in a non-empty field.
+pub fn typed_path_ui(
+    ui: &mut egui::Ui,
+    text: &mut String,
+    hint: &str,
+    width: f32,
+) -> Option<PathBuf> {
+    ui.label("or path:");
+    let r = ui.add(
+        egui::TextEdit::singleline(text)
+            .desired_width(width)
+            .hint_text(hint),
+    );
+    let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+    let load = ui.button("Load").clicked() || enter;
+    (load && !text.trim().is_empty()).then(|| PathBuf::from(text.trim()))
+}
+
 /// Reads a platform record (CSV with `t` and `x` and/or `xdd`, SI) for the live simulation.
 pub fn read_platform_record(path: &Path) -> anyhow::Result<SampledMotion> {
     let rec = dataset::read_record(path, RecordKind::Excitation)?;

@@ -134,91 +134,56 @@ fn minus(s: String) -> String {
 /// ("friction (F_c = 12.30 N, b = 150.0 N·s/m)"). Empty when none is on.
 pub fn active_effects(p: &Params) -> Vec<String> {
     let e = &p.plant.effects;
-    let mut out = Vec::new();
-    let f = |name: &str, v: f64| fitted(name, v, f64::NAN);
-    if e.friction.enabled {
-        out.push(format!(
-            "friction ({}, {})",
-            f("coulomb_n", e.friction.coulomb_n),
-            f("viscous_n_s_per_m", e.friction.viscous_n_s_per_m)
-        ));
-    }
-    if e.valve_overlap.enabled {
-        out.push(format!(
-            "valve overlap ({})",
-            f("overlap_m", e.valve_overlap.overlap_m)
-        ));
-    }
-    if e.valve_offset.enabled {
-        out.push(format!(
-            "valve offset ({})",
-            f("bias_v", e.valve_offset.bias_v)
-        ));
-    }
-    if e.leakage.enabled {
-        out.push(format!(
-            "leakage ({})",
-            f("coefficient_m3_per_s_pa", e.leakage.coefficient_m3_per_s_pa)
-        ));
-    }
-    if e.compliance.enabled {
-        out.push(format!(
-            "compliance ({})",
-            f(
+    // (on, name, its main values by parameter key)
+    let effects: [(bool, &str, &[(&str, f64)]); 6] = [
+        (
+            e.friction.enabled,
+            "friction",
+            &[
+                ("coulomb_n", e.friction.coulomb_n),
+                ("viscous_n_s_per_m", e.friction.viscous_n_s_per_m),
+            ],
+        ),
+        (
+            e.valve_overlap.enabled,
+            "valve overlap",
+            &[("overlap_m", e.valve_overlap.overlap_m)],
+        ),
+        (
+            e.valve_offset.enabled,
+            "valve offset",
+            &[("bias_v", e.valve_offset.bias_v)],
+        ),
+        (
+            e.leakage.enabled,
+            "leakage",
+            &[("coefficient_m3_per_s_pa", e.leakage.coefficient_m3_per_s_pa)],
+        ),
+        (
+            e.compliance.enabled,
+            "compliance",
+            &[(
                 "effective_bulk_modulus_pa",
-                e.compliance.effective_bulk_modulus_pa
-            )
-        ));
-    }
-    if e.supply_sag.enabled {
-        out.push(format!(
-            "supply sag ({})",
-            f("droop_pa_per_m3_s", e.supply_sag.droop_pa_per_m3_s)
-        ));
-    }
-    out
-}
-
-/// A report note with the optimiser's Debug-formatted stop reason
-/// (`Converged { ftol: false, xtol: true }`, `LostPatience`, …) put in words.
-pub fn note_for_people(note: &str) -> String {
-    let words = [
-        (
-            "Converged { ftol: true, xtol: true }",
-            "converged (error and parameters both settled)",
+                e.compliance.effective_bulk_modulus_pa,
+            )],
         ),
         (
-            "Converged { ftol: true, xtol: false }",
-            "converged (the error stopped improving)",
+            e.supply_sag.enabled,
+            "supply sag",
+            &[("droop_pa_per_m3_s", e.supply_sag.droop_pa_per_m3_s)],
         ),
-        (
-            "Converged { ftol: false, xtol: true }",
-            "converged (the parameters stopped moving)",
-        ),
-        ("Converged { ftol: false, xtol: false }", "converged"),
-        ("LostPatience", "iteration limit reached"),
-        ("ResidualsZero", "exact fit"),
-        (
-            "Orthogonal",
-            "converged (residuals orthogonal to the Jacobian)",
-        ),
-        ("NoParameters", "nothing to fit"),
-        ("NoResiduals", "no data to fit"),
-        ("WrongDimensions", "internal size mismatch"),
-        ("User", "stopped"),
     ];
-    let mut s = note.to_string();
-    for (debug, people) in words {
-        s = s.replace(debug, people);
-    }
-    // `Numerical("…")` → numerical problem: …
-    if let Some(i) = s.find("Numerical(\"")
-        && let Some(j) = s[i..].find("\")")
-    {
-        let inner = s[i + 11..i + j].to_string();
-        s.replace_range(i..i + j + 2, &format!("numerical problem: {inner}"));
-    }
-    s
+    effects
+        .iter()
+        .filter(|(on, ..)| *on)
+        .map(|(_, name, values)| {
+            let values: Vec<String> = values
+                .iter()
+                .map(|(key, v)| fitted(key, *v, f64::NAN))
+                .collect();
+            format!("{name} ({})", values.join(", "))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -255,19 +220,5 @@ mod tests {
         assert_eq!(compact(200.0), "200");
         assert_eq!(compact(-5.0), "−5");
         assert_eq!(compact(0.1506), "0.1506");
-    }
-
-    #[test]
-    fn debug_stop_reasons_become_words() {
-        let n = note_for_people(
-            "declared-parameter fit stopped: Converged { ftol: false, xtol: true } after 12 replays",
-        );
-        assert_eq!(
-            n,
-            "declared-parameter fit stopped: converged (the parameters stopped moving) after 12 replays"
-        );
-        assert!(!n.contains('{'));
-        let n = note_for_people("stopped: Numerical(\"NaN in Jacobian\")");
-        assert_eq!(n, "stopped: numerical problem: NaN in Jacobian");
     }
 }

@@ -191,12 +191,18 @@ struct CurveStyle {
     style: LineStyle,
 }
 
-/// Each curve with its style.
-fn styled<'a>(styles: &[CurveStyle], curves: &'a [Curve]) -> Vec<(CurveStyle, &'a [PlotPoint])> {
+/// Each curve with its style, then `extra` (the A/B reference) if there is one.
+fn styled<'a>(
+    styles: &[CurveStyle],
+    curves: &'a [Curve],
+    extra: Option<(CurveStyle, &'a Curve)>,
+) -> Vec<(CurveStyle, &'a [PlotPoint])> {
     styles
         .iter()
+        .copied()
         .zip(curves)
-        .map(|(s, c)| (*s, c.as_slice()))
+        .chain(extra)
+        .map(|(s, c)| (s, c.as_slice()))
         .collect()
 }
 
@@ -420,13 +426,11 @@ pub fn frequency_ui(
         id: "t_mag",
         y_label: "|T| [dB]",
         unit: "dB",
-        lines: styled(&t_styles, &curves.t_mag)
-            .into_iter()
-            .chain(
-                view.reference
-                    .map(|r| (reference_style, r.t_mag[1].as_slice())),
-            )
-            .collect(),
+        lines: styled(
+            &t_styles,
+            &curves.t_mag,
+            view.reference.map(|r| (reference_style, &r.t_mag[1])),
+        ),
         dwell: show_dwell.then_some((T_DWELL_NAME, dwell_c, dwell.mag.as_slice())),
         phase: false,
     };
@@ -434,13 +438,11 @@ pub fn frequency_ui(
         id: "t_phase",
         y_label: "phase T [deg]",
         unit: "°",
-        lines: styled(&t_styles, &curves.t_phase)
-            .into_iter()
-            .chain(
-                view.reference
-                    .map(|r| (reference_style, r.t_phase[1].as_slice())),
-            )
-            .collect(),
+        lines: styled(
+            &t_styles,
+            &curves.t_phase,
+            view.reference.map(|r| (reference_style, &r.t_phase[1])),
+        ),
         dwell: show_dwell.then_some((T_DWELL_NAME, dwell_c, dwell.phase.as_slice())),
         phase: true,
     };
@@ -462,7 +464,7 @@ pub fn frequency_ui(
         id: "bode_mag",
         y_label: "|du/dt / V_in| [dB]",
         unit: "dB re (mm/s)/V",
-        lines: styled(&b_styles, &curves.bode_mag),
+        lines: styled(&b_styles, &curves.bode_mag, None),
         dwell: show_dwell.then_some((BODE_DWELL_NAME, dwell_c, dwell.bode_mag.as_slice())),
         phase: false,
     };
@@ -470,7 +472,7 @@ pub fn frequency_ui(
         id: "bode_phase",
         y_label: "phase [deg]",
         unit: "°",
-        lines: styled(&b_styles, &curves.bode_phase),
+        lines: styled(&b_styles, &curves.bode_phase, None),
         dwell: show_dwell.then_some((BODE_DWELL_NAME, dwell_c, dwell.bode_phase.as_slice())),
         phase: true,
     };

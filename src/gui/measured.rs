@@ -444,15 +444,9 @@ impl MeasuredData {
             {
                 self.load_files(Self::demo_campaign());
             }
-            ui.label("or path:");
-            let r = ui.add(
-                egui::TextEdit::singleline(&mut self.typed_path)
-                    .desired_width(220.0)
-                    .hint_text("file.csv"),
-            );
-            let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-            if (ui.button("Load").clicked() || enter) && !self.typed_path.trim().is_empty() {
-                let p = PathBuf::from(self.typed_path.trim());
+            if let Some(p) =
+                super::files::typed_path_ui(ui, &mut self.typed_path, "file.csv", 220.0)
+            {
                 self.load_files(vec![p]);
             }
             if !self.records.is_empty() && ui.button("Clear").clicked() {
@@ -501,14 +495,11 @@ impl MeasuredData {
         ui.strong(
             "Records (tick “use” to include one in the calibration; click a name to draw it)",
         );
-        egui::Grid::new("measured_records")
-            .striped(true)
-            .num_columns(5)
-            .show(ui, |ui| {
-                for h in ["use", "file", "duration", "rate", "channels"] {
-                    ui.strong(h);
-                }
-                ui.end_row();
+        crate::gui::plotkit::table_ui(
+            ui,
+            "measured_records",
+            &["use", "file", "duration", "rate", "channels"],
+            |ui| {
                 for (i, r) in self.records.iter_mut().enumerate() {
                     ui.checkbox(&mut r.include, "");
                     if ui
@@ -523,7 +514,8 @@ impl MeasuredData {
                     ui.label(channels_text(&r.record));
                     ui.end_row();
                 }
-            });
+            },
+        );
     }
 
     fn calibration_ui(&mut self, ui: &mut egui::Ui, params: &Params) -> MeasuredAction {
@@ -583,14 +575,11 @@ impl MeasuredData {
         for m in &r.missing {
             ui.label(format!("missing: {m}"));
         }
-        egui::Grid::new("measured_errors")
-            .striped(true)
-            .num_columns(4)
-            .show(ui, |ui| {
-                for h in ["stage", "weighted error", "du/dt [mm/s]", "ydd [m/s²]"] {
-                    ui.strong(h);
-                }
-                ui.end_row();
+        crate::gui::plotkit::table_ui(
+            ui,
+            "measured_errors",
+            &["stage", "weighted error", "du/dt [mm/s]", "ydd [m/s²]"],
+            |ui| {
                 let mut row = |name: &str, e: &ErrorSummary| {
                     ui.label(name);
                     ui.monospace(format!("{:.3}", e.value));
@@ -614,7 +603,8 @@ impl MeasuredData {
                 }
                 row("before (Cd, τ re-fitted)", &r.error_before);
                 row("after (with effects)", &r.error_after);
-            });
+            },
+        );
         if let Some(v) = &r.error_validation {
             ui.monospace(format!(
                 "validation (held-out records): weighted error {:.3} before → {:.3} after",
@@ -642,14 +632,11 @@ impl MeasuredData {
             ui.weak(glyph_safe(&e.evidence));
         }
         ui.collapsing("candidate scores (ΔBIC, negative = better)", |ui| {
-            egui::Grid::new("measured_candidates")
-                .striped(true)
-                .num_columns(4)
-                .show(ui, |ui| {
-                    for h in ["round", "effect", "ΔBIC", "share removed"] {
-                        ui.strong(h);
-                    }
-                    ui.end_row();
+            crate::gui::plotkit::table_ui(
+                ui,
+                "measured_candidates",
+                &["round", "effect", "ΔBIC", "share removed"],
+                |ui| {
                     for c in &r.candidates {
                         ui.monospace(c.round.to_string());
                         ui.label(c.effect.name());
@@ -657,10 +644,11 @@ impl MeasuredData {
                         ui.monospace(format!("{:.0} %", c.relative_gain * 100.0));
                         ui.end_row();
                     }
-                });
+                },
+            );
         });
         for note in &r.notes {
-            ui.weak(glyph_safe(&super::format::note_for_people(note)));
+            ui.weak(glyph_safe(note));
         }
         ui.horizontal(|ui| {
             if ui

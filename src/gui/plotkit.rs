@@ -1,5 +1,6 @@
-//! Shared plot furniture: y axes that always carry numbers, a clickable legend drawn above
-//! the plot (off the data) with a swatch per line style, wrapped phase.
+//! Shared plot and table furniture: y axes that always carry numbers, a clickable legend
+//! drawn above the plot (off the data) with a swatch per line style, wrapped phase, and the
+//! striped tables with a header row.
 
 use egui::{Color32, Pos2, Sense, Shape, Stroke, pos2, vec2};
 use egui_plot::{AxisHints, GridInput, GridMark, LineStyle};
@@ -114,6 +115,21 @@ pub fn key(plot: &str, name: &str) -> String {
 /// Whether `name` in `plot` is hidden.
 pub fn hidden(hidden: &BTreeSet<String>, plot: &str, name: &str) -> bool {
     hidden.contains(&key(plot, name))
+}
+
+/// A striped table: a bold header row, then the rows `body` adds (each closed by
+/// `ui.end_row()`), one column per header.
+pub fn table_ui(ui: &mut egui::Ui, id: &str, headers: &[&str], body: impl FnOnce(&mut egui::Ui)) {
+    egui::Grid::new(id)
+        .striped(true)
+        .num_columns(headers.len())
+        .show(ui, |ui| {
+            for h in headers {
+                ui.strong(*h);
+            }
+            ui.end_row();
+            body(ui);
+        });
 }
 
 /// Width of a legend swatch [px].

@@ -215,28 +215,24 @@ pub fn schematic_ui(
     );
     for (i, (text, color)) in lines.into_iter().enumerate() {
         let pos = rect.left_top() + vec2(8.0, 6.0 + 15.0 * i as f32);
-        if i >= 2 {
+        // The pressure lines carry a colour swatch and ink text; the others their colour.
+        let text_color = if i >= 2 {
             painter.rect_filled(
                 Rect::from_min_size(pos + vec2(0.0, 3.0), vec2(9.0, 9.0)),
                 1.0,
                 color,
             );
-            painter.text(
-                pos + vec2(14.0, 0.0),
-                Align2::LEFT_TOP,
-                text,
-                FontId::monospace(11.0),
-                ink,
-            );
+            ink
         } else {
-            painter.text(
-                pos + vec2(14.0, 0.0),
-                Align2::LEFT_TOP,
-                text,
-                FontId::monospace(11.0),
-                color,
-            );
-        }
+            color
+        };
+        painter.text(
+            pos + vec2(14.0, 0.0),
+            Align2::LEFT_TOP,
+            text,
+            FontId::monospace(11.0),
+            text_color,
+        );
     }
     if s.contact {
         painter.rect_stroke(

@@ -213,33 +213,26 @@ impl SeatTwinApp {
             "over {:.1} s since the last change (ISO 2631-1 Wk)",
             self.traces.metrics.counted_s()
         ));
-        egui::Grid::new("metrics")
-            .striped(true)
-            .num_columns(5)
-            .show(ui, |ui| {
-                for h in ["", "RMS", "a_w", "VDV", "SEAT"] {
-                    ui.strong(h);
+        crate::gui::plotkit::table_ui(ui, "metrics", &["", "RMS", "a_w", "VDV", "SEAT"], |ui| {
+            ui.label("platform");
+            ui.monospace(format!("{:.3}", platform.rms));
+            ui.monospace(format!("{:.3}", platform.aw));
+            ui.monospace(format!("{:.3}", platform.vdv));
+            ui.label("");
+            ui.end_row();
+            for (name, m, seat) in rows {
+                ui.label(name);
+                ui.monospace(format!("{:.3}", m.rms));
+                ui.monospace(format!("{:.3}", m.aw));
+                ui.monospace(format!("{:.3}", m.vdv));
+                if seat.is_finite() {
+                    ui.monospace(format!("{seat:.0} %"));
+                } else {
+                    ui.monospace("–");
                 }
                 ui.end_row();
-                ui.label("platform");
-                ui.monospace(format!("{:.3}", platform.rms));
-                ui.monospace(format!("{:.3}", platform.aw));
-                ui.monospace(format!("{:.3}", platform.vdv));
-                ui.label("");
-                ui.end_row();
-                for (name, m, seat) in rows {
-                    ui.label(name);
-                    ui.monospace(format!("{:.3}", m.rms));
-                    ui.monospace(format!("{:.3}", m.aw));
-                    ui.monospace(format!("{:.3}", m.vdv));
-                    if seat.is_finite() {
-                        ui.monospace(format!("{seat:.0} %"));
-                    } else {
-                        ui.monospace("–");
-                    }
-                    ui.end_row();
-                }
-            });
+            }
+        });
         ui.weak("RMS, a_w [m/s²]; VDV [m/s^1.75]; SEAT = a_w body / a_w platform");
         ui.label(format!(
             "end-stop contacts (twin): {}",

@@ -146,14 +146,11 @@ impl MeasuredData {
             w.max_lag,
         ));
         ui.label("correlation of the residual with each effect's signature:");
-        egui::Grid::new("measured_corr")
-            .striped(true)
-            .num_columns(4)
-            .show(ui, |ui| {
-                for h in ["feature", "suggests", "velocity", "accel."] {
-                    ui.strong(h);
-                }
-                ui.end_row();
+        crate::gui::plotkit::table_ui(
+            ui,
+            "measured_corr",
+            &["feature", "suggests", "velocity", "accel."],
+            |ui| {
                 let strongest = v
                     .correlations
                     .iter()
@@ -175,7 +172,8 @@ impl MeasuredData {
                     });
                     ui.end_row();
                 }
-            });
+            },
+        );
         ui.weak(
             "Correlations hint; the calibration decides, by fitting each effect and ranking \
              them by ΔBIC.",
