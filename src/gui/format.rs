@@ -130,12 +130,15 @@ fn minus(s: String) -> String {
     s.replacen('-', "−", 1)
 }
 
+/// An effect for [`active_effects`]: whether it is on, its name, and its main values by
+/// parameter key.
+type EffectLine<'a> = (bool, &'a str, &'a [(&'a str, f64)]);
+
 /// The model effects switched on in `p`, each with its main values, for people
 /// ("friction (F_c = 12.30 N, b = 150.0 N·s/m)"). Empty when none is on.
 pub fn active_effects(p: &Params) -> Vec<String> {
     let e = &p.plant.effects;
-    // (on, name, its main values by parameter key)
-    let effects: [(bool, &str, &[(&str, f64)]); 6] = [
+    let effects: [EffectLine<'_>; 6] = [
         (
             e.friction.enabled,
             "friction",
