@@ -77,11 +77,6 @@ pub fn run_streaming(
     }
 }
 
-/// Closed loop with the preset's controller (the passive model ignores it).
-pub fn closed_loop(params: &Params) -> Drive {
-    Drive::ClosedLoop(crate::control::ControlLaw::new(params))
-}
-
 /// The cycloidal bump of Figs. 13–14 in closed loop.
 pub fn cycloid(
     params: &Params,
@@ -93,7 +88,7 @@ pub fn cycloid(
     run(
         params,
         kind,
-        closed_loop(params),
+        Drive::closed_loop(params),
         PlatformMotion::Cycloid(*bump),
         duration_s,
         rate_hz,

@@ -464,12 +464,7 @@ mod tests {
     #[test]
     fn exact_hold_matches_fine_rk4_on_the_closed_loop_ride() {
         let p = Params::paper();
-        let (e_ydd, e_u, peak) = compare(
-            LinearModel::new(&p),
-            crate::experiments::closed_loop(&p),
-            ride(),
-            0.0,
-        );
+        let (e_ydd, e_u, peak) = compare(LinearModel::new(&p), Drive::closed_loop(&p), ride(), 0.0);
         assert!(e_ydd < 2e-3 * peak, "ÿ error {e_ydd} of peak {peak}");
         assert!(e_u < 1e-6, "u error {e_u}");
     }
@@ -485,12 +480,8 @@ mod tests {
         // the hold smears that jump, so compare once its 80 Hz ring has died out.
         let (e_ydd, _, peak) = compare(LinearModel::new(&p), drive, PlatformMotion::Still, 0.5);
         assert!(e_ydd < 5e-3 * peak, "ÿ error {e_ydd} of peak {peak}");
-        let (e_ydd, e_u, peak) = compare(
-            PassiveModel::new(&p),
-            crate::experiments::closed_loop(&p),
-            ride(),
-            0.0,
-        );
+        let (e_ydd, e_u, peak) =
+            compare(PassiveModel::new(&p), Drive::closed_loop(&p), ride(), 0.0);
         assert!(e_ydd < 2e-3 * peak, "ÿ error {e_ydd} of peak {peak}");
         assert!(e_u < 1e-6, "u error {e_u}");
     }
@@ -502,7 +493,7 @@ mod tests {
         let sim = LtiSimulation::new(
             LinearModel::new(&p),
             1e-3,
-            crate::experiments::closed_loop(&p),
+            Drive::closed_loop(&p),
             PlatformMotion::Still,
         );
         assert!(sim.is_none());

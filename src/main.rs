@@ -202,14 +202,14 @@ fn run(cmd: Command) -> Result<()> {
                     };
                     let d = motion.duration_s();
                     (
-                        experiments::closed_loop(&params),
+                        Drive::closed_loop(&params),
                         PlatformMotion::Sampled(motion),
                         d,
                         format!("excitation {}", path.display()),
                     )
                 }
                 (Some(ScenarioArg::Cycloid), None) => (
-                    experiments::closed_loop(&params),
+                    Drive::closed_loop(&params),
                     PlatformMotion::Cycloid(Cycloid::default()),
                     5.0,
                     "cycloid 30 mm in 0.5 s".to_string(),
@@ -225,7 +225,7 @@ fn run(cmd: Command) -> Result<()> {
                     };
                     ride.validate()?;
                     (
-                        experiments::closed_loop(&params),
+                        Drive::closed_loop(&params),
                         PlatformMotion::Sampled(ride.generate()),
                         ride.duration_s,
                         format!("random ride seed {seed}"),
@@ -272,7 +272,7 @@ fn run(cmd: Command) -> Result<()> {
                     let sampled = motion.generate()?;
                     let d = sampled.duration_s();
                     (
-                        experiments::closed_loop(&params),
+                        Drive::closed_loop(&params),
                         PlatformMotion::Sampled(sampled),
                         d,
                         format!("seat-test input class {} seed {seed}", class.name),

@@ -25,6 +25,13 @@ pub enum Drive {
     OpenLoop(CommandSignal),
 }
 
+impl Drive {
+    /// Closed loop with the preset's controller (the passive model ignores it).
+    pub fn closed_loop(params: &crate::params::Params) -> Self {
+        Drive::ClosedLoop(ControlLaw::new(params))
+    }
+}
+
 /// A numerical failure of a run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimError {

@@ -12,7 +12,7 @@ use crate::params::Params;
 use crate::plot::{self, Figure, Panel, Scale, Series, SeriesStyle};
 use crate::preset::write_atomic;
 use crate::scenario::{Cycloid, PlatformMotion, RandomRide};
-use crate::simulation::{SimError, Trace};
+use crate::simulation::{Drive, SimError, Trace};
 use num_complex::Complex64;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -197,7 +197,7 @@ fn ride_traces(params: &Params, seed: u64) -> Result<[Trace; 3], SimError> {
         experiments::run(
             params,
             kind,
-            experiments::closed_loop(params),
+            Drive::closed_loop(params),
             ride.clone(),
             RIDE_DURATION_S,
             1000.0,
