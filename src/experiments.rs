@@ -8,7 +8,7 @@ use crate::model::passive::PassiveModel;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, Cycloid, PlatformMotion};
 use crate::simulation::{
-    Drive, RunSummary, Sample, SimError, Simulation, Trace, sample_count, step_for_rate,
+    Drive, Run, RunSummary, Sample, SimError, Simulation, Trace, step_for_rate, trace_buffer,
 };
 
 /// Largest step of the exact (first-order-hold) runs of the linear and passive models [s].
@@ -25,8 +25,7 @@ pub fn run(
     duration_s: f64,
     rate_hz: f64,
 ) -> Result<Trace, SimError> {
-    let n = sample_count(duration_s, rate_hz, step_for_rate(LTI_MAX_STEP_S, rate_hz));
-    let mut samples = Vec::with_capacity(usize::try_from(n).unwrap_or(0).min(1 << 24));
+    let mut samples = trace_buffer(duration_s, rate_hz, step_for_rate(LTI_MAX_STEP_S, rate_hz));
     let summary = run_streaming(params, kind, drive, platform, duration_s, rate_hz, |s| {
         samples.push(s);
         true
@@ -56,7 +55,7 @@ pub fn run_streaming(
             let model = LinearModel::new(params);
             let h_lti = step_for_rate(LTI_MAX_STEP_S, rate_hz);
             match LtiSimulation::new(model.clone(), h_lti, drive.clone(), platform.clone()) {
-                Some(sim) => sim.run_streaming(duration_s, rate_hz, record),
+                Some(mut sim) => sim.run_streaming(duration_s, rate_hz, record),
                 None => Simulation::new(model, h, drive, platform)
                     .run_streaming(duration_s, rate_hz, record),
             }
@@ -69,7 +68,7 @@ pub fn run_streaming(
                 drive.clone(),
                 platform.clone(),
             ) {
-                Some(sim) => sim.run_streaming(duration_s, rate_hz, record),
+                Some(mut sim) => sim.run_streaming(duration_s, rate_hz, record),
                 None => Simulation::new(PassiveModel::new(params), h, drive, platform)
                     .run_streaming(duration_s, rate_hz, record),
             }

@@ -40,7 +40,7 @@ use super::IdentifyError;
 use crate::dataset::Record;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, PlatformMotion, SampledMotion};
-use crate::simulation::{Drive, Simulation, step_for_rate};
+use crate::simulation::{Drive, Run, Simulation, step_for_rate};
 use std::sync::Arc;
 
 pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
