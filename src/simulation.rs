@@ -16,7 +16,9 @@ use crate::model::{Inputs, Model, ModelKind, Outputs};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::{CommandSignal, PlatformMotion, PlatformSample};
 
+mod csv;
 mod run;
+pub use csv::{CsvRunError, SAMPLE_UNITS, SampleColumns, write_csv_streamed};
 pub use run::{Run, RunState};
 pub(crate) use run::{check_bounds, trace_buffer};
 
