@@ -5,7 +5,7 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use seat_twin::analysis::dwell;
 use seat_twin::analysis::response::{Method, Response, ResponseError, response};
-use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, check_range};
+use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, SweepArgs, check_range};
 use seat_twin::dataset::{self, RecordKind};
 use seat_twin::experiments::RunSpec;
 use seat_twin::fsutil::{self, OutputDir};
@@ -18,7 +18,6 @@ use seat_twin::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, Sa
 use seat_twin::simulation::{
     ContactEvent, CsvRunError, Drive, SAMPLE_UNITS, sample_count, step_for_rate,
 };
-use std::path::Path;
 
 mod commands;
 use commands::{find_class, run_seat_test_command, run_tune};
@@ -361,23 +360,16 @@ fn run(cmd: Command) -> Result<()> {
             model,
             preset,
             amp,
-            freqs,
-            method,
-            out,
+            sweep,
         } => {
             let what = Response::Bode { amplitude_v: amp };
-            write_response(&preset, model, what, method, &freqs, &out)
+            write_response(&preset, model, what, &sweep)
         }
         Command::Transmissibility {
             model,
             preset,
-            freqs,
-            method,
-            out,
-        } => {
-            let what = Response::Transmissibility;
-            write_response(&preset, model, what, method, &freqs, &out)
-        }
+            sweep,
+        } => write_response(&preset, model, Response::Transmissibility, &sweep),
         Command::Replay { data, preset, out } => {
             let params = load_params(&preset)?;
             let rec = dataset::read_record(&data, RecordKind::Measured)?;
@@ -509,14 +501,8 @@ fn run(cmd: Command) -> Result<()> {
 
 /// `bode` and `transmissibility`: the response by its entry point, then one CSV file. A
 /// non-finite point is refused naming the frequency and the input it came from.
-fn write_response(
-    preset: &str,
-    kind: ModelKind,
-    what: Response,
-    method: Option<Method>,
-    freqs: &[f64],
-    out: &Path,
-) -> Result<()> {
+fn write_response(preset: &str, kind: ModelKind, what: Response, sweep: &SweepArgs) -> Result<()> {
+    let SweepArgs { freqs, method, out } = sweep;
     let params = load_params(preset)?;
     // What a non-finite point is traced back to, and the input's own comment line.
     let (input, extra) = match what {
