@@ -287,7 +287,7 @@ fn legend_keeps_off_the_data_in_the_figure() {
         let legend = drawn[0].legend.expect("labelled series have a legend");
         // Pixel box of the data, as the renderer maps x, y ∈ [0.5, 1].
         let px = |t: f64, a: i32, b: i32| f64::from(a) + 0.5 + t * f64::from(b - a - 1);
-        let data = legend::Rect {
+        let data = canvas::Rect {
             x0: px(0.5, f.l, f.r).floor() as i32 - 2,
             x1: f.r,
             y0: f.t,
