@@ -128,14 +128,8 @@ pub fn cycloid(
     duration_s: f64,
     rate_hz: f64,
 ) -> Result<Trace, SimError> {
-    run(
-        params,
-        kind,
-        Drive::closed_loop(params),
-        PlatformMotion::Cycloid(*bump),
-        duration_s,
-        rate_hz,
-    )
+    let (drive, platform) = (Drive::closed_loop(params), PlatformMotion::Cycloid(*bump));
+    run(params, kind, drive, platform, duration_s, rate_hz)
 }
 
 /// A valve sine test (platform still, open loop): `V_in = A·cos(2πft)`.
@@ -147,17 +141,12 @@ pub fn valve_sine(
     duration_s: f64,
     rate_hz: f64,
 ) -> Result<Trace, SimError> {
-    run(
-        params,
-        kind,
-        Drive::OpenLoop(CommandSignal::Sine {
-            amplitude_v,
-            freq_hz,
-        }),
-        PlatformMotion::Still,
-        duration_s,
-        rate_hz,
-    )
+    let sine = CommandSignal::Sine {
+        amplitude_v,
+        freq_hz,
+    };
+    let (drive, platform) = (Drive::OpenLoop(sine), PlatformMotion::Still);
+    run(params, kind, drive, platform, duration_s, rate_hz)
 }
 
 /// Table 1 of the paper: the 69 (frequency [Hz], amplitude [V]) valve sine tests.
