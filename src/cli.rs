@@ -196,7 +196,7 @@ pub struct SweepArgs {
         allow_hyphen_values = true
     )]
     pub freqs: Vec<f64>,
-    /// Default: simulated for the twin, exact for the linear and passive models.
+    /// Default: simulated for the twin, exact for linear and passive.
     #[arg(long, value_enum)]
     pub method: Option<Method>,
     /// Output file (CSV).
