@@ -378,30 +378,18 @@ fn run(cmd: Command) -> Result<()> {
             }
             let rep = identify::replay(&params, &rec)?;
             let s = &rep.sim;
-            let rows = (0..s.t.len()).map(|i| {
-                vec![
-                    rec.t[i], s.u[i], s.ydd[i], s.p1[i], s.p2[i], s.xv[i], s.q1[i], s.q2[i],
-                ]
-            });
-            dataset::write_csv_atomic(
-                &out,
-                &["t", "u", "ydd", "p1", "p2", "xv", "q1", "q2"],
-                &[
-                    ("model".into(), "twin".into()),
-                    ("preset".into(), preset.clone()),
-                    ("replayed".into(), data.display().to_string()),
-                    (
-                        "excitation".into(),
-                        identify::replay::EXCITATION_CONDITIONING.into(),
-                    ),
-                    (
-                        "units".into(),
-                        "t s, u m, ydd m/s^2, p1 Pa, p2 Pa, xv m, q1 m^3/s, q2 m^3/s".into(),
-                    ),
-                ],
-                rows,
-            )
-            .with_context(|| format!("writing {}", out.display()))?;
+            let comments = [
+                ("model".into(), "twin".into()),
+                ("preset".into(), preset.clone()),
+                ("replayed".into(), data.display().to_string()),
+                (
+                    "excitation".into(),
+                    identify::replay::EXCITATION_CONDITIONING.into(),
+                ),
+                ("units".into(), identify::SimChannels::CSV_UNITS.into()),
+            ];
+            s.write_csv(&rec.t, &out, &comments)
+                .with_context(|| format!("writing {}", out.display()))?;
             let e = &rep.errors;
             println!(
                 "{} samples replayed to {}; RMS error: du {:.3} mm/s ({:.1} %), u {:.3} mm{}",
