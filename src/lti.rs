@@ -29,7 +29,7 @@ use crate::params::MAX_DELAY_S;
 use crate::scenario::PlatformMotion;
 use crate::simulation::{
     CommandPath, Drive, Run, RunState, Sample, SimError, check_bounds, closed_loop_controller,
-    send_command,
+    send_command, start_controller,
 };
 use nalgebra::{DMatrix, SMatrix};
 
@@ -118,14 +118,7 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> LtiSimulat
             reuse_valve: false,
         };
         let u0 = sim.model.relative_position(&sim.y);
-        if let Some(c) = sim.controller.as_mut() {
-            c.start(&Measurement {
-                u: u0,
-                ydd: 0.0,
-                xdd: xdd_now,
-                dxd: 0.0,
-            });
-        }
+        start_controller(&mut sim.controller, u0, xdd_now);
         let v0 = sim.command_now();
         send_command(&mut sim.controller, &mut history, v0);
         sim.history = history;

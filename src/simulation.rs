@@ -265,24 +265,12 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             stats: StepStats::default(),
             method: Method::Rk4(Rk4 { h }),
         };
-        sim.start_controller();
+        let u0 = sim.model.relative_position(&sim.y);
+        start_controller(&mut sim.controller, u0, xdd_now);
         let v0 = sim.command_now();
         send_command(&mut sim.controller, &mut history, v0);
         sim.history = history;
         sim
-    }
-
-    /// Gives the controller its first measurement (t = 0).
-    fn start_controller(&mut self) {
-        let m = Measurement {
-            u: self.model.relative_position(&self.y),
-            ydd: 0.0,
-            xdd: self.xdd_now,
-            dxd: 0.0,
-        };
-        if let Some(c) = self.controller.as_mut() {
-            c.start(&m);
-        }
     }
 
     /// The model.
@@ -347,7 +335,8 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             _ => {
                 self.controller = closed_loop_controller(&drive, self.run.h);
                 self.drive = drive;
-                self.start_controller();
+                let u = self.model.relative_position(&self.y);
+                start_controller(&mut self.controller, u, self.xdd_now);
                 return;
             }
         }
@@ -543,6 +532,19 @@ pub(crate) fn closed_loop_controller(drive: &Drive, h: f64) -> Option<Controller
     match drive {
         Drive::ClosedLoop(law) => Some(Controller::new(law, h)),
         Drive::OpenLoop(_) => None,
+    }
+}
+
+/// Gives a closed loop's controller its first measurement: stroke `u` [m] and platform
+/// acceleration `xdd` [m/s²] (no body acceleration and no `∫ẍ` yet).
+pub(crate) fn start_controller(controller: &mut Option<Controller>, u: f64, xdd: f64) {
+    if let Some(c) = controller.as_mut() {
+        c.start(&Measurement {
+            u,
+            ydd: 0.0,
+            xdd,
+            dxd: 0.0,
+        });
     }
 }
 
