@@ -7,7 +7,7 @@ use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::{Integrator, Params};
 use crate::scenario::{PlatformMotion, RandomRide};
-use crate::simulation::{SimError, Trace};
+use crate::simulation::{Drive, SimError, Trace};
 use std::fmt::Write;
 use std::time::Instant;
 
@@ -55,7 +55,7 @@ pub fn ride_run(
     experiments::run(
         &p,
         kind,
-        experiments::closed_loop(&p),
+        Drive::closed_loop(&p),
         ride.clone(),
         duration_s,
         1000.0,

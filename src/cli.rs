@@ -128,20 +128,9 @@ pub enum Command {
         /// Command amplitude of the sine dwell [V] (twin).
         #[arg(long, default_value_t = 0.72, allow_hyphen_values = true)]
         amp: f64,
-        /// Comma-separated frequencies [Hz].
-        #[arg(
-            long,
-            value_delimiter = ',',
-            required = true,
-            allow_hyphen_values = true
-        )]
-        freqs: Vec<f64>,
-        /// Default: simulated for the twin, exact for the linear model.
-        #[arg(long, value_enum)]
-        method: Option<Method>,
-        /// Output file (CSV).
-        #[arg(long)]
-        out: PathBuf,
+        /// Frequencies, method and output file.
+        #[command(flatten)]
+        sweep: SweepArgs,
     },
     /// Transmissibility ÿ/ẍ with the controller: columns freq_hz, mag, phase_deg.
     Transmissibility {
@@ -151,20 +140,9 @@ pub enum Command {
         /// Preset file or shipped preset name.
         #[arg(long, default_value = "paper")]
         preset: String,
-        /// Comma-separated frequencies [Hz].
-        #[arg(
-            long,
-            value_delimiter = ',',
-            required = true,
-            allow_hyphen_values = true
-        )]
-        freqs: Vec<f64>,
-        /// Default: simulated for the twin, exact for linear and passive.
-        #[arg(long, value_enum)]
-        method: Option<Method>,
-        /// Output file (CSV).
-        #[arg(long)]
-        out: PathBuf,
+        /// Frequencies, method and output file.
+        #[command(flatten)]
+        sweep: SweepArgs,
     },
     /// Replay a measured record through the twin (its v_in and platform motion, open loop):
     /// columns t,u,ydd,p1,p2,xv,q1,q2 on the record's time grid (SI).
@@ -205,6 +183,25 @@ pub enum Command {
     /// no end-stop contact, max |u| ≤ 30 mm, GM ≥ 6 dB, PM ≥ 45°); writes tuned.toml,
     /// report.md, report.json and plots to DIR.
     Tune(TuneArgs),
+}
+
+/// The options `bode` and `transmissibility` end with: the frequencies, the method, the file.
+#[derive(Debug, clap::Args)]
+pub struct SweepArgs {
+    /// Comma-separated frequencies [Hz].
+    #[arg(
+        long,
+        value_delimiter = ',',
+        required = true,
+        allow_hyphen_values = true
+    )]
+    pub freqs: Vec<f64>,
+    /// Default: simulated for the twin, exact for linear and passive.
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
+    /// Output file (CSV).
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// Arguments of `seat-twin tune`.
@@ -333,11 +330,11 @@ pub fn validate(cmd: &Command) -> Result<(), OptionError> {
             check_range("--f1", *f1, flo, fhi, "Hz")?;
             Ok(())
         }
-        Command::Bode { amp, freqs, .. } => {
-            check_freqs(freqs)?;
+        Command::Bode { amp, sweep, .. } => {
+            check_freqs(&sweep.freqs)?;
             check_dwell_amp(*amp)
         }
-        Command::Transmissibility { freqs, .. } => check_freqs(freqs),
+        Command::Transmissibility { sweep, .. } => check_freqs(&sweep.freqs),
         // Checked by their own runs (`seat-test`, `tune`), or no numeric option.
         Command::Report { .. }
         | Command::Replay { .. }

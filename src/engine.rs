@@ -17,7 +17,7 @@ use crate::params::ControllerParams;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, SampledMotion};
 use crate::seat_test::{ClassMotion, InputClass};
-use crate::simulation::{ContactEvent, Drive, Sample, SimError, Simulation, step_for_rate};
+use crate::simulation::{ContactEvent, Drive, Run, Sample, SimError, Simulation, step_for_rate};
 use serde::{Deserialize, Serialize};
 use std::panic::AssertUnwindSafe;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};

@@ -14,7 +14,7 @@
 //!   registered path. The CLI calls it when it receives SIGINT or SIGTERM, so an interrupted
 //!   run leaves no hidden temporary file behind.
 
-use std::ffi::OsString;
+use std::ffi::{OsStr, OsString};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
@@ -83,6 +83,18 @@ fn hidden_prefix(path: &Path) -> OsString {
     s
 }
 
+/// A builder of the temporary path `{prefix}XXXXXX.tmp` ([`hidden_prefix`]), created with the
+/// Unix mode `mode` less the umask.
+fn temp_beside(prefix: &OsStr, mode: u32) -> tempfile::Builder<'_, 'static> {
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(prefix).suffix(".tmp");
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(mode));
+    #[cfg(not(unix))]
+    let _ = mode;
+    builder
+}
+
 /// Writes a file atomically: `write` fills a temporary file in the target's directory, which
 /// is then flushed, synced and renamed over `path`. On any error, `write`'s included, `path` is
 /// left as it was and the temporary file is removed. The file's mode is `0666` less the umask.
@@ -93,13 +105,8 @@ pub fn write_atomic<E: From<io::Error>>(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> Result<(), E>,
 ) -> Result<(), E> {
-    let dir = parent_of(path);
     let prefix = hidden_prefix(path);
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let tmp = builder.tempfile_in(dir)?;
+    let tmp = temp_beside(&prefix, 0o666).tempfile_in(parent_of(path))?;
     let registered = Registered::new(tmp.path());
     let mut w = io::BufWriter::with_capacity(1 << 16, tmp);
     write(&mut w)?;
@@ -156,11 +163,7 @@ impl OutputDir {
         let parent = parent_of(target);
         std::fs::create_dir_all(parent)?;
         let prefix = hidden_prefix(target);
-        let mut builder = tempfile::Builder::new();
-        builder.prefix(&prefix).suffix(".tmp");
-        #[cfg(unix)]
-        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o777));
-        let tmp = builder.tempdir_in(parent)?;
+        let tmp = temp_beside(&prefix, 0o777).tempdir_in(parent)?;
         let registered = Registered::new(tmp.path());
         Ok(Self {
             target: target.to_path_buf(),

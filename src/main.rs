@@ -5,9 +5,9 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use seat_twin::analysis::dwell;
 use seat_twin::analysis::response::{Method, Response, ResponseError, response};
-use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, check_range};
+use seat_twin::cli::{self, Cli, Command, MAX_DURATION_S, ScenarioArg, SweepArgs, check_range};
 use seat_twin::dataset::{self, RecordKind};
-use seat_twin::experiments;
+use seat_twin::experiments::RunSpec;
 use seat_twin::fsutil::{self, OutputDir};
 use seat_twin::identify;
 use seat_twin::model::ModelKind;
@@ -16,9 +16,8 @@ use seat_twin::params::fmt_value;
 use seat_twin::preset;
 use seat_twin::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, SampledMotion};
 use seat_twin::simulation::{
-    ContactEvent, Drive, RunSummary, SimError, sample_count, step_for_rate,
+    ContactEvent, CsvRunError, Drive, SAMPLE_UNITS, sample_count, step_for_rate,
 };
-use std::path::Path;
 
 mod commands;
 use commands::{find_class, run_seat_test_command, run_tune};
@@ -202,14 +201,14 @@ fn run(cmd: Command) -> Result<()> {
                     };
                     let d = motion.duration_s();
                     (
-                        experiments::closed_loop(&params),
+                        Drive::closed_loop(&params),
                         PlatformMotion::Sampled(motion),
                         d,
                         format!("excitation {}", path.display()),
                     )
                 }
                 (Some(ScenarioArg::Cycloid), None) => (
-                    experiments::closed_loop(&params),
+                    Drive::closed_loop(&params),
                     PlatformMotion::Cycloid(Cycloid::default()),
                     5.0,
                     "cycloid 30 mm in 0.5 s".to_string(),
@@ -225,7 +224,7 @@ fn run(cmd: Command) -> Result<()> {
                     };
                     ride.validate()?;
                     (
-                        experiments::closed_loop(&params),
+                        Drive::closed_loop(&params),
                         PlatformMotion::Sampled(ride.generate()),
                         ride.duration_s,
                         format!("random ride seed {seed}"),
@@ -272,7 +271,7 @@ fn run(cmd: Command) -> Result<()> {
                     let sampled = motion.generate()?;
                     let d = sampled.duration_s();
                     (
-                        experiments::closed_loop(&params),
+                        Drive::closed_loop(&params),
                         PlatformMotion::Sampled(sampled),
                         d,
                         format!("seat-test input class {} seed {seed}", class.name),
@@ -304,23 +303,16 @@ fn run(cmd: Command) -> Result<()> {
                 ("model".to_string(), kind.name().to_string()),
                 ("preset".to_string(), preset.clone()),
                 ("scenario".to_string(), label.clone()),
-                (
-                    "units".to_string(),
-                    "t s, x m, xdd m/s^2, u m, ydd m/s^2, v_in V, xv m, p1 Pa, p2 Pa, q1 m^3/s, q2 m^3/s"
-                        .to_string(),
-                ),
+                ("units".to_string(), SAMPLE_UNITS.to_string()),
             ];
             comments.extend(warnings.into_iter().map(|w| ("warning".to_string(), w)));
-            let run = || {
-                let spec = RunSpec {
-                    params: &params,
-                    kind,
-                    drive,
-                    platform,
-                    duration,
-                    rate,
-                };
-                simulate_to_csv(spec, &out, &comments)
+            let spec = RunSpec {
+                params: &params,
+                kind,
+                drive,
+                platform,
+                duration_s: duration,
+                rate_hz: rate,
             };
             let heartbeat = (samples > 2_000_000).then(|| {
                 Heartbeat::start(
@@ -328,9 +320,9 @@ fn run(cmd: Command) -> Result<()> {
                     std::time::Duration::from_secs(10),
                 )
             });
-            let summary = match run() {
+            let summary = match spec.write_csv(&out, &comments) {
                 Ok(s) => s,
-                Err(StreamError::Sim(e)) => {
+                Err(CsvRunError::Sim(e)) => {
                     return Err(
                         anyhow::Error::new(e).context(match (&excitation, peak_input) {
                             (Some(path), Some(peak)) => format!(
@@ -349,7 +341,7 @@ fn run(cmd: Command) -> Result<()> {
                         }),
                     );
                 }
-                Err(StreamError::Io(e)) => {
+                Err(CsvRunError::Io(e)) => {
                     return Err(anyhow::Error::new(e))
                         .with_context(|| format!("writing {}", out.display()));
                 }
@@ -368,23 +360,16 @@ fn run(cmd: Command) -> Result<()> {
             model,
             preset,
             amp,
-            freqs,
-            method,
-            out,
+            sweep,
         } => {
             let what = Response::Bode { amplitude_v: amp };
-            write_response(&preset, model, what, method, &freqs, &out)
+            write_response(&preset, model, what, &sweep)
         }
         Command::Transmissibility {
             model,
             preset,
-            freqs,
-            method,
-            out,
-        } => {
-            let what = Response::Transmissibility;
-            write_response(&preset, model, what, method, &freqs, &out)
-        }
+            sweep,
+        } => write_response(&preset, model, Response::Transmissibility, &sweep),
         Command::Replay { data, preset, out } => {
             let params = load_params(&preset)?;
             let rec = dataset::read_record(&data, RecordKind::Measured)?;
@@ -393,30 +378,18 @@ fn run(cmd: Command) -> Result<()> {
             }
             let rep = identify::replay(&params, &rec)?;
             let s = &rep.sim;
-            let rows = (0..s.t.len()).map(|i| {
-                vec![
-                    rec.t[i], s.u[i], s.ydd[i], s.p1[i], s.p2[i], s.xv[i], s.q1[i], s.q2[i],
-                ]
-            });
-            dataset::write_csv_atomic(
-                &out,
-                &["t", "u", "ydd", "p1", "p2", "xv", "q1", "q2"],
-                &[
-                    ("model".into(), "twin".into()),
-                    ("preset".into(), preset.clone()),
-                    ("replayed".into(), data.display().to_string()),
-                    (
-                        "excitation".into(),
-                        identify::replay::EXCITATION_CONDITIONING.into(),
-                    ),
-                    (
-                        "units".into(),
-                        "t s, u m, ydd m/s^2, p1 Pa, p2 Pa, xv m, q1 m^3/s, q2 m^3/s".into(),
-                    ),
-                ],
-                rows,
-            )
-            .with_context(|| format!("writing {}", out.display()))?;
+            let comments = [
+                ("model".into(), "twin".into()),
+                ("preset".into(), preset.clone()),
+                ("replayed".into(), data.display().to_string()),
+                (
+                    "excitation".into(),
+                    identify::replay::EXCITATION_CONDITIONING.into(),
+                ),
+                ("units".into(), identify::SimChannels::CSV_UNITS.into()),
+            ];
+            s.write_csv(&rec.t, &out, &comments)
+                .with_context(|| format!("writing {}", out.display()))?;
             let e = &rep.errors;
             println!(
                 "{} samples replayed to {}; RMS error: du {:.3} mm/s ({:.1} %), u {:.3} mm{}",
@@ -516,14 +489,8 @@ fn run(cmd: Command) -> Result<()> {
 
 /// `bode` and `transmissibility`: the response by its entry point, then one CSV file. A
 /// non-finite point is refused naming the frequency and the input it came from.
-fn write_response(
-    preset: &str,
-    kind: ModelKind,
-    what: Response,
-    method: Option<Method>,
-    freqs: &[f64],
-    out: &Path,
-) -> Result<()> {
+fn write_response(preset: &str, kind: ModelKind, what: Response, sweep: &SweepArgs) -> Result<()> {
+    let SweepArgs { freqs, method, out } = sweep;
     let params = load_params(preset)?;
     // What a non-finite point is traced back to, and the input's own comment line.
     let (input, extra) = match what {
@@ -572,87 +539,6 @@ fn record_peak(rec: &dataset::Record) -> Option<String> {
         fmt_value(rec.t[i]),
         i + 1
     ))
-}
-
-/// Why a streamed simulation stopped.
-enum StreamError {
-    /// The model diverged.
-    Sim(SimError),
-    /// The output could not be written.
-    Io(std::io::Error),
-}
-
-impl From<std::io::Error> for StreamError {
-    fn from(e: std::io::Error) -> Self {
-        StreamError::Io(e)
-    }
-}
-
-/// One run of `simulate`: a model with its drive and platform motion, for `duration` [s]
-/// recorded at `rate` [Hz].
-struct RunSpec<'a> {
-    params: &'a Params,
-    kind: ModelKind,
-    drive: Drive,
-    platform: PlatformMotion,
-    duration: f64,
-    rate: f64,
-}
-
-/// Runs the simulation and writes its samples to `out` as they are made (atomically, with the
-/// columns the model has): memory does not grow with the duration.
-fn simulate_to_csv(
-    spec: RunSpec,
-    out: &Path,
-    comments: &[(String, String)],
-) -> Result<RunSummary, StreamError> {
-    let RunSpec {
-        params,
-        kind,
-        drive,
-        platform,
-        duration,
-        rate,
-    } = spec;
-    let hyd = kind.has_hydraulics();
-    let cmd = kind.has_command();
-    let mut header = vec!["t", "x", "xdd", "u", "ydd"];
-    if cmd {
-        header.push("v_in");
-    }
-    if hyd {
-        header.extend(["xv", "p1", "p2", "q1", "q2"]);
-    }
-    let mut summary = None;
-    fsutil::write_atomic(out, |w| -> Result<(), StreamError> {
-        let mut csv = dataset::CsvWriter::start(w, &header, comments)?;
-        let mut failed = None;
-        let mut row = Vec::with_capacity(header.len());
-        let s = experiments::run_streaming(params, kind, drive, platform, duration, rate, |s| {
-            row.clear();
-            row.extend([s.t, s.x, s.xdd, s.u, s.ydd]);
-            if cmd {
-                row.push(s.v_in);
-            }
-            if hyd {
-                row.extend([s.xv, s.p1, s.p2, s.q1, s.q2]);
-            }
-            match csv.row(&mut *w, &row) {
-                Ok(()) => true,
-                Err(e) => {
-                    failed = Some(e);
-                    false
-                }
-            }
-        })
-        .map_err(StreamError::Sim)?;
-        if let Some(e) = failed {
-            return Err(StreamError::Io(e));
-        }
-        summary = Some(s);
-        Ok(())
-    })?;
-    summary.ok_or_else(|| StreamError::Io(std::io::Error::other("the run recorded nothing")))
 }
 
 fn report_contacts(kind: ModelKind, contacts: &[ContactEvent]) {

@@ -432,6 +432,33 @@ pub fn shipped_presets() -> Vec<(String, PathBuf)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::params::{ControllerKind, PARAMS};
+
+    /// The key of every entry names the field it reads, as the preset file spells it: the
+    /// paper's parameters serialised to TOML hold, at each dotted key, the value `get` reads
+    /// (for each controller kind, since a preset writes only its kind's gains).
+    #[test]
+    fn keys_match_the_preset_file() {
+        for kind in ControllerKind::ALL {
+            let mut p = Params::paper();
+            p.controller.kind = kind;
+            let preset = Preset {
+                meta: Default::default(),
+                params: p,
+            };
+            let doc: toml::Value = toml::from_str(&preset.to_toml()).unwrap();
+            for s in PARAMS.iter().filter(|s| s.applies_to(p.controller.kind)) {
+                let mut v = &doc;
+                for part in s.key.split('.') {
+                    v = v
+                        .get(part)
+                        .unwrap_or_else(|| panic!("{} not in the preset", s.key));
+                }
+                let in_file = v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+                assert_eq!(in_file, Some(s.get(&p)), "{}", s.key);
+            }
+        }
+    }
 
     #[test]
     fn empty_file_is_the_paper() {

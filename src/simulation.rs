@@ -16,6 +16,12 @@ use crate::model::{Inputs, Model, ModelKind, Outputs};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::{CommandSignal, PlatformMotion, PlatformSample};
 
+mod csv;
+mod run;
+pub use csv::{CsvRunError, SAMPLE_UNITS, SampleColumns, write_csv_streamed};
+pub use run::{Run, RunState};
+pub(crate) use run::{check_bounds, trace_buffer};
+
 /// Where the valve command comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Drive {
@@ -23,6 +29,13 @@ pub enum Drive {
     ClosedLoop(ControlLaw),
     /// An open-loop command (sine tests, replay).
     OpenLoop(CommandSignal),
+}
+
+impl Drive {
+    /// Closed loop with the preset's controller (the passive model ignores it).
+    pub fn closed_loop(params: &crate::params::Params) -> Self {
+        Drive::ClosedLoop(ControlLaw::new(params))
+    }
 }
 
 /// A numerical failure of a run.
@@ -105,35 +118,6 @@ impl Sample {
     }
 }
 
-/// Opens, extends or closes the end-stop contact event at time `t` for stroke `u` [m].
-/// Called every step: the usual step (no contact before or after) writes nothing.
-#[inline(always)]
-pub(crate) fn track_contact(
-    contacts: &mut Vec<ContactEvent>,
-    in_contact: &mut bool,
-    t: f64,
-    u: f64,
-    half_stroke: f64,
-) {
-    let pen = u.abs() - half_stroke;
-    if pen > 0.0 {
-        if !*in_contact {
-            contacts.push(ContactEvent {
-                t_start: t,
-                t_end: t,
-                side: if u > 0.0 { 1 } else { -1 },
-                max_penetration_m: pen,
-            });
-            *in_contact = true;
-        } else if let Some(c) = contacts.last_mut() {
-            c.t_end = t;
-            c.max_penetration_m = c.max_penetration_m.max(pen);
-        }
-    } else if *in_contact {
-        *in_contact = false;
-    }
-}
-
 /// One end-stop contact (twin) or stroke overrun (linear, passive models).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct ContactEvent {
@@ -160,7 +144,7 @@ pub struct Trace {
     pub stats: StepStats,
 }
 
-/// What a streamed run leaves besides its samples ([`Simulation::run_streaming`]).
+/// What a streamed run leaves besides its samples ([`Run::run_streaming`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSummary {
     /// Which model produced it.
@@ -193,7 +177,7 @@ pub fn record_every(h: f64, rate_hz: f64) -> u64 {
 }
 
 /// Samples a run to `t_end` [s] recorded at `rate_hz` with internal step `h` gives, both
-/// ends included (what [`Simulation::run_trace`] returns); saturates for absurd inputs.
+/// ends included (what [`Run::run_trace`] returns); saturates for absurd inputs.
 pub fn sample_count(t_end: f64, rate_hz: f64, h: f64) -> u64 {
     let every = record_every(h, rate_hz);
     let n_end = (t_end / h - 1e-9).ceil().max(0.0) as u64;
@@ -212,9 +196,8 @@ impl Trace {
 pub struct Simulation<M: Model<N>, const N: usize> {
     model: M,
     y: [f64; N],
-    t: f64,
-    steps: u64,
-    h: f64,
+    /// The grid, the steps taken and the contacts.
+    run: RunState,
     tau: f64,
     v_max: f64,
     drive: Drive,
@@ -230,8 +213,6 @@ pub struct Simulation<M: Model<N>, const N: usize> {
     /// Platform acceleration at the current time [m/s²] (the previous step's end value).
     xdd_now: f64,
     stats: StepStats,
-    contacts: Vec<ContactEvent>,
-    in_contact: bool,
     /// The stepper (the solver; everything above is the problem it solves): RK4, or the
     /// exponential integrator for
     /// [`Integrator::Exponential`](crate::params::Integrator::Exponential).
@@ -271,9 +252,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         let mut sim = Self {
             model,
             y,
-            t: 0.0,
-            steps: 0,
-            h,
+            run: RunState::new(h),
             tau,
             v_max,
             controller: closed_loop_controller(&drive, h),
@@ -284,41 +263,14 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             stride,
             xdd_now,
             stats: StepStats::default(),
-            contacts: Vec::new(),
-            in_contact: false,
             method: Method::Rk4(Rk4 { h }),
         };
-        sim.start_controller();
+        let u0 = sim.model.relative_position(&sim.y);
+        start_controller(&mut sim.controller, u0, xdd_now);
         let v0 = sim.command_now();
-        if let Some(c) = sim.controller.as_mut() {
-            c.sent(v0);
-        }
-        history.push(v0);
+        send_command(&mut sim.controller, &mut history, v0);
         sim.history = history;
         sim
-    }
-
-    /// Gives the controller its first measurement (t = 0).
-    fn start_controller(&mut self) {
-        let m = Measurement {
-            u: self.model.relative_position(&self.y),
-            ydd: 0.0,
-            xdd: self.xdd_now,
-            dxd: 0.0,
-        };
-        if let Some(c) = self.controller.as_mut() {
-            c.start(&m);
-        }
-    }
-
-    /// Current time [s].
-    pub fn time(&self) -> f64 {
-        self.t
-    }
-
-    /// Internal step [s].
-    pub fn step_size(&self) -> f64 {
-        self.h
     }
 
     /// The model.
@@ -331,24 +283,14 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         &self.y
     }
 
-    /// Integrator work so far.
-    pub fn stats(&self) -> StepStats {
-        self.stats
-    }
-
-    /// Contacts so far.
-    pub fn contacts(&self) -> &[ContactEvent] {
-        &self.contacts
-    }
-
     /// Replaces the model (e.g. new parameters from a slider) keeping the state and time.
     pub fn set_model(&mut self, model: M) {
         self.tau = model.command_delay();
         self.v_max = model.command_limit();
-        self.taps = stage_taps(&self.history, self.tau, self.h);
+        self.taps = stage_taps(&self.history, self.tau, self.run.h);
         self.model = model;
         if self.is_exponential() && self.use_exponential().is_err() {
-            self.method = Method::Rk4(Rk4 { h: self.h });
+            self.method = Method::Rk4(Rk4 { h: self.run.h });
         }
     }
 
@@ -363,7 +305,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             v_valve: 1.0,
             xdd: 1.0,
         };
-        let etd = Etd4::new(self.h, &a, rest, &scales, |y| {
+        let etd = Etd4::new(self.run.h, &a, rest, &scales, |y| {
             self.model.derivatives(0.0, y, &inputs)
         })?;
         self.method = Method::Exponential(Box::new(etd));
@@ -391,9 +333,10 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         match (&drive, self.controller.as_mut()) {
             (Drive::ClosedLoop(law), Some(c)) => c.retune(law),
             _ => {
-                self.controller = closed_loop_controller(&drive, self.h);
+                self.controller = closed_loop_controller(&drive, self.run.h);
                 self.drive = drive;
-                self.start_controller();
+                let u = self.model.relative_position(&self.y);
+                start_controller(&mut self.controller, u, self.xdd_now);
                 return;
             }
         }
@@ -408,7 +351,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     /// Command as sent at the current time (before the delay) [V].
     #[inline]
     pub fn command_now(&self) -> f64 {
-        self.command_for(self.t, &self.y, 0.0)
+        self.command_for(self.time(), &self.y, 0.0)
     }
 
     /// Command at time `t` for state `y`, `dxd` [m/s] of `∫ẍ` beyond the last grid time.
@@ -434,15 +377,15 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     fn valve_command(&self, ts: f64, side: f64, ys: &[f64; N], xdd0: f64, xdds: f64) -> f64 {
         let tq = ts - self.tau;
         match &self.drive {
-            Drive::OpenLoop(sig) => self.saturate(sig.at(tq + side * 1e-6 * self.h)),
+            Drive::OpenLoop(sig) => self.saturate(sig.at(tq + side * 1e-6 * self.run.h)),
             Drive::ClosedLoop(_) => {
                 let t_last = self.history.last_time();
-                if tq <= t_last + 1e-12 * self.h {
+                if tq <= t_last + 1e-12 * self.run.h {
                     self.history.value_at(tq)
                 } else {
                     // τ shorter than the stage offset: blend the newest stored command with
                     // the command of the stage state itself (exact for τ = 0).
-                    let dz = 0.5 * (ts - self.t) * (xdd0 + xdds);
+                    let dz = 0.5 * (ts - self.time()) * (xdd0 + xdds);
                     let v_now = self.command_for(ts, ys, dz);
                     let span = ts - t_last;
                     let w = if span > 0.0 {
@@ -456,10 +399,69 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         }
     }
 
-    /// Advances one internal step.
+    /// Steps the controller to the current grid time; `dxd` is `∫ẍ dt` over the step.
+    #[inline(always)]
+    fn advance_controller(&mut self, dxd: f64) {
+        let Some(c) = self.controller.as_ref() else {
+            return;
+        };
+        let ydd = if c.needs_body_acceleration() {
+            self.outputs().ydd
+        } else {
+            0.0
+        };
+        let m = Measurement {
+            u: self.model.relative_position(&self.y),
+            ydd,
+            xdd: self.xdd_now,
+            dxd,
+        };
+        if let Some(c) = self.controller.as_mut() {
+            c.advance(&m);
+        }
+    }
+
+    #[inline(always)]
+    fn check_state(&self) -> Result<(), SimError> {
+        check_bounds::<M, N>(&self.y, self.time(), |i| self.model.state_bound(i))
+    }
+
+    #[inline(always)]
+    fn track_contact(&mut self) {
+        let u = self.model.relative_position(&self.y);
+        self.run.track_contact(u, self.model.half_stroke());
+    }
+
+    /// Inputs at the current time (for outputs).
+    fn inputs_now(&self) -> Inputs {
+        Inputs {
+            v_valve: match &self.drive {
+                Drive::OpenLoop(sig) => self.saturate(sig.at(self.time() - self.tau)),
+                Drive::ClosedLoop(_) => match &self.taps {
+                    Some([tap, ..]) => self.history.value_at_tap(self.run.steps, tap),
+                    None => self.history.value_at(self.time() - self.tau),
+                },
+            },
+            xdd: self.xdd_now,
+        }
+    }
+
+    /// Model outputs at the current time.
+    pub fn outputs(&self) -> Outputs {
+        self.model.outputs(&self.y, &self.inputs_now())
+    }
+}
+
+impl<M: Model<N> + CommandPath, const N: usize> Run for Simulation<M, N> {
+    const KIND: ModelKind = M::KIND;
+
+    fn run_state(&self) -> &RunState {
+        &self.run
+    }
+
     #[inline]
-    pub fn step(&mut self) -> Result<(), SimError> {
-        let (t, h, n) = (self.t, self.h, self.steps);
+    fn step(&mut self) -> Result<(), SimError> {
+        let (t, h, n) = (self.time(), self.run.h, self.run.steps);
         let xdd0 = self.xdd_now;
         let xdd_mid = self.platform.xdd_at(t + 0.5 * h);
         let xdd1 = self.platform.xdd_at_grid(n + 1, h, self.stride);
@@ -492,229 +494,37 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         self.model.project(&mut y);
         self.stats.steps += 1;
         self.stats.rhs_evals += 4;
-        self.steps += 1;
-        self.t = self.steps as f64 * h;
+        self.run.steps += 1;
         self.y = y;
         self.xdd_now = xdd1;
         self.check_state()?;
         // The controller's ∫ẍ by Simpson's rule, as the RK stages see ẍ.
         self.advance_controller(h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1));
         let v = self.command_now();
-        if let Some(c) = self.controller.as_mut() {
-            c.sent(v);
-        }
-        self.history.push(v);
+        send_command(&mut self.controller, &mut self.history, v);
         self.track_contact();
         Ok(())
     }
 
-    /// Steps the controller to the current grid time; `dxd` is `∫ẍ dt` over the step.
-    #[inline(always)]
-    fn advance_controller(&mut self, dxd: f64) {
-        let Some(c) = self.controller.as_ref() else {
-            return;
-        };
-        let ydd = if c.needs_body_acceleration() {
-            self.outputs().ydd
-        } else {
-            0.0
-        };
-        let m = Measurement {
-            u: self.model.relative_position(&self.y),
-            ydd,
-            xdd: self.xdd_now,
-            dxd,
-        };
-        if let Some(c) = self.controller.as_mut() {
-            c.advance(&m);
-        }
-    }
-
-    fn check_state(&self) -> Result<(), SimError> {
-        for (i, v) in self.y.iter().enumerate() {
-            let bound = self.model.state_bound(i);
-            if !v.is_finite() || v.abs() > bound {
-                return Err(SimError::Diverged {
-                    model: M::KIND.name(),
-                    t: self.t,
-                    state: M::STATE_NAMES[i],
-                    value: *v,
-                    bound,
-                });
-            }
-        }
-        Ok(())
-    }
-
-    fn track_contact(&mut self) {
-        let u = self.model.relative_position(&self.y);
-        let half = self.model.half_stroke();
-        track_contact(&mut self.contacts, &mut self.in_contact, self.t, u, half);
-    }
-
-    /// Inputs at the current time (for outputs).
-    fn inputs_now(&self) -> Inputs {
-        Inputs {
-            v_valve: match &self.drive {
-                Drive::OpenLoop(sig) => self.saturate(sig.at(self.t - self.tau)),
-                Drive::ClosedLoop(_) => match &self.taps {
-                    Some([tap, ..]) => self.history.value_at_tap(self.steps, tap),
-                    None => self.history.value_at(self.t - self.tau),
-                },
-            },
-            xdd: self.xdd_now,
-        }
-    }
-
-    /// Model outputs at the current time.
-    pub fn outputs(&self) -> Outputs {
-        self.model.outputs(&self.y, &self.inputs_now())
-    }
-
-    /// The current instant as a recorded sample.
-    pub fn sample(&self) -> Sample {
+    fn sample(&self) -> Sample {
         let v_in = if M::KIND.has_command() {
             self.history.last_value()
         } else {
             f64::NAN
         };
         Sample::assemble(
-            self.t,
-            self.platform.at_grid(self.steps, self.h, self.stride),
+            self.time(),
+            self.platform
+                .at_grid(self.run.steps, self.run.h, self.stride),
             &self.outputs(),
             v_in,
             self.model.half_stroke(),
         )
     }
 
-    /// Runs until `t_end` [s], calling `record` every `every` steps (and at the start if
-    /// t = 0).
-    pub fn run_until(
-        &mut self,
-        t_end: f64,
-        every: u64,
-        mut record: impl FnMut(Sample),
-    ) -> Result<(), SimError> {
-        stream(self, t_end, every, |s| {
-            record(s);
-            true
-        })
-        .map(|_| ())
+    fn stats(&self) -> StepStats {
+        self.stats
     }
-
-    /// Runs from the current state to `t_end` and returns the recorded trace at `rate_hz`.
-    pub fn run_trace(&mut self, t_end: f64, rate_hz: f64) -> Result<Trace, SimError> {
-        let mut samples = trace_buffer(t_end, rate_hz, self.h);
-        let summary = self.run_streaming(t_end, rate_hz, |s| {
-            samples.push(s);
-            true
-        })?;
-        Ok(summary.into_trace(samples))
-    }
-
-    /// Runs from the current state to `t_end`, passing each sample at `rate_hz` to `record`
-    /// as it is made (the samples of [`Self::run_trace`], without keeping them: memory does
-    /// not grow with the duration). `record` returns `false` to stop the run early.
-    pub fn run_streaming(
-        &mut self,
-        t_end: f64,
-        rate_hz: f64,
-        record: impl FnMut(Sample) -> bool,
-    ) -> Result<RunSummary, SimError> {
-        let every = record_every(self.h, rate_hz);
-        let (samples, stopped) = stream(self, t_end, every, record)?;
-        Ok(RunSummary {
-            model: M::KIND,
-            samples,
-            stopped,
-            contacts: self.contacts.clone(),
-            stats: self.stats,
-        })
-    }
-}
-
-impl<M: Model<N> + CommandPath, const N: usize> Stream for Simulation<M, N> {
-    fn steps_taken(&self) -> u64 {
-        self.steps
-    }
-
-    fn grid_step(&self) -> f64 {
-        self.h
-    }
-
-    #[inline(always)]
-    fn advance_one(&mut self) -> Result<(), SimError> {
-        self.step()
-    }
-
-    #[inline(always)]
-    fn sample_now(&self) -> Sample {
-        self.sample()
-    }
-}
-
-/// A run advanced on a fixed grid and sampled: what [`stream`] drives ([`Simulation`] and
-/// [`crate::lti::LtiSimulation`]).
-pub(crate) trait Stream {
-    /// Steps taken so far.
-    fn steps_taken(&self) -> u64;
-    /// The grid step [s].
-    fn grid_step(&self) -> f64;
-    /// Advances one step.
-    fn advance_one(&mut self) -> Result<(), SimError>;
-    /// The current instant as a recorded sample.
-    fn sample_now(&self) -> Sample;
-    /// Advances one step whose end is recorded and returns that sample (a run may share work
-    /// between the two).
-    #[inline(always)]
-    fn advance_sampled(&mut self) -> Result<Sample, SimError> {
-        self.advance_one()?;
-        Ok(self.sample_now())
-    }
-}
-
-/// The stepping loop of every run: steps `run` until `t_end` [s], passing a sample to
-/// `record` every `every` steps (and at the start when no step has been taken yet), and stops
-/// early when `record` returns `false`. Returns the samples passed and whether it stopped.
-#[inline(always)]
-pub(crate) fn stream(
-    run: &mut impl Stream,
-    t_end: f64,
-    every: u64,
-    mut record: impl FnMut(Sample) -> bool,
-) -> Result<(u64, bool), SimError> {
-    let every = every.max(1);
-    let mut samples = 0u64;
-    if run.steps_taken() == 0 {
-        samples += 1;
-        if !record(run.sample_now()) {
-            return Ok((samples, true));
-        }
-    }
-    let n_end = (t_end / run.grid_step() - 1e-9).ceil() as u64;
-    // Steps until the next multiple of `every`: a countdown rather than a division per step,
-    // which is a fair share of a step as cheap as the exact hold's.
-    let mut to_record = every - run.steps_taken() % every;
-    while run.steps_taken() < n_end {
-        to_record -= 1;
-        if to_record == 0 {
-            to_record = every;
-            let s = run.advance_sampled()?;
-            samples += 1;
-            if !record(s) {
-                return Ok((samples, true));
-            }
-        } else {
-            run.advance_one()?;
-        }
-    }
-    Ok((samples, false))
-}
-
-/// An empty sample buffer sized for a run to `t_end` [s] at `rate_hz` with step `h` [s].
-pub(crate) fn trace_buffer(t_end: f64, rate_hz: f64, h: f64) -> Vec<Sample> {
-    let n = sample_count(t_end, rate_hz, h);
-    Vec::with_capacity(usize::try_from(n).unwrap_or(0).min(1 << 24))
 }
 
 /// The controller a drive runs, if it is closed loop.
@@ -723,6 +533,29 @@ pub(crate) fn closed_loop_controller(drive: &Drive, h: f64) -> Option<Controller
         Drive::ClosedLoop(law) => Some(Controller::new(law, h)),
         Drive::OpenLoop(_) => None,
     }
+}
+
+/// Gives a closed loop's controller its first measurement: stroke `u` [m] and platform
+/// acceleration `xdd` [m/s²] (no body acceleration and no `∫ẍ` yet).
+pub(crate) fn start_controller(controller: &mut Option<Controller>, u: f64, xdd: f64) {
+    if let Some(c) = controller.as_mut() {
+        c.start(&Measurement {
+            u,
+            ydd: 0.0,
+            xdd,
+            dxd: 0.0,
+        });
+    }
+}
+
+/// Records `v` [V] as the command sent at the current grid time: the controller is told, and
+/// the delay line stores it for the valve to read `τ` later.
+#[inline(always)]
+pub(crate) fn send_command(controller: &mut Option<Controller>, history: &mut DelayLine, v: f64) {
+    if let Some(c) = controller.as_mut() {
+        c.sent(v);
+    }
+    history.push(v);
 }
 
 /// The reads of the delayed command at a step's three stage times, when τ ≥ h.

@@ -3,7 +3,7 @@
 
 use super::IdentifyError;
 use super::diagnose;
-use super::replay::{ChannelErrors, PreparedRecord, Replay, replay_prepared, rms};
+use super::replay::{ChannelErrors, PreparedRecord, RawChannel, Replay, replay_prepared, rms};
 use super::result::{
     CalibrationReport, Diagnostics, ErrorSummary, METRIC, RAW_NRMSE, RawNrmse, Split, StageErrors,
     Verdict,
@@ -22,22 +22,20 @@ pub(super) fn replay_all(
         .collect()
 }
 
-/// Pooled raw NRMSE per channel over `replays`.
-pub(super) fn raw_pooled(replays: &[Replay]) -> BTreeMap<String, f64> {
+/// Per channel, `√(Σ num / Σ den)` over `replays`, where `terms` gives each replay's
+/// `(num, den)` per channel (`None` for a channel it lacks); a channel whose `Σ den` is not
+/// positive is left out.
+fn pooled<const K: usize>(
+    replays: &[Replay],
+    terms: impl Fn(&Replay) -> [(&'static str, Option<(f64, f64)>); K],
+) -> BTreeMap<String, f64> {
     let mut acc: BTreeMap<&str, (f64, f64)> = BTreeMap::new();
     for r in replays {
-        let n = r.errors.samples as f64;
-        let raw = &r.errors.raw;
-        for (name, c) in [
-            ("u", Some(raw.u)),
-            ("ydd", raw.ydd),
-            ("p1", raw.p1),
-            ("p2", raw.p2),
-        ] {
-            if let Some(c) = c {
+        for (name, term) in terms(r) {
+            if let Some((num, den)) = term {
                 let e = acc.entry(name).or_insert((0.0, 0.0));
-                e.0 += n * c.rms_error * c.rms_error;
-                e.1 += n * c.measured_std * c.measured_std;
+                e.0 += num;
+                e.1 += den;
             }
         }
     }
@@ -47,29 +45,39 @@ pub(super) fn raw_pooled(replays: &[Replay]) -> BTreeMap<String, f64> {
         .collect()
 }
 
+/// Pooled raw NRMSE per channel over `replays`.
+pub(super) fn raw_pooled(replays: &[Replay]) -> BTreeMap<String, f64> {
+    pooled(replays, |r| {
+        let n = r.errors.samples as f64;
+        let raw = &r.errors.raw;
+        let term = |c: RawChannel| {
+            (
+                n * c.rms_error * c.rms_error,
+                n * c.measured_std * c.measured_std,
+            )
+        };
+        [
+            ("u", Some(term(raw.u))),
+            ("ydd", raw.ydd.map(term)),
+            ("p1", raw.p1.map(term)),
+            ("p2", raw.p2.map(term)),
+        ]
+    })
+}
+
 /// Weighted RMS per channel (`du`, `ydd`, `p1`, `p2`) pooled over the replays.
 pub(super) fn weighted_channels(replays: &[Replay]) -> BTreeMap<String, f64> {
-    let mut acc: BTreeMap<&str, (f64, f64)> = BTreeMap::new();
-    for r in replays {
+    pooled(replays, |r| {
         let e = &r.errors;
         let n = e.samples as f64;
-        for (name, v) in [
-            ("du", Some(e.weighted_du)),
-            ("ydd", e.weighted_ydd),
-            ("p1", e.weighted_p1),
-            ("p2", e.weighted_p2),
-        ] {
-            if let Some(v) = v {
-                let a = acc.entry(name).or_insert((0.0, 0.0));
-                a.0 += n * v * v;
-                a.1 += n;
-            }
-        }
-    }
-    acc.into_iter()
-        .filter(|(_, (_, n))| *n > 0.0)
-        .map(|(k, (s, n))| (k.to_string(), (s / n).sqrt()))
-        .collect()
+        let term = |v: f64| (n * v * v, n);
+        [
+            ("du", Some(term(e.weighted_du))),
+            ("ydd", e.weighted_ydd.map(term)),
+            ("p1", e.weighted_p1.map(term)),
+            ("p2", e.weighted_p2.map(term)),
+        ]
+    })
 }
 
 /// Weighted error before and after, pooled and per channel, on `recs`.

@@ -36,63 +36,56 @@ pub fn write_plots(r: &CalibrationReport, dir: &Path) -> Result<(), OutputError>
         let (ix, _) = thin(&rec.t, 3000);
         let pick = |v: &[f64], k: f64| ix.iter().map(|&j| k * v[j]).collect::<Vec<f64>>();
         let t = pick(&rec.t, 1.0);
-        let mut p = Panel::new(
-            format!("{}: relative velocity", rec.name),
-            "time [s]",
-            "u̇ [mm/s]",
-        );
-        p.series = vec![
-            Series::line("measured", t.clone(), pick(&rec.du_meas_f, 1e3), c_meas),
-            Series::line(
-                "twin before",
-                t.clone(),
-                pick(&r.replays_before[i].twin_du, 1e3),
-                c_before,
-            ),
-            Series::line(
-                "twin after",
-                t.clone(),
-                pick(&r.replays_after[i].twin_du, 1e3),
-                c_after,
-            ),
-        ];
-        fit_panels.push(p);
-        let mut q = Panel::new(
-            format!("{}: velocity residual (twin − measured)", rec.name),
-            "time [s]",
-            "Δu̇ [mm/s]",
-        );
-        q.series = vec![
-            Series::line(
-                "before",
-                t.clone(),
-                pick(&r.replays_before[i].residual_du, 1e3),
-                c_before,
-            ),
-            Series::line(
-                "after",
-                t.clone(),
-                pick(&r.replays_after[i].residual_du, 1e3),
-                c_after,
-            ),
-        ];
-        if let (Some(b), Some(a)) = (
-            &r.replays_before[i].residual_ydd,
-            &r.replays_after[i].residual_ydd,
-        ) {
-            let mut qa = Panel::new(
-                format!("{}: acceleration residual", rec.name),
+        // A "before" and an "after" curve of the channel each replay gives.
+        let before_after = |labels: [&str; 2], before: &[f64], after: &[f64], k: f64| {
+            vec![
+                Series::line(labels[0], t.clone(), pick(before, k), c_before),
+                Series::line(labels[1], t.clone(), pick(after, k), c_after),
+            ]
+        };
+        let (b, a) = (&r.replays_before[i], &r.replays_after[i]);
+        let mut fit = vec![Series::line(
+            "measured",
+            t.clone(),
+            pick(&rec.du_meas_f, 1e3),
+            c_meas,
+        )];
+        fit.extend(before_after(
+            ["twin before", "twin after"],
+            &b.twin_du,
+            &a.twin_du,
+            1e3,
+        ));
+        fit_panels.push(
+            Panel::new(
+                format!("{}: relative velocity", rec.name),
                 "time [s]",
-                "Δÿ [m/s²]",
+                "u̇ [mm/s]",
+            )
+            .with_series(fit),
+        );
+        res_panels.push(
+            Panel::new(
+                format!("{}: velocity residual (twin − measured)", rec.name),
+                "time [s]",
+                "Δu̇ [mm/s]",
+            )
+            .with_series(before_after(
+                ["before", "after"],
+                &b.residual_du,
+                &a.residual_du,
+                1e3,
+            )),
+        );
+        if let (Some(rb), Some(ra)) = (&b.residual_ydd, &a.residual_ydd) {
+            res_panels.push(
+                Panel::new(
+                    format!("{}: acceleration residual", rec.name),
+                    "time [s]",
+                    "Δÿ [m/s²]",
+                )
+                .with_series(before_after(["before", "after"], rb, ra, 1.0)),
             );
-            qa.series = vec![
-                Series::line("before", t.clone(), pick(b, 1.0), c_before),
-                Series::line("after", t.clone(), pick(a, 1.0), c_after),
-            ];
-            res_panels.push(q);
-            res_panels.push(qa);
-        } else {
-            res_panels.push(q);
         }
     }
     let h = |n: usize| (260 * n as u32).clamp(400, 2400);

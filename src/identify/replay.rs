@@ -40,7 +40,8 @@ use super::IdentifyError;
 use crate::dataset::Record;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, PlatformMotion, SampledMotion};
-use crate::simulation::{Drive, Simulation, step_for_rate};
+use crate::simulation::{Drive, Run, Simulation, step_for_rate};
+use std::path::Path;
 use std::sync::Arc;
 
 pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
@@ -108,6 +109,38 @@ pub struct SimChannels {
     pub q1: Vec<f64>,
     /// Hose-2 flow [m³/s].
     pub q2: Vec<f64>,
+}
+
+impl SimChannels {
+    /// The columns [`Self::write_csv`] writes.
+    pub const CSV_COLUMNS: [&'static str; 8] = ["t", "u", "ydd", "p1", "p2", "xv", "q1", "q2"];
+    /// Their units, for the `units` comment.
+    pub const CSV_UNITS: &'static str =
+        "t s, u m, ydd m/s^2, p1 Pa, p2 Pa, xv m, q1 m^3/s, q2 m^3/s";
+
+    /// Writes the channels to `path` in the [dataset format](crate::dataset) with `comments`,
+    /// atomically, one row per sample with its time from `t` (the replayed record's own time
+    /// column, on whose grid the channels lie).
+    pub fn write_csv(
+        &self,
+        t: &[f64],
+        path: &Path,
+        comments: &[(String, String)],
+    ) -> std::io::Result<()> {
+        let rows = (0..self.t.len()).map(|i| {
+            vec![
+                t[i],
+                self.u[i],
+                self.ydd[i],
+                self.p1[i],
+                self.p2[i],
+                self.xv[i],
+                self.q1[i],
+                self.q2[i],
+            ]
+        });
+        crate::dataset::write_csv_atomic(path, &Self::CSV_COLUMNS, comments, rows)
+    }
 }
 
 /// A record made ready for repeated replays: inputs, filtered measured channels, weights.
@@ -596,6 +629,49 @@ pub fn replay_prepared(params: &Params, rec: &PreparedRecord) -> Result<Replay, 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The written replay holds the record's times and the twin's channels, number for
+    /// number, in the documented columns.
+    #[test]
+    fn a_replay_written_to_csv_reads_back_number_for_number() {
+        let n = 50;
+        let ch = |k: f64| {
+            (0..n)
+                .map(|i| k * (i as f64 + 0.5).sin())
+                .collect::<Vec<f64>>()
+        };
+        let sim = SimChannels {
+            t: (0..n).map(|i| i as f64 * 1e-3).collect(),
+            u: ch(0.01),
+            du: ch(0.2),
+            ydd: ch(3.0),
+            p1: ch(55e5),
+            p2: ch(-54e5),
+            xv: ch(1e-4),
+            q1: ch(3e-4),
+            q2: ch(-3e-4),
+        };
+        // The record's own times (printed rounded in a file) are the ones written.
+        let t: Vec<f64> = (0..n).map(|i| 0.5 + i as f64 * 1.0001e-3).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("replay.csv");
+        sim.write_csv(&t, &path, &[("model".into(), "twin".into())])
+            .unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("# model: twin"));
+        assert_eq!(lines.next(), Some("t,u,ydd,p1,p2,xv,q1,q2"));
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len(), n);
+        for (i, row) in rows.iter().enumerate() {
+            let expected = [
+                t[i], sim.u[i], sim.ydd[i], sim.p1[i], sim.p2[i], sim.xv[i], sim.q1[i], sim.q2[i],
+            ];
+            assert_eq!(row.as_slice(), expected.as_slice(), "row {i}");
+        }
+    }
 
     #[test]
     fn pressure_channels_enter_the_metric_only_when_recorded() {

@@ -252,18 +252,13 @@ pub fn report(
     monitor: &Monitor<'_>,
 ) -> Result<CalibrationReport, IdentifyError> {
     monitor.enter(Stage::Report, 7);
-    let Findings {
-        campaign,
-        nominal,
-        paper,
-        declared,
-        search,
-        bic,
-        notes,
-    } = found;
-    let (all, fit_recs, val_recs) = (&campaign.all, &campaign.fit, &campaign.validation);
-    let before_params = with_numerics_of(declared.fit.params, params);
-    let mut current = search.current;
+    let (all, fit_recs, val_recs) = (
+        &found.campaign.all,
+        &found.campaign.fit,
+        &found.campaign.validation,
+    );
+    let before_params = with_numerics_of(found.declared.fit.params, params);
+    let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
     let replay = |p: &Params, recs| -> Result<Vec<Replay>, IdentifyError> {
         let r = replay_all(p, recs)?;
@@ -287,7 +282,7 @@ pub fn report(
     let error_validation = stage_errors(val_recs, &val_before, &val_after);
     let raw_nrmse = RawNrmse {
         definition: RAW_NRMSE.into(),
-        nominal: raw_pooled(&nominal.replays),
+        nominal: raw_pooled(&found.nominal.replays),
         before: raw_pooled(&replays_before),
         after: raw_pooled(&replays_after),
         validation: [
@@ -300,14 +295,14 @@ pub fn report(
         .collect(),
     };
     let verdict = verdict(
-        !search.added.is_empty(),
+        !found.search.added.is_empty(),
         &error_before,
         &error_after,
         options,
     );
     let residual_left = (verdict == Verdict::Unexplained)
         .then(|| diagnose::residual_left(all, &replays_after, options.noise_level_record));
-    let effects = search
+    let effects = found.search
         .added
         .iter()
         .map(|a| {
@@ -364,31 +359,36 @@ pub fn report(
         params: current.params,
         verdict,
         effects,
-        candidates: search.candidates,
+        candidates: found.search.candidates,
         calibrated,
-        mass_fitted: declared.mass_fitted,
+        mass_fitted: found.declared.mass_fitted,
         correlation: (
-            search.knobs.iter().map(|k| k.name().to_string()).collect(),
+            found
+                .search
+                .knobs
+                .iter()
+                .map(|k| k.name().to_string())
+                .collect(),
             current.correlation.clone(),
         ),
-        baseline: paper.baseline,
-        error_nominal: nominal.error,
-        error_baseline: paper.error,
+        baseline: found.paper.baseline,
+        error_nominal: found.nominal.error,
+        error_baseline: found.paper.error,
         error_before,
         error_after,
         diagnostics_before,
         diagnostics_after,
-        n: bic.n,
-        n_eff: bic.n_eff,
+        n: found.bic.n,
+        n_eff: found.bic.n_eff,
         evaluations: monitor.evaluations(),
         files: all.iter().map(|r| r.name.clone()).collect(),
         replays_before,
         replays_after,
-        replays_nominal: nominal.replays,
-        records: campaign.all,
-        notes,
+        replays_nominal: found.nominal.replays,
+        records: found.campaign.all,
+        notes: found.notes,
         missing: Vec::new(),
-        split: campaign.split,
+        split: found.campaign.split,
         error_training: Some(error_training),
         error_validation: Some(error_validation),
         raw_nrmse,

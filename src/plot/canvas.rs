@@ -75,39 +75,61 @@ pub(super) struct Frame {
     pub b: i32,
 }
 
-/// Fills unscaled px `x0..x1` × `y0..y1`: crisp one-pixel lines in both outputs.
+/// A box in unscaled px: columns `x0..x1`, rows `y0..y1`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Rect {
+    pub x0: i32,
+    pub y0: i32,
+    pub x1: i32,
+    pub y1: i32,
+}
+
+impl Rect {
+    /// Columns `x0..x1`, rows `y0..y1`.
+    pub const fn new(x0: i32, y0: i32, x1: i32, y1: i32) -> Self {
+        Self { x0, y0, x1, y1 }
+    }
+
+    /// Whether the two boxes share any pixel.
+    #[cfg(test)]
+    pub fn intersects(&self, o: &Rect) -> bool {
+        self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
+    }
+
+    /// The box's one-pixel edges (top, bottom, left, right): its outline, to [`fill`].
+    pub fn edges(self) -> [Rect; 4] {
+        let Rect { x0, y0, x1, y1 } = self;
+        [
+            Rect::new(x0, y0, x1, y0 + 1),
+            Rect::new(x0, y1 - 1, x1, y1),
+            Rect::new(x0, y0, x0 + 1, y1),
+            Rect::new(x1 - 1, y0, x1, y1),
+        ]
+    }
+}
+
+/// Fills each box of `boxes` (an empty one draws nothing): crisp one-pixel lines in both
+/// outputs.
 pub(super) fn fill<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     ctx: &Ctx,
-    (x0, y0): (i32, i32),
-    (x1, y1): (i32, i32),
+    boxes: impl IntoIterator<Item = Rect>,
     style: ShapeStyle,
 ) -> Result<(), PlotError> {
-    if x1 <= x0 || y1 <= y0 {
-        return Ok(());
+    for Rect { x0, y0, x1, y1 } in boxes {
+        if x1 <= x0 || y1 <= y0 {
+            continue;
+        }
+        root.draw(&Rectangle::new(
+            [
+                (ctx.px(f64::from(x0)), ctx.px(f64::from(y0))),
+                (ctx.px(f64::from(x1)), ctx.px(f64::from(y1))),
+            ],
+            style.filled(),
+        ))
+        .map_err(backend)?;
     }
-    root.draw(&Rectangle::new(
-        [
-            (ctx.px(f64::from(x0)), ctx.px(f64::from(y0))),
-            (ctx.px(f64::from(x1)), ctx.px(f64::from(y1))),
-        ],
-        style.filled(),
-    ))
-    .map_err(backend)
-}
-
-/// One-pixel outline of the unscaled px box `a`–`b`.
-pub(super) fn outline<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    ctx: &Ctx,
-    (x0, y0): (i32, i32),
-    (x1, y1): (i32, i32),
-    style: ShapeStyle,
-) -> Result<(), PlotError> {
-    fill(root, ctx, (x0, y0), (x1, y0 + 1), style)?;
-    fill(root, ctx, (x0, y1 - 1), (x1, y1), style)?;
-    fill(root, ctx, (x0, y0), (x0 + 1, y1), style)?;
-    fill(root, ctx, (x1 - 1, y0), (x1, y1), style)
+    Ok(())
 }
 
 /// Where the anchor point is along the text.

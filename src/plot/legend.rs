@@ -6,8 +6,8 @@
 //! data, hence this module.
 
 use super::canvas::{
-    Ctx, Frame, HAlign, LEGEND_BORDER, LEGEND_PX, NOTE_PX, TEXT, TEXT_MUTED, TextStyle, VAlign,
-    backend, draw_text, outline, text_width,
+    Ctx, Frame, HAlign, LEGEND_BORDER, LEGEND_PX, NOTE_PX, Rect, TEXT, TEXT_MUTED, TextStyle,
+    VAlign, backend, draw_text, fill, text_width,
 };
 use super::{Panel, PlotError, Series, SeriesStyle};
 use plotters::coord::Shift;
@@ -16,23 +16,6 @@ use plotters::prelude::*;
 
 /// Polyline pieces (or one marker set) in backend px.
 pub(super) type Pieces = Vec<Vec<(i32, i32)>>;
-
-/// A box in unscaled px: columns `x0..x1`, rows `y0..y1`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Rect {
-    pub x0: i32,
-    pub y0: i32,
-    pub x1: i32,
-    pub y1: i32,
-}
-
-impl Rect {
-    /// Whether the two boxes share any pixel.
-    #[cfg(test)]
-    pub fn intersects(&self, o: &Rect) -> bool {
-        self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
-    }
-}
 
 /// Coarse grid over a plot area counting what is drawn where, to place the legend.
 pub(super) struct Occupancy {
@@ -137,24 +120,14 @@ pub(super) fn place_box(occ: &Occupancy, w: i32, h: i32) -> Rect {
     let mut best = None;
     let mut best_cost = u64::MAX;
     for (x, y) in [(right, top), (left, top), (right, bottom), (left, bottom)] {
-        let r = Rect {
-            x0: x,
-            y0: y,
-            x1: x + w,
-            y1: y + h,
-        };
+        let r = Rect::new(x, y, x + w, y + h);
         let cost = occ.cost(r);
         if cost < best_cost || best.is_none() {
             best_cost = cost;
             best = Some(r);
         }
     }
-    best.unwrap_or(Rect {
-        x0: right,
-        y0: top,
-        x1: right + w,
-        y1: top + h,
-    })
+    best.unwrap_or(Rect::new(right, top, right + w, top + h))
 }
 
 /// Draws the labels of the reference lines `(y px, text)` just above each line at its left
@@ -199,12 +172,12 @@ pub(super) fn draw_ref_labels<DB: DrawingBackend>(
             (ctx.px(x0 + pad), ctx.px(y_bot - pad)),
             TextStyle::new(NOTE_PX, TEXT_MUTED, HAlign::Start, VAlign::Bottom),
         )?;
-        let r = Rect {
-            x0: x0 as i32,
-            y0: y_top as i32,
-            x1: x1.ceil() as i32,
-            y1: y_bot.ceil() as i32,
-        };
+        let r = Rect::new(
+            x0 as i32,
+            y_top as i32,
+            x1.ceil() as i32,
+            y_bot.ceil() as i32,
+        );
         occ.mark_rect(r, 50);
     }
     Ok(())
@@ -248,7 +221,7 @@ pub(super) fn draw_legend<DB: DrawingBackend>(
         WHITE.mix(0.85).filled(),
     ))
     .map_err(backend)?;
-    outline(root, ctx, (b.x0, b.y0), (b.x1, b.y1), LEGEND_BORDER.into())?;
+    fill(root, ctx, b.edges(), LEGEND_BORDER.into())?;
 
     let mut x = b.x0 + pad;
     for (c, chunk) in entries.chunks(rows).enumerate() {
@@ -348,18 +321,8 @@ mod tests {
     fn the_legend_avoids_the_data() {
         let (w, h) = (180, 90);
         // Data in the upper-right quadrant (the preferred corner), then the whole upper half.
-        let upper_right = Rect {
-            x0: 500,
-            y0: 50,
-            x1: 900,
-            y1: 250,
-        };
-        let upper_left = Rect {
-            x0: 100,
-            y0: 50,
-            x1: 500,
-            y1: 250,
-        };
+        let upper_right = Rect::new(500, 50, 900, 250);
+        let upper_left = Rect::new(100, 50, 500, 250);
         let mut occ = Occupancy::new(F, 6);
         let line = SeriesStyle::Line {
             color: super::super::palette(0),
@@ -406,24 +369,9 @@ mod tests {
 
     #[test]
     fn boxes_intersect_only_when_they_overlap() {
-        let a = Rect {
-            x0: 0,
-            y0: 0,
-            x1: 10,
-            y1: 10,
-        };
-        let touching = Rect {
-            x0: 10,
-            y0: 0,
-            x1: 20,
-            y1: 10,
-        };
-        let overlapping = Rect {
-            x0: 9,
-            y0: 9,
-            x1: 20,
-            y1: 20,
-        };
+        let a = Rect::new(0, 0, 10, 10);
+        let touching = Rect::new(10, 0, 20, 10);
+        let overlapping = Rect::new(9, 9, 20, 20);
         assert!(!a.intersects(&touching) && a.intersects(&overlapping));
         assert!(overlapping.intersects(&a));
     }

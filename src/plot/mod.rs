@@ -227,6 +227,12 @@ impl Panel {
             ..Self::default()
         }
     }
+
+    /// The panel with `series` as its curves.
+    pub fn with_series(mut self, series: Vec<Series>) -> Self {
+        self.series = series;
+        self
+    }
 }
 
 /// A titled figure of panels stacked vertically.

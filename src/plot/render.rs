@@ -4,11 +4,11 @@
 
 use super::canvas::{
     AXIS, AXIS_TITLE_PX, Ctx, FIG_TITLE_PX, Frame, GAP_TICK_LABEL, GRID, GRID_MINOR, HAlign,
-    PANEL_TITLE_PX, REF_LINE, SPAN, TEXT, TEXT_MUTED, TICK_LEN, TICK_PX, TextStyle, VAlign,
-    backend, draw_text, fill, fit_size, outline, text_width,
+    PANEL_TITLE_PX, REF_LINE, Rect, SPAN, TEXT, TEXT_MUTED, TICK_LEN, TICK_PX, TextStyle, VAlign,
+    backend, draw_text, fill, fit_size, text_width,
 };
 use super::clip::{clip_polyline, decimate, inside, transformed};
-use super::legend::{Occupancy, Pieces, Rect, draw_legend, draw_ref_labels};
+use super::legend::{Occupancy, Pieces, draw_legend, draw_ref_labels};
 use super::ticks::{Axis, make_axis, resolve_range, tr};
 use super::{Figure, Panel, PlotError, Scale, Series, SeriesStyle};
 use plotters::coord::Shift;
@@ -253,19 +253,19 @@ fn draw_background<DB: DrawingBackend>(
         }
         let (x0, x1) = (v.x(a).round() as i32, v.x(b).round() as i32);
         let shade = SPAN.mix(0.2).into();
-        fill(root, ctx, (x0, f.t), (x1.max(x0 + 1), f.b), shade)?;
+        fill(root, ctx, [Rect::new(x0, f.t, x1.max(x0 + 1), f.b)], shade)?;
     }
     let majors = |a: &Axis| a.major.iter().map(|t| t.0).collect::<Vec<_>>();
     for (vals, color) in [(xa.minor.clone(), GRID_MINOR), (majors(xa), GRID)] {
         for x in vals {
             let c = v.x(x).floor() as i32;
-            fill(root, ctx, (c, f.t), (c + 1, f.b), color.into())?;
+            fill(root, ctx, [Rect::new(c, f.t, c + 1, f.b)], color.into())?;
         }
     }
     for (vals, color) in [(ya.minor.clone(), GRID_MINOR), (majors(ya), GRID)] {
         for y in vals {
             let r = v.y(y).floor() as i32;
-            fill(root, ctx, (f.l, r), (f.r, r + 1), color.into())?;
+            fill(root, ctx, [Rect::new(f.l, r, f.r, r + 1)], color.into())?;
         }
     }
     Ok(())
@@ -392,11 +392,17 @@ fn draw_axes<DB: DrawingBackend>(
 ) -> Result<(), PlotError> {
     let f = v.f;
     let axis: ShapeStyle = AXIS.into();
-    outline(root, ctx, (f.l - 1, f.t - 1), (f.r + 1, f.b + 1), axis)?;
+    let frame = Rect::new(f.l - 1, f.t - 1, f.r + 1, f.b + 1);
+    fill(root, ctx, frame.edges(), axis)?;
     let tick = TICK_LEN as i32;
     for (x, label) in &v.xa.major {
         let c = v.x(*x).floor() as i32;
-        fill(root, ctx, (c, f.b + 1), (c + 1, f.b + 1 + tick), axis)?;
+        fill(
+            root,
+            ctx,
+            [Rect::new(c, f.b + 1, c + 1, f.b + 1 + tick)],
+            axis,
+        )?;
         let at = (
             ctx.px(f64::from(c) + 0.5),
             ctx.px(f64::from(f.b + 1 + tick) + GAP_TICK_LABEL),
@@ -406,7 +412,12 @@ fn draw_axes<DB: DrawingBackend>(
     }
     for (y, label) in &v.ya.major {
         let r = v.y(*y).floor() as i32;
-        fill(root, ctx, (f.l - 1 - tick, r), (f.l - 1, r + 1), axis)?;
+        fill(
+            root,
+            ctx,
+            [Rect::new(f.l - 1 - tick, r, f.l - 1, r + 1)],
+            axis,
+        )?;
         let at = (
             ctx.px(f64::from(f.l - 1 - tick) - GAP_TICK_LABEL),
             ctx.px(f64::from(r) + 0.5),

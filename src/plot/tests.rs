@@ -28,6 +28,14 @@ fn svg_texts(svg: &str) -> Vec<&str> {
     svg.lines().filter(|l| !l.starts_with('<')).collect()
 }
 
+/// The SVG elements `<{tag}` whose attribute `attr` is palette entry `i`'s colour.
+fn svg_elements<'a>(svg: &'a str, tag: &str, attr: &str, i: usize) -> Vec<&'a str> {
+    let (start, colour) = (format!("<{tag}"), format!("{attr}=\"{}\"", svg_color(i)));
+    svg.lines()
+        .filter(|l| l.starts_with(&start) && l.contains(&colour))
+        .collect()
+}
+
 /// A Bode-like panel over a linear time panel.
 fn sample_figure() -> Figure {
     let f: Vec<f64> = (0..300)
@@ -207,11 +215,7 @@ fn svg_holds_the_series_and_the_labels() {
             "no line in {c} (palette {i})"
         );
     }
-    let green = svg_color(2);
-    let dots = text
-        .lines()
-        .filter(|l| l.starts_with("<circle") && l.contains(&format!("fill=\"{green}\"")))
-        .count();
+    let dots = svg_elements(&text, "circle", "fill", 2).len();
     assert_eq!(dots, 9 + 1, "nine markers and the legend's sample");
 }
 
@@ -227,11 +231,7 @@ fn non_finite_values_are_skipped_not_drawn() {
     let (text, drawn) = render_svg(&fig).unwrap();
     assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
     // Three polylines of the series' colour (0–2, 4–5, 7–8) and one in the legend.
-    let red = svg_color(3);
-    let polylines: Vec<&str> = text
-        .lines()
-        .filter(|l| l.starts_with("<polyline") && l.contains(&format!("stroke=\"{red}\"")))
-        .collect();
+    let polylines = svg_elements(&text, "polyline", "stroke", 3);
     assert_eq!(polylines.len(), 4, "{polylines:#?}");
     // All of them inside the plot area.
     let f = drawn[0].frame;
@@ -253,11 +253,7 @@ fn non_finite_values_are_skipped_not_drawn() {
         }
     }
     // Seven markers (and the legend's), none for the two non-finite values.
-    let green = svg_color(2);
-    let dots = text
-        .lines()
-        .filter(|l| l.starts_with("<circle") && l.contains(&format!("fill=\"{green}\"")))
-        .count();
+    let dots = svg_elements(&text, "circle", "fill", 2).len();
     assert_eq!(dots, 7 + 1);
     // The fitted y range comes from the finite values only: 0 … 2 plus 5 % padding.
     let texts = svg_texts(&text);
@@ -287,7 +283,7 @@ fn legend_keeps_off_the_data_in_the_figure() {
         let legend = drawn[0].legend.expect("labelled series have a legend");
         // Pixel box of the data, as the renderer maps x, y ∈ [0.5, 1].
         let px = |t: f64, a: i32, b: i32| f64::from(a) + 0.5 + t * f64::from(b - a - 1);
-        let data = legend::Rect {
+        let data = canvas::Rect {
             x0: px(0.5, f.l, f.r).floor() as i32 - 2,
             x1: f.r,
             y0: f.t,

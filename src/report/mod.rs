@@ -8,11 +8,12 @@ use crate::analysis::metrics;
 use crate::control::ControlLaw;
 use crate::experiments;
 use crate::model::ModelKind;
+use crate::output::OutputError;
 use crate::params::Params;
 use crate::plot::{self, Figure, Panel, Scale, Series, SeriesStyle};
 use crate::preset::write_atomic;
 use crate::scenario::{Cycloid, PlatformMotion, RandomRide};
-use crate::simulation::{SimError, Trace};
+use crate::simulation::{Drive, SimError, Trace};
 use num_complex::Complex64;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -24,20 +25,18 @@ pub enum ReportError {
     /// A simulation diverged.
     #[error(transparent)]
     Sim(#[from] SimError),
-    /// A plot failed.
+    /// A file (named) or a plot could not be written.
     #[error(transparent)]
-    Plot(#[from] plot::PlotError),
-    /// Writing a file failed.
-    #[error("{file}: {source}")]
-    Io {
-        /// The file.
-        file: std::path::PathBuf,
-        /// The error.
-        source: std::io::Error,
-    },
+    Output(#[from] OutputError),
     /// Metrics could not be computed.
     #[error(transparent)]
     Metrics(#[from] metrics::MetricsError),
+}
+
+impl From<plot::PlotError> for ReportError {
+    fn from(e: plot::PlotError) -> Self {
+        Self::Output(e.into())
+    }
 }
 
 /// Seeds of the random rides whose spread the report states.
@@ -197,7 +196,7 @@ fn ride_traces(params: &Params, seed: u64) -> Result<[Trace; 3], SimError> {
         experiments::run(
             params,
             kind,
-            experiments::closed_loop(params),
+            Drive::closed_loop(params),
             ride.clone(),
             RIDE_DURATION_S,
             1000.0,
@@ -212,10 +211,7 @@ fn ride_traces(params: &Params, seed: u64) -> Result<[Trace; 3], SimError> {
 
 /// Writes the full report into `out` and returns a short console summary.
 pub fn write_report(params: &Params, preset_name: &str, out: &Path) -> Result<String, ReportError> {
-    std::fs::create_dir_all(out).map_err(|source| ReportError::Io {
-        file: out.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir_all(out).map_err(OutputError::io(out))?;
     let settle = RandomRide::default().fade_in_s;
 
     // --- Section 4: Table 1 on the twin, G(s) and the linearised twin.
@@ -356,16 +352,10 @@ pub fn write_report(params: &Params, preset_name: &str, out: &Path) -> Result<St
     let json = serde_json::to_string_pretty(&numbers)
         .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
     let json_path = out.join("numbers.json");
-    write_atomic(&json_path, json.as_bytes()).map_err(|source| ReportError::Io {
-        file: json_path.clone(),
-        source,
-    })?;
+    write_atomic(&json_path, json.as_bytes()).map_err(OutputError::io(&json_path))?;
     let md = markdown(&numbers, params);
     let md_path = out.join("report.md");
-    write_atomic(&md_path, md.as_bytes()).map_err(|source| ReportError::Io {
-        file: md_path.clone(),
-        source,
-    })?;
+    write_atomic(&md_path, md.as_bytes()).map_err(OutputError::io(&md_path))?;
     Ok(summary_table(&numbers))
 }
 

@@ -1,6 +1,7 @@
 //! The report's figures.
 
 use super::*;
+use crate::simulation::Sample;
 
 fn line(label: &str, x: Vec<f64>, y: Vec<f64>, i: usize) -> Series {
     Series {
@@ -273,51 +274,68 @@ fn contact_spans(t: &Trace) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Curves over time of the runs of one scenario (twin, G(s), passive), on the first run's
+/// time axis.
+struct TimeCurves<'a> {
+    t: Vec<f64>,
+    runs: &'a [Trace],
+}
+
+impl<'a> TimeCurves<'a> {
+    fn new(runs: &'a [Trace]) -> Self {
+        Self {
+            t: runs[0].channel(|s| s.t),
+            runs,
+        }
+    }
+
+    /// A solid curve of run `k`'s channel `f` in palette colour `i`.
+    fn line(&self, label: &str, k: usize, f: impl Fn(&Sample) -> f64, i: usize) -> Series {
+        line(label, self.t.clone(), self.runs[k].channel(f), i)
+    }
+
+    /// [`Self::line`] dashed.
+    fn dashed(&self, label: &str, k: usize, f: impl Fn(&Sample) -> f64, i: usize) -> Series {
+        dashed(label, self.t.clone(), self.runs[k].channel(f), i)
+    }
+
+    /// The "Accelerations" panel: the platform's ẍ (first run), then the `body` curves.
+    fn accelerations(&self, body: Vec<Series>) -> Panel {
+        let mut series = vec![self.line("platform ẍ", 0, |s| s.xdd, 7)];
+        series.extend(body);
+        time_panel("Accelerations", "acceleration [m/s²]", series)
+    }
+}
+
+/// A panel over time [s].
+fn time_panel(title: &str, y_label: &str, series: Vec<Series>) -> Panel {
+    panel(title, "time [s]", y_label, Scale::Linear, series)
+}
+
 pub fn cycloid(out: &Path, cyc: &[Trace]) -> Result<(), ReportError> {
-    let t = cyc[0].channel(|s| s.t);
-    let acc = panel(
-        "Accelerations",
-        "time [s]",
-        "acceleration [m/s²]",
-        Scale::Linear,
-        vec![
-            line("platform ẍ", t.clone(), cyc[0].channel(|s| s.xdd), 7),
-            line("body ÿ twin", t.clone(), cyc[0].channel(|s| s.ydd), 1),
-            dashed("body ÿ G(s)", t.clone(), cyc[1].channel(|s| s.ydd), 0),
-            line("body ÿ passive", t.clone(), cyc[2].channel(|s| s.ydd), 3),
-        ],
-    );
-    let pos = panel(
+    let c = TimeCurves::new(cyc);
+    let acc = c.accelerations(vec![
+        c.line("body ÿ twin", 0, |s| s.ydd, 1),
+        c.dashed("body ÿ G(s)", 1, |s| s.ydd, 0),
+        c.line("body ÿ passive", 2, |s| s.ydd, 3),
+    ]);
+    let pos = time_panel(
         "Displacements",
-        "time [s]",
         "displacement [mm]",
-        Scale::Linear,
         vec![
-            line("platform x", t.clone(), cyc[0].channel(|s| s.x * 1e3), 7),
-            line("u twin", t.clone(), cyc[0].channel(|s| s.u * 1e3), 1),
-            line(
-                "y twin",
-                t.clone(),
-                cyc[0].channel(|s| (s.x + s.u) * 1e3),
-                2,
-            ),
-            line("u passive", t.clone(), cyc[2].channel(|s| s.u * 1e3), 3),
-            dashed(
-                "y passive",
-                t.clone(),
-                cyc[2].channel(|s| (s.x + s.u) * 1e3),
-                3,
-            ),
+            c.line("platform x", 0, |s| s.x * 1e3, 7),
+            c.line("u twin", 0, |s| s.u * 1e3, 1),
+            c.line("y twin", 0, |s| (s.x + s.u) * 1e3, 2),
+            c.line("u passive", 2, |s| s.u * 1e3, 3),
+            c.dashed("y passive", 2, |s| (s.x + s.u) * 1e3, 3),
         ],
     );
-    let mut valve = panel(
+    let mut valve = time_panel(
         "Fig. 14 — command and spool (twin)",
-        "time [s]",
         "V_in [V] · x_v [×0.1 mm]",
-        Scale::Linear,
         vec![
-            line("V_in [V]", t.clone(), cyc[0].channel(|s| s.v_in), 0),
-            line("x_v [0.1 mm]", t.clone(), cyc[0].channel(|s| s.xv * 1e4), 1),
+            c.line("V_in [V]", 0, |s| s.v_in, 0),
+            c.line("x_v [0.1 mm]", 0, |s| s.xv * 1e4, 1),
         ],
     );
     valve.vspans = contact_spans(&cyc[0]);
@@ -332,49 +350,36 @@ pub fn cycloid(out: &Path, cyc: &[Trace]) -> Result<(), ReportError> {
 }
 
 pub fn ride(out: &Path, r: &[Trace; 3]) -> Result<(), ReportError> {
-    let t = r[0].channel(|s| s.t);
-    let acc = panel(
-        "Accelerations",
-        "time [s]",
-        "acceleration [m/s²]",
-        Scale::Linear,
-        vec![
-            line("platform ẍ", t.clone(), r[0].channel(|s| s.xdd), 7),
-            line("body ÿ passive", t.clone(), r[2].channel(|s| s.ydd), 3),
-            line("body ÿ twin", t.clone(), r[0].channel(|s| s.ydd), 1),
-        ],
-    );
-    let mut disp = panel(
+    let c = TimeCurves::new(r);
+    let acc = c.accelerations(vec![
+        c.line("body ÿ passive", 2, |s| s.ydd, 3),
+        c.line("body ÿ twin", 0, |s| s.ydd, 1),
+    ]);
+    let mut disp = time_panel(
         "Relative displacement",
-        "time [s]",
         "u [mm]",
-        Scale::Linear,
         vec![
-            line("u twin", t.clone(), r[0].channel(|s| s.u * 1e3), 1),
-            dashed("u G(s)", t.clone(), r[1].channel(|s| s.u * 1e3), 0),
-            line("u passive", t.clone(), r[2].channel(|s| s.u * 1e3), 3),
+            c.line("u twin", 0, |s| s.u * 1e3, 1),
+            c.dashed("u G(s)", 1, |s| s.u * 1e3, 0),
+            c.line("u passive", 2, |s| s.u * 1e3, 3),
         ],
     );
     disp.hlines = vec![(35.0, "+Lc/2".into()), (-35.0, "−Lc/2".into())];
     disp.vspans = contact_spans(&r[0]);
-    let press = panel(
+    let press = time_panel(
         "Fig. 16 — chamber pressures (twin)",
-        "time [s]",
         "pressure [bar]",
-        Scale::Linear,
         vec![
-            line("p1", t.clone(), r[0].channel(|s| s.p1 / 1e5), 0),
-            line("p2", t.clone(), r[0].channel(|s| s.p2 / 1e5), 3),
+            c.line("p1", 0, |s| s.p1 / 1e5, 0),
+            c.line("p2", 0, |s| s.p2 / 1e5, 3),
         ],
     );
-    let flow = panel(
+    let flow = time_panel(
         "Flows (twin)",
-        "time [s]",
         "flow [L/min]",
-        Scale::Linear,
         vec![
-            line("Q1", t.clone(), r[0].channel(|s| s.q1 * 60_000.0), 0),
-            dashed("Q2", t.clone(), r[0].channel(|s| s.q2 * 60_000.0), 3),
+            c.line("Q1", 0, |s| s.q1 * 60_000.0, 0),
+            c.dashed("Q2", 0, |s| s.q2 * 60_000.0, 3),
         ],
     );
     let fig = Figure {

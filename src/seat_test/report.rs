@@ -2,36 +2,17 @@
 
 use super::classes::{InputClass, PSD_TOLERANCE_OF_PEAK};
 use super::run::{CREST_FACTOR_LIMIT, SeatTestResult};
+use crate::output::OutputError;
 use crate::plot::{self, Figure, Panel, Series, SeriesStyle, palette};
 use crate::preset::write_atomic;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Suspended mass of the paper's rig \[kg\].
 pub const RIG_MASS_KG: f64 = 11.7;
 
-/// Why the report could not be written.
-#[derive(Debug, thiserror::Error)]
-pub enum SeatReportError {
-    /// A plot failed.
-    #[error(transparent)]
-    Plot(#[from] plot::PlotError),
-    /// Writing a file failed.
-    #[error("{file}: {source}")]
-    Io {
-        /// The file.
-        file: PathBuf,
-        /// The error.
-        source: std::io::Error,
-    },
-}
-
-fn io(file: &Path) -> impl FnOnce(std::io::Error) -> SeatReportError + '_ {
-    move |source| SeatReportError::Io {
-        file: file.to_path_buf(),
-        source,
-    }
-}
+/// Why the report could not be written: a file (named) or a plot.
+pub type SeatReportError = OutputError;
 
 /// Writes `report.md`, `numbers.json`, `platform_psd.{png,svg}` and
 /// `seat_response.{png,svg}` into `out` (created if missing); `preset` names the preset.
@@ -41,16 +22,16 @@ pub fn write_seat_test(
     preset: &str,
     out: &Path,
 ) -> Result<(), SeatReportError> {
-    std::fs::create_dir_all(out).map_err(io(out))?;
+    std::fs::create_dir_all(out).map_err(OutputError::io(out))?;
     platform_psd_figure(result, class, &out.join("platform_psd"))?;
     response_figure(result, &out.join("seat_response"))?;
     let json = serde_json::to_string_pretty(&result.numbers)
         .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
     let path = out.join("numbers.json");
-    write_atomic(&path, json.as_bytes()).map_err(io(&path))?;
+    write_atomic(&path, json.as_bytes()).map_err(OutputError::io(&path))?;
     let md = markdown(result, class, preset);
     let path = out.join("report.md");
-    write_atomic(&path, md.as_bytes()).map_err(io(&path))?;
+    write_atomic(&path, md.as_bytes()).map_err(OutputError::io(&path))?;
     Ok(())
 }
 
@@ -88,15 +69,11 @@ fn platform_psd_figure(
         .filter(|(f, _)| **f >= f0 && **f <= f1)
         .map(|(f, p)| (*f, *p))
         .unzip();
-    let mut panel = Panel::new(
-        format!(
-            "{}: platform acceleration PSD (largest deviation {:.1} % of the peak at {:.2} Hz)",
-            class.name, r.numbers.psd_error_percent, r.numbers.psd_error_at_hz
-        ),
-        "frequency [Hz]",
-        "PSD [(m/s²)²/Hz]",
+    let title = format!(
+        "{}: platform acceleration PSD (largest deviation {:.1} % of the peak at {:.2} Hz)",
+        class.name, r.numbers.psd_error_percent, r.numbers.psd_error_at_hz
     );
-    panel.series = vec![
+    let mut panel = Panel::new(title, "frequency [Hz]", "PSD [(m/s²)²/Hz]").with_series(vec![
         Series::line("generated (Welch)", fe, pe, palette(0)),
         Series::line("target", freqs.clone(), target.clone(), palette(3)),
         dashed(
@@ -104,7 +81,7 @@ fn platform_psd_figure(
             target.iter().map(|g| g + tol).collect(),
         ),
         dashed("", target.iter().map(|g| (g - tol).max(0.0)).collect()),
-    ];
+    ]);
     panel.x_range = Some((f0, f1));
     let fig = Figure::new(
         format!(
@@ -131,18 +108,14 @@ fn response_figure(r: &SeatTestResult, path: &Path) -> Result<(), SeatReportErro
     };
     let (ff, pf) = spec(&r.psd_floor);
     let (fs_, ps) = spec(&r.psd_seat);
-    let mut psd = Panel::new(
-        format!(
-            "acceleration PSD: SEAT {:.0} %, a_w floor {:.2}, seat {:.2} m/s²",
-            n.seat_percent, n.aw_floor, n.aw_seat
-        ),
-        "frequency [Hz]",
-        "PSD [(m/s²)²/Hz]",
+    let psd_title = format!(
+        "acceleration PSD: SEAT {:.0} %, a_w floor {:.2}, seat {:.2} m/s²",
+        n.seat_percent, n.aw_floor, n.aw_seat
     );
-    psd.series = vec![
+    let mut psd = Panel::new(psd_title, "frequency [Hz]", "PSD [(m/s²)²/Hz]").with_series(vec![
         Series::line("floor (platform) ẍ", ff, pf, palette(0)),
         Series::line("seat (suspended body) ÿ", fs_, ps, palette(3)),
-    ];
+    ]);
     psd.x_range = Some((f0, f1));
 
     // Ten seconds from the start of the evaluated interval.
@@ -154,12 +127,12 @@ fn response_figure(r: &SeatTestResult, path: &Path) -> Result<(), SeatReportErro
         .filter(|s| s.t >= t0 && s.t <= t0 + 10.0)
         .collect();
     let t: Vec<f64> = window.iter().map(|s| s.t).collect();
-    let mut acc = Panel::new(
+    let acc = Panel::new(
         "acceleration, 10 s of the evaluated interval",
         "time [s]",
         "acceleration [m/s²]",
-    );
-    acc.series = vec![
+    )
+    .with_series(vec![
         Series::line(
             "floor ẍ",
             t.clone(),
@@ -172,18 +145,14 @@ fn response_figure(r: &SeatTestResult, path: &Path) -> Result<(), SeatReportErro
             window.iter().map(|s| s.ydd).collect(),
             palette(3),
         ),
-    ];
+    ]);
 
     let all = &r.trace.samples;
-    let mut stroke = Panel::new(
-        format!(
-            "relative displacement u: max |u| {:.1} mm, {} contact(s); platform x up to ±{:.0} mm",
-            n.max_abs_u_mm, n.contacts, n.platform_max_abs_x_mm
-        ),
-        "time [s]",
-        "displacement [mm]",
+    let stroke_title = format!(
+        "relative displacement u: max |u| {:.1} mm, {} contact(s); platform x up to ±{:.0} mm",
+        n.max_abs_u_mm, n.contacts, n.platform_max_abs_x_mm
     );
-    stroke.series = vec![
+    let mut stroke = Panel::new(stroke_title, "time [s]", "displacement [mm]").with_series(vec![
         Series {
             label: "platform x".into(),
             x: all.iter().map(|s| s.t).collect(),
@@ -200,7 +169,7 @@ fn response_figure(r: &SeatTestResult, path: &Path) -> Result<(), SeatReportErro
             all.iter().map(|s| 1e3 * s.u).collect(),
             palette(2),
         ),
-    ];
+    ]);
     stroke.hlines = vec![
         (
             n.half_stroke_mm,

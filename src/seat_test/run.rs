@@ -12,7 +12,7 @@ use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::{ParamError, Params};
 use crate::scenario::PlatformMotion;
-use crate::simulation::{SimError, Trace};
+use crate::simulation::{Drive, SimError, Trace};
 
 /// Default duration of a seat-test record \[s\], fades included (a choice made here: the
 /// standards' run length was not read).
@@ -167,7 +167,7 @@ pub fn run_seat_test(
     let trace = experiments::run(
         &params,
         opts.model,
-        experiments::closed_loop(&params),
+        Drive::closed_loop(&params),
         PlatformMotion::Sampled(sampled),
         duration,
         SEAT_TEST_RATE_HZ,

@@ -27,6 +27,7 @@ use crate::params::{ControllerKind, ControllerParams, Params};
 use crate::scenario::{PlatformMotion, RandomRide};
 use crate::seat_test::InputClass;
 use crate::seat_test::signal::ClassMotion;
+use crate::simulation::Drive;
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use rayon::prelude::*;
@@ -337,7 +338,7 @@ fn ride_score(
     let trace = experiments::run(
         params,
         ModelKind::Twin,
-        experiments::closed_loop(params),
+        Drive::closed_loop(params),
         ride.clone(),
         duration_s,
         RATE_HZ,

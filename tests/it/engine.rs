@@ -7,7 +7,7 @@ use seat_twin::engine::{self, Command, EngineHandle, Event, Excitation, Speed};
 use seat_twin::params::{ControllerKind, ControllerParams, Params};
 use seat_twin::scenario::PlatformMotion;
 use seat_twin::seat_test::{self, signal::band_rms};
-use seat_twin::simulation::{Drive, Sample, Simulation, step_for_rate};
+use seat_twin::simulation::{Drive, Run, Sample, Simulation, step_for_rate};
 use std::time::{Duration, Instant};
 
 /// Collects events until `done` says so, or fails after 60 s (a 3-minute seat-test record at

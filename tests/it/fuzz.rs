@@ -402,22 +402,22 @@ fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
             prop_assert!(in_range(*f0, r("--f0")), "f0 {}", f0);
             prop_assert!(in_range(*f1, r("--f1")), "f1 {}", f1);
         }
-        Command::Bode { amp, freqs, .. } => {
+        Command::Bode { amp, sweep, .. } => {
             prop_assert!(in_range(
                 *amp,
                 documented_range("bode", "--amp", false).unwrap()
             ));
-            prop_assert!(!freqs.is_empty());
-            for f in freqs {
+            prop_assert!(!sweep.freqs.is_empty());
+            for f in &sweep.freqs {
                 prop_assert!(in_range(
                     *f,
                     documented_range("bode", "--freqs", false).unwrap()
                 ));
             }
         }
-        Command::Transmissibility { freqs, .. } => {
-            prop_assert!(!freqs.is_empty());
-            for f in freqs {
+        Command::Transmissibility { sweep, .. } => {
+            prop_assert!(!sweep.freqs.is_empty());
+            for f in &sweep.freqs {
                 let r = documented_range("transmissibility", "--freqs", false).unwrap();
                 prop_assert!(in_range(*f, r));
             }

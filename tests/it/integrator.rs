@@ -8,7 +8,7 @@ use seat_twin::model::ModelKind;
 use seat_twin::model::twin::Twin;
 use seat_twin::params::{Integrator, Params};
 use seat_twin::scenario::{CommandSignal, PlatformMotion};
-use seat_twin::simulation::{Drive, Simulation};
+use seat_twin::simulation::{Drive, Run, Simulation};
 
 /// Final (u [m], p1 [Pa], q1 [m³/s]) of a 0.25 s open-loop valve sine at step `h` with RK4.
 fn final_state(h: f64) -> (f64, f64, f64) {

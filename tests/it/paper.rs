@@ -7,6 +7,7 @@ use seat_twin::experiments;
 use seat_twin::model::ModelKind;
 use seat_twin::params::Params;
 use seat_twin::scenario::{PlatformMotion, RandomRide};
+use seat_twin::simulation::Drive;
 
 const SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
 
@@ -23,7 +24,7 @@ fn ride_rms(kind: ModelKind) -> (f64, f64) {
         let trace = experiments::run(
             &params,
             kind,
-            experiments::closed_loop(&params),
+            Drive::closed_loop(&params),
             PlatformMotion::Sampled(ride.generate()),
             60.0,
             500.0,

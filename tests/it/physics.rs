@@ -9,6 +9,7 @@ use seat_twin::experiments;
 use seat_twin::model::ModelKind;
 use seat_twin::params::{Params, derived};
 use seat_twin::scenario::{PlatformMotion, RandomRide};
+use seat_twin::simulation::Drive;
 use std::f64::consts::PI;
 
 fn ride(seconds: f64, seed: u64) -> PlatformMotion {
@@ -30,7 +31,7 @@ fn chamber_pressures_stay_symmetric_and_flows_equal() {
     let trace = experiments::run(
         &p,
         ModelKind::Twin,
-        experiments::closed_loop(&p),
+        Drive::closed_loop(&p),
         ride(10.0, 3),
         10.0,
         1000.0,

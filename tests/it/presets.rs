@@ -56,13 +56,14 @@ fn tuned_presets_beat_the_papers_gains_on_a_held_out_ride() {
     use seat_twin::control::ControlLaw;
     use seat_twin::experiments;
     use seat_twin::model::ModelKind;
+    use seat_twin::simulation::Drive;
     use seat_twin::tune;
 
     let ride = |p: &Params| {
         let trace = experiments::run(
             p,
             ModelKind::Twin,
-            experiments::closed_loop(p),
+            Drive::closed_loop(p),
             tune::ride(101, 60.0),
             60.0,
             1000.0,

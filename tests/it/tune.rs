@@ -9,6 +9,7 @@ use seat_twin::experiments;
 use seat_twin::model::ModelKind;
 use seat_twin::params::{ControllerKind, Params};
 use seat_twin::preset::Preset;
+use seat_twin::simulation::Drive;
 use seat_twin::tune::{self, Objective, TuneOptions};
 
 fn short(kind: ControllerKind) -> TuneOptions {
@@ -49,7 +50,7 @@ fn tune_improves_the_paper_gains_within_every_constraint() {
     let trace = experiments::run(
         &q,
         ModelKind::Twin,
-        experiments::closed_loop(&q),
+        Drive::closed_loop(&q),
         tune::ride(1, 12.0),
         12.0,
         1000.0,
