@@ -32,9 +32,20 @@ fn pending() -> MutexGuard<'static, Vec<PathBuf>> {
 struct Registered(PathBuf);
 
 impl Registered {
-    fn new(path: &Path) -> Self {
-        pending().push(path.to_path_buf());
-        Self(path.to_path_buf())
+    /// Creates a temporary file or directory with `create` and registers its path, both
+    /// while the list is locked. So a signal handler's [`remove_pending`] either runs first
+    /// (and then nothing is created: the list stays locked until the process exits) or sees
+    /// the new path; and no temporary file appears inside a registered directory while
+    /// [`remove_pending`] is deleting it (which would leave that directory behind).
+    fn create<T>(
+        create: impl FnOnce() -> io::Result<T>,
+        path: impl Fn(&T) -> &Path,
+    ) -> io::Result<(T, Self)> {
+        let mut list = pending();
+        let made = create()?;
+        let p = path(&made).to_path_buf();
+        list.push(p.clone());
+        Ok((made, Self(p)))
     }
 }
 
@@ -106,8 +117,10 @@ pub fn write_atomic<E: From<io::Error>>(
     write: impl FnOnce(&mut dyn Write) -> Result<(), E>,
 ) -> Result<(), E> {
     let prefix = hidden_prefix(path);
-    let tmp = temp_beside(&prefix, 0o666).tempfile_in(parent_of(path))?;
-    let registered = Registered::new(tmp.path());
+    let (tmp, registered) = Registered::create(
+        || temp_beside(&prefix, 0o666).tempfile_in(parent_of(path)),
+        |t| t.path(),
+    )?;
     let mut w = io::BufWriter::with_capacity(1 << 16, tmp);
     write(&mut w)?;
     let tmp = w.into_inner().map_err(io::IntoInnerError::into_error)?;
@@ -163,8 +176,10 @@ impl OutputDir {
         let parent = parent_of(target);
         std::fs::create_dir_all(parent)?;
         let prefix = hidden_prefix(target);
-        let tmp = temp_beside(&prefix, 0o777).tempdir_in(parent)?;
-        let registered = Registered::new(tmp.path());
+        let (tmp, registered) = Registered::create(
+            || temp_beside(&prefix, 0o777).tempdir_in(parent),
+            |t| t.path(),
+        )?;
         Ok(Self {
             target: target.to_path_buf(),
             tmp: Some(tmp),

@@ -348,9 +348,21 @@ fn calibrating_on_a_megavolt_record_warns_and_sigterm_leaves_nothing() {
     let dir = tmp();
     let rec = dir.path().join("mv.csv");
     measured_record(&rec, 3.0, 1e6, 0.002);
+    // A fine step makes the calibration take seconds instead of 0.1 s, so that the signal
+    // surely arrives while it runs (with the default step it could end first).
+    let preset = dir.path().join("fine.toml");
+    std::fs::write(&preset, "[numerics]\nmax_step_s = 1e-6\n").unwrap();
     let out = dir.path().join("cal");
     let mut child = bin()
-        .args(["calibrate", "--data", s(&rec), "--out", s(&out)])
+        .args([
+            "calibrate",
+            "--preset",
+            s(&preset),
+            "--data",
+            s(&rec),
+            "--out",
+            s(&out),
+        ])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
