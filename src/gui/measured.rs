@@ -524,8 +524,15 @@ impl MeasuredData {
         let n = self.records.iter().filter(|r| r.include).count();
         if let Some(c) = &self.calibration {
             let p = c.progress.lock().ok().and_then(|g| g.clone());
+            // The button first: the progress text changes length every frame, and a button
+            // after it would move under the pointer.
             ui.horizontal(|ui| {
                 ui.spinner();
+                if c.job.is_cancelled() {
+                    ui.weak("cancelling…");
+                } else if ui.button("Cancel calibration").clicked() {
+                    c.job.cancel();
+                }
                 ui.label(match &p {
                     Some(p) => format!(
                         "{} — {} replays, {:.0} s",
@@ -535,11 +542,6 @@ impl MeasuredData {
                     ),
                     None => "starting…".into(),
                 });
-                if c.job.is_cancelled() {
-                    ui.weak("cancelling…");
-                } else if ui.button("Cancel calibration").clicked() {
-                    c.job.cancel();
-                }
             });
         } else {
             ui.horizontal(|ui| {
