@@ -292,12 +292,7 @@ fn dwell_status_ui(ui: &mut egui::Ui, dwell: &mut Dwell, params: &Params, unstab
             ui.label("not shown: the closed loop is unstable");
         }
         Some((done, total)) => {
-            ui.add(
-                egui::ProgressBar::new(done as f32 / total.max(1) as f32)
-                    .desired_width(120.0)
-                    .text(format!("{done}/{total}")),
-            );
-            if ui.button("Cancel").clicked() {
+            if plotkit::progress_cancel_ui(ui, done, total, "Cancel") {
                 dwell.cancel();
             }
         }

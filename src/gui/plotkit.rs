@@ -132,6 +132,17 @@ pub fn table_ui(ui: &mut egui::Ui, id: &str, headers: &[&str], body: impl FnOnce
         });
 }
 
+/// A fixed-width progress bar reading "done/total", then a cancel button (at a fixed place,
+/// so it does not move while the count changes). Returns whether the button was clicked.
+pub fn progress_cancel_ui(ui: &mut egui::Ui, done: usize, total: usize, cancel: &str) -> bool {
+    ui.add(
+        egui::ProgressBar::new(done as f32 / total.max(1) as f32)
+            .desired_width(120.0)
+            .text(format!("{done}/{total}")),
+    );
+    ui.button(cancel).clicked()
+}
+
 /// Width of a legend swatch [px].
 const SWATCH_W: f32 = 22.0;
 

@@ -152,15 +152,10 @@ impl TunePanel {
             {
                 self.start(params, opts, waker.clone());
             }
-            if let Some((done, total)) = self.progress() {
-                ui.add(
-                    egui::ProgressBar::new(done as f32 / total.max(1) as f32)
-                        .desired_width(120.0)
-                        .text(format!("{done}/{total}")),
-                );
-                if ui.button("Cancel tuning").clicked() {
-                    self.cancel();
-                }
+            if let Some((done, total)) = self.progress()
+                && super::plotkit::progress_cancel_ui(ui, done, total, "Cancel tuning")
+            {
+                self.cancel();
             }
         });
         if let Some((m, error)) = &self.message {

@@ -31,7 +31,7 @@ pub fn save_figure(
     let (rgb, _) = render_rgb(fig)?;
     let mut encoded = Vec::new();
     image::codecs::png::PngEncoder::new(&mut encoded)
-        .write_image(&rgb, w, h, image::ColorType::Rgb8)
+        .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8)
         .map_err(|e| PlotError::Backend(format!("{}: {e}", png.display())))?;
     let io = |path: &Path| {
         let path = path.to_path_buf();
