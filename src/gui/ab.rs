@@ -41,6 +41,12 @@ impl AbView {
         self.on
     }
 
+    /// The reference's curves as last drawn (the view updates them every frame), if A/B is
+    /// on: what an export shows.
+    pub fn drawn_curves(&self) -> Option<&Curves> {
+        self.on.then(|| self.analytic.curves())
+    }
+
     /// The reference controller (B).
     pub fn reference(&self) -> ControllerParams {
         self.reference

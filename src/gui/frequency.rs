@@ -37,9 +37,13 @@ pub const DWELL_RANGE_HZ: (f64, f64) = (0.3, 30.0);
 /// Number of dwell points.
 pub const N_DWELL: usize = 14;
 /// Legend of the simulated transmissibility points.
-const T_DWELL_NAME: &str = "twin simulated (dwell)";
+pub const T_DWELL_NAME: &str = "twin simulated (dwell)";
 /// Legend of the simulated u̇/V_in points.
-const BODE_DWELL_NAME: &str = "twin simulated (sine dwell, ≤ 1.1 V)";
+pub const BODE_DWELL_NAME: &str = "twin simulated (sine dwell, ≤ 1.1 V)";
+/// Legends of the transmissibility curves: linear model, linearised twin, passive seat.
+pub const T_NAMES: [&str; 3] = ["linear active", "twin active (linearised)", "passive"];
+/// Legends of the u̇/V_in curves: linearised twin, G(s).
+pub const BODE_NAMES: [&str; 2] = ["twin (linearised)", "G(s)"];
 /// Highest frequency of the simulated u̇/V_in points [Hz] (Table 1's range: above it the
 /// phase between neighbouring dwell points could not be unwrapped reliably).
 pub const BODE_DWELL_MAX_HZ: f64 = 20.0;
@@ -391,19 +395,19 @@ pub fn frequency_ui(
     let active = |c: Color32| if unstable { c.gamma_multiply(0.45) } else { c };
     let t_styles = [
         CurveStyle {
-            name: "linear active",
+            name: T_NAMES[0],
             color: active(LINEAR),
             width: 1.8,
             style: LineStyle::dashed_dense(),
         },
         CurveStyle {
-            name: "twin active (linearised)",
+            name: T_NAMES[1],
             color: active(TWIN),
             width: 2.4,
             style: LineStyle::Solid,
         },
         CurveStyle {
-            name: "passive",
+            name: T_NAMES[2],
             color: PASSIVE,
             width: 1.6,
             style: LineStyle::dotted_dense(),
@@ -443,13 +447,13 @@ pub fn frequency_ui(
     };
     let b_styles = [
         CurveStyle {
-            name: "twin (linearised)",
+            name: BODE_NAMES[0],
             color: TWIN,
             width: 2.4,
             style: LineStyle::Solid,
         },
         CurveStyle {
-            name: "G(s)",
+            name: BODE_NAMES[1],
             color: LINEAR,
             width: 1.8,
             style: LineStyle::dashed_dense(),

@@ -515,3 +515,53 @@ fn frequency_plots_stay_in_the_window_when_a_legend_wraps() {
         );
     }
 }
+
+/// Regression: the exported frequency figure showed less than the view (dwell points only
+/// on |T|, no A/B reference, the phase always unwrapped down to −1000° while the view
+/// wraps it) and named the preset twice. Now it carries what the view draws.
+#[test]
+fn exported_frequency_figure_shows_what_the_view_shows() {
+    use seat_twin::plot::SeriesStyle;
+    let mut h = harness();
+    h.run_steps(2);
+    h.get_by_label("A/B: compare with a reference twin").click();
+    super::gui_measured::step_until_long(
+        &mut h,
+        "the sine-dwell points",
+        Duration::from_secs(120),
+        |a| a.dwell().progress().is_none() && a.dwell().mag.len() >= 10,
+    );
+    h.run_steps(2);
+    let figs = h.state().plot_figures();
+    let freq = &figs
+        .iter()
+        .find(|(n, _)| *n == "frequency")
+        .expect("figure")
+        .1;
+    assert!(freq.title.contains("preset paper"), "{}", freq.title);
+    assert_eq!(freq.panels.len(), 4);
+    for (i, p) in freq.panels.iter().enumerate() {
+        let markers = p
+            .series
+            .iter()
+            .filter(|s| matches!(s.style, SeriesStyle::Markers { .. }))
+            .count();
+        assert_eq!(markers, 1, "panel {i}: the dwell points");
+        if i < 2 {
+            assert!(
+                p.series.iter().any(|s| s.label == "B: reference"),
+                "panel {i}: the A/B reference"
+            );
+        }
+        if i % 2 == 1 {
+            // Phase panels: wrapped into ±180°, as the view shows by default.
+            let worst = p
+                .series
+                .iter()
+                .flat_map(|s| s.y.iter())
+                .filter(|y| y.is_finite())
+                .fold(0.0f64, |m, y| m.max(y.abs()));
+            assert!(worst <= 180.0 + 1e-9, "panel {i}: phase reaches {worst}°");
+        }
+    }
+}

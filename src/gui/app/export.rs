@@ -77,69 +77,148 @@ impl SeatTwinApp {
         }
     }
 
-    /// The current plots as report figures: frequency responses and scopes.
-    pub fn plot_figures(&self) -> Vec<(&'static str, Figure)> {
+    /// The four frequency plots as a report figure, with what the view shows: the same curve
+    /// names and colours, the A/B reference, the dwell points on every plot where the view
+    /// draws them (current and stable only), the phase wrapped or unwrapped as in the view,
+    /// and no curve the legend has hidden. An unstable loop says so in the title.
+    fn frequency_figure(&self) -> Figure {
+        use crate::gui::frequency::{
+            BODE_DWELL_NAME, BODE_NAMES, LINEAR, PASSIVE, REFERENCE_NAME, T_DWELL_NAME, T_NAMES,
+            TWIN, shown_phase,
+        };
         let c = self.analytic.curves();
-        let xy = |pts: &[egui_plot::PlotPoint], logx: bool| -> (Vec<f64>, Vec<f64>) {
-            pts.iter()
-                .map(|p| (if logx { 10f64.powf(p.x) } else { p.x }, p.y))
-                .unzip()
+        let rgb = |c: egui::Color32| Rgb(c.r(), c.g(), c.b());
+        let unwrapped = self.settings.phase_unwrapped;
+        let unstable = c.unstable();
+        let show_dwell =
+            !unstable && (self.dwell.is_current(&self.params) || self.dwell.progress().is_some());
+        // A phase curve as the view draws it: wrapped segments joined by a break.
+        let points = |pts: &[egui_plot::PlotPoint], phase: bool| -> (Vec<f64>, Vec<f64>) {
+            let segments = if phase {
+                shown_phase(pts, unwrapped)
+            } else {
+                vec![pts.to_vec()]
+            };
+            let mut xy = (Vec::new(), Vec::new());
+            for (i, seg) in segments.iter().enumerate() {
+                if i > 0 {
+                    xy.0.push(f64::NAN);
+                    xy.1.push(f64::NAN);
+                }
+                for p in seg {
+                    xy.0.push(10f64.powf(p.x));
+                    xy.1.push(p.y);
+                }
+            }
+            xy
         };
-        let line = |label: &str, pts: &[egui_plot::PlotPoint], color: Rgb, logx: bool| {
-            let (x, y) = xy(pts, logx);
-            Series::line(label, x, y, color)
+        let reference = self.ab.drawn_curves();
+        let panel = |id: &str,
+                     title: &str,
+                     y_label: &str,
+                     lines: &[(&str, egui::Color32, &[egui_plot::PlotPoint])],
+                     dwell: (&str, &[egui_plot::PlotPoint]),
+                     phase: bool| {
+            let shown = |name: &str| !crate::gui::plotkit::hidden(&self.hidden_curves, id, name);
+            let mut p = Panel::new(title, "frequency [Hz]", y_label);
+            p.x_scale = Scale::Log10;
+            for (name, color, pts) in lines.iter().filter(|(n, ..)| shown(n)) {
+                let (x, y) = points(pts, phase);
+                p.series.push(Series::line(*name, x, y, rgb(*color)));
+            }
+            if show_dwell && shown(dwell.0) && !dwell.1.is_empty() {
+                let (x, y) = points(dwell.1, phase);
+                // Dark markers on the figure's white ground (the view's are the theme's
+                // strongest text colour).
+                p.series
+                    .push(Series::markers(dwell.0, x, y, Rgb(30, 30, 30)));
+            }
+            p
         };
-        let (lin_c, twin_c, pas_c) = (Rgb(255, 127, 14), Rgb(31, 119, 180), Rgb(44, 160, 44));
-        let mut t_mag = Panel::new("Transmissibility", "frequency [Hz]", "|T| [dB]");
-        t_mag.x_scale = Scale::Log10;
-        t_mag.series = vec![
-            line("linear active", &c.t_mag[0], lin_c, true),
-            line("twin active (linearised)", &c.t_mag[1], twin_c, true),
-            line("passive", &c.t_mag[2], pas_c, true),
-        ];
-        if !self.dwell.mag.is_empty() {
-            let (x, y) = xy(&self.dwell.mag, true);
-            t_mag
-                .series
-                .push(Series::markers("twin simulated (dwell)", x, y, twin_c));
+        type Lines<'a> = Vec<(&'a str, egui::Color32, &'a [egui_plot::PlotPoint])>;
+        fn t_lines<'a>(
+            curves: &'a [frequency::Curve; 3],
+            r: Option<&'a frequency::Curve>,
+        ) -> Lines<'a> {
+            let colors = [LINEAR, TWIN, PASSIVE];
+            let mut v: Lines<'a> = (0..3)
+                .map(|i| (T_NAMES[i], colors[i], curves[i].as_slice()))
+                .collect();
+            if let Some(r) = r {
+                v.push((REFERENCE_NAME, crate::gui::scopes::REFERENCE, r.as_slice()));
+            }
+            v
         }
-        t_mag.hlines = vec![(0.0, "|T| = 1".into())];
-        let mut t_ph = Panel::new("", "frequency [Hz]", "phase T [deg]");
-        t_ph.x_scale = Scale::Log10;
-        t_ph.series = vec![
-            line("linear active", &c.t_phase[0], lin_c, true),
-            line("twin active", &c.t_phase[1], twin_c, true),
-            line("passive", &c.t_phase[2], pas_c, true),
-        ];
-        let mut b_mag = Panel::new(
-            "Valve/actuator (du/dt)/V_in",
-            "frequency [Hz]",
-            "|du/dt / V_in| [dB re (mm/s)/V]",
+        fn b_lines(curves: &[frequency::Curve; 2]) -> Lines<'_> {
+            vec![
+                (BODE_NAMES[0], TWIN, curves[0].as_slice()),
+                (BODE_NAMES[1], LINEAR, curves[1].as_slice()),
+            ]
+        }
+        let mut t_mag = panel(
+            "t_mag",
+            "Transmissibility",
+            "|T| [dB]",
+            &t_lines(&c.t_mag, reference.map(|r| &r.t_mag[1])),
+            (T_DWELL_NAME, &self.dwell.mag),
+            false,
         );
-        b_mag.x_scale = Scale::Log10;
-        b_mag.series = vec![
-            line("twin (linearised)", &c.bode_mag[0], twin_c, true),
-            line("G(s)", &c.bode_mag[1], lin_c, true),
-        ];
-        let mut b_ph = Panel::new("", "frequency [Hz]", "phase (du/dt)/V_in [deg]");
-        b_ph.x_scale = Scale::Log10;
-        b_ph.series = vec![
-            line("twin (linearised)", &c.bode_phase[0], twin_c, true),
-            line("G(s)", &c.bode_phase[1], lin_c, true),
-        ];
+        t_mag.hlines = vec![(0.0, "|T| = 1".into())];
+        let t_ph = panel(
+            "t_phase",
+            "",
+            "phase T [deg]",
+            &t_lines(&c.t_phase, reference.map(|r| &r.t_phase[1])),
+            (T_DWELL_NAME, &self.dwell.phase),
+            true,
+        );
+        let b_mag = panel(
+            "bode_mag",
+            "Valve/actuator (du/dt)/V_in",
+            "|du/dt / V_in| [dB re (mm/s)/V]",
+            &b_lines(&c.bode_mag),
+            (BODE_DWELL_NAME, &self.dwell.bode_mag),
+            false,
+        );
+        let b_ph = panel(
+            "bode_phase",
+            "",
+            "phase (du/dt)/V_in [deg]",
+            &b_lines(&c.bode_phase),
+            (BODE_DWELL_NAME, &self.dwell.bode_phase),
+            true,
+        );
         let mut freq = Figure::new(
             format!(
-                "seat-twin — {} ({})",
+                "seat-twin — preset {}{} — {}{}",
                 self.preset.name,
-                crate::gui::format::controller_text(&self.params.controller)
+                if self.is_modified() {
+                    " (modified)"
+                } else {
+                    ""
+                },
+                crate::gui::format::controller_text(&self.params.controller),
+                if unstable {
+                    " — UNSTABLE closed loop (not a steady state)"
+                } else {
+                    ""
+                }
             ),
             vec![t_mag, t_ph, b_mag, b_ph],
         );
         freq.height = 1200;
+        freq
+    }
 
+    /// The current plots as report figures: frequency responses and scopes.
+    pub fn plot_figures(&self) -> Vec<(&'static str, Figure)> {
+        use crate::gui::frequency::REFERENCE_NAME;
+        let freq = self.frequency_figure();
+        let (lin_c, twin_c, pas_c) = (Rgb(255, 127, 14), Rgb(31, 119, 180), Rgb(44, 160, 44));
         let tr = &self.traces;
         let ch = |label: &str, chan: Ch, color: Rgb| {
-            line(label, tr.channel(chan).points(), color, false)
+            let (x, y) = tr.channel(chan).points().iter().map(|p| (p.x, p.y)).unzip();
+            Series::line(label, x, y, color)
         };
         let mut acc = Panel::new("Live traces", "time [s]", "acceleration [m/s²]");
         acc.series = vec![
@@ -172,10 +251,25 @@ impl SeatTwinApp {
             ch("linear", Ch::LinearVin, lin_c),
             ch("twin", Ch::TwinVin, twin_c),
         ];
+        if self.ab.is_on() {
+            // The A/B reference twin (B), as the view overlays it.
+            let b = Rgb(220, 0, 150);
+            acc.series.push(ch(REFERENCE_NAME, Ch::RefAcc, b));
+            stroke.series.push(ch("B: reference u", Ch::RefU, b));
+            v.series.push(ch("B: reference V_in", Ch::RefVin, b));
+        }
         let mut xv = Panel::new("", "time [s]", "spool x_v [mm]");
         xv.series = vec![ch("twin", Ch::TwinXv, twin_c)];
         let mut scopes = Figure::new(
-            format!("seat-twin — {} live traces", self.preset.name),
+            format!(
+                "seat-twin — preset {}{} — live traces",
+                self.preset.name,
+                if self.is_modified() {
+                    " (modified)"
+                } else {
+                    ""
+                }
+            ),
             vec![acc, stroke, pr, q, v, xv],
         );
         scopes.height = 1500;
