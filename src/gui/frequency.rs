@@ -188,11 +188,11 @@ pub fn shown_phase(c: &[PlotPoint], unwrapped: bool) -> Vec<Vec<PlotPoint>> {
 
 /// One analytic curve of a frequency plot: its legend name, colour and stroke.
 #[derive(Clone, Copy)]
-struct CurveStyle {
-    name: &'static str,
-    color: Color32,
-    width: f32,
-    style: LineStyle,
+pub(crate) struct CurveStyle {
+    pub(crate) name: &'static str,
+    pub(crate) color: Color32,
+    pub(crate) width: f32,
+    pub(crate) style: LineStyle,
 }
 
 /// Each curve with its style, then `extra` (the A/B reference) if there is one.
@@ -212,13 +212,13 @@ fn styled<'a>(
 
 /// What one of the four frequency plots shows: its lines (with their styles), the simulated
 /// dwell points if shown, and whether the y axis is a phase (wrapped unless unwrapped).
-struct FreqPanel<'a> {
-    id: &'static str,
-    y_label: &'static str,
-    unit: &'static str,
-    lines: Vec<(CurveStyle, &'a [PlotPoint])>,
-    dwell: Option<(&'static str, Color32, &'a [PlotPoint])>,
-    phase: bool,
+pub(crate) struct FreqPanel<'a> {
+    pub(crate) id: &'static str,
+    pub(crate) y_label: &'static str,
+    pub(crate) unit: &'static str,
+    pub(crate) lines: Vec<(CurveStyle, &'a [PlotPoint])>,
+    pub(crate) dwell: Option<(&'static str, Color32, &'a [PlotPoint])>,
+    pub(crate) phase: bool,
 }
 
 impl FreqPanel<'_> {
@@ -387,10 +387,51 @@ pub fn frequency_ui(
         ui.checkbox(&mut *view.phase_unwrapped, "unwrapped phase")
             .on_hover_text("Off: phase wrapped into ±180°. On: continuous (unwrapped) phase.");
     });
-    // Points simulated for other parameters, or for an unstable loop, are not shown.
-    let show_dwell = !unstable && (dwell.is_current(params) || dwell.progress().is_some());
+    let show_dwell = dwell_shown(curves, dwell, params);
     let hidden = view.hidden;
     let unwrapped = *view.phase_unwrapped;
+    let [t_mag, t_phase, bode_mag, bode_phase] = freq_panels(
+        curves,
+        dwell,
+        view.reference,
+        show_dwell.then(|| dwell_color(ui)),
+    );
+    let t_colors = [t_mag.lines[0].0.color, t_mag.lines[1].0.color];
+    t_mag.ui(ui, 4, unwrapped, hidden, |pu| {
+        pu.hline(
+            egui_plot::HLine::new("|T| = 1", 0.0)
+                .color(Color32::GRAY)
+                .style(LineStyle::dashed_dense()),
+        );
+        // The |T| = 1 crossings of an unstable loop mean nothing.
+        if !unstable {
+            crossing_marks(pu, curves, t_colors);
+        }
+    });
+    t_phase.ui(ui, 3, unwrapped, hidden, |_| {});
+    bode_mag.ui(ui, 2, unwrapped, hidden, |_| {});
+    bode_phase.ui(ui, 1, unwrapped, hidden, |_| {});
+    action
+}
+
+/// Whether the dwell points are shown: they belong to these parameters (or are arriving for
+/// them) and the loop is stable. Points simulated for other parameters, or for an unstable
+/// loop, are not shown — in the view nor in an export.
+pub(crate) fn dwell_shown(curves: &Curves, dwell: &Dwell, params: &Params) -> bool {
+    !curves.unstable() && (dwell.is_current(params) || dwell.progress().is_some())
+}
+
+/// The four frequency plots (|T|, its phase, |u̇/V_in|, its phase) as the view draws them
+/// and an export writes them: every curve with its name and style, the A/B reference on the
+/// transmissibility plots, and the dwell points in `dwell_color` when they are shown. An
+/// unstable loop's active curves are faint.
+pub(crate) fn freq_panels<'a>(
+    curves: &'a Curves,
+    dwell: &'a Dwell,
+    reference: Option<&'a Curves>,
+    dwell_c: Option<Color32>,
+) -> [FreqPanel<'a>; 4] {
+    let unstable = curves.unstable();
     // Unstable: the active curves are faint (not a steady state).
     let active = |c: Color32| if unstable { c.gamma_multiply(0.45) } else { c };
     let t_styles = [
@@ -420,7 +461,6 @@ pub fn frequency_ui(
         width: ref_w,
         style: ref_style,
     };
-    let dwell_c = dwell_color(ui);
     let t_mag = FreqPanel {
         id: "t_mag",
         y_label: "|T| [dB]",
@@ -428,9 +468,9 @@ pub fn frequency_ui(
         lines: styled(
             &t_styles,
             &curves.t_mag,
-            view.reference.map(|r| (reference_style, &r.t_mag[1])),
+            reference.map(|r| (reference_style, &r.t_mag[1])),
         ),
-        dwell: show_dwell.then_some((T_DWELL_NAME, dwell_c, dwell.mag.as_slice())),
+        dwell: dwell_c.map(|c| (T_DWELL_NAME, c, dwell.mag.as_slice())),
         phase: false,
     };
     let t_phase = FreqPanel {
@@ -440,9 +480,9 @@ pub fn frequency_ui(
         lines: styled(
             &t_styles,
             &curves.t_phase,
-            view.reference.map(|r| (reference_style, &r.t_phase[1])),
+            reference.map(|r| (reference_style, &r.t_phase[1])),
         ),
-        dwell: show_dwell.then_some((T_DWELL_NAME, dwell_c, dwell.phase.as_slice())),
+        dwell: dwell_c.map(|c| (T_DWELL_NAME, c, dwell.phase.as_slice())),
         phase: true,
     };
     let b_styles = [
@@ -464,7 +504,7 @@ pub fn frequency_ui(
         y_label: "|du/dt / V_in| [dB]",
         unit: "dB re (mm/s)/V",
         lines: styled(&b_styles, &curves.bode_mag, None),
-        dwell: show_dwell.then_some((BODE_DWELL_NAME, dwell_c, dwell.bode_mag.as_slice())),
+        dwell: dwell_c.map(|c| (BODE_DWELL_NAME, c, dwell.bode_mag.as_slice())),
         phase: false,
     };
     let bode_phase = FreqPanel {
@@ -472,22 +512,8 @@ pub fn frequency_ui(
         y_label: "phase [deg]",
         unit: "°",
         lines: styled(&b_styles, &curves.bode_phase, None),
-        dwell: show_dwell.then_some((BODE_DWELL_NAME, dwell_c, dwell.bode_phase.as_slice())),
+        dwell: dwell_c.map(|c| (BODE_DWELL_NAME, c, dwell.bode_phase.as_slice())),
         phase: true,
     };
-    t_mag.ui(ui, 4, unwrapped, hidden, |pu| {
-        pu.hline(
-            egui_plot::HLine::new("|T| = 1", 0.0)
-                .color(Color32::GRAY)
-                .style(LineStyle::dashed_dense()),
-        );
-        // The |T| = 1 crossings of an unstable loop mean nothing.
-        if !unstable {
-            crossing_marks(pu, curves, [t_styles[0].color, t_styles[1].color]);
-        }
-    });
-    t_phase.ui(ui, 3, unwrapped, hidden, |_| {});
-    bode_mag.ui(ui, 2, unwrapped, hidden, |_| {});
-    bode_phase.ui(ui, 1, unwrapped, hidden, |_| {});
-    action
+    [t_mag, t_phase, bode_mag, bode_phase]
 }

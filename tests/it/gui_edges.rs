@@ -462,6 +462,22 @@ fn an_injected_engine_panic_shows_the_banner_and_reset_recovers() {
     });
 }
 
+/// The app with A/B on and the twin's sine-dwell points computed (the most the frequency
+/// plots show).
+fn harness_with_ab_and_dwell_points() -> Harness<'static, SeatTwinApp> {
+    let mut h = harness();
+    h.run_steps(2);
+    h.get_by_label("A/B: compare with a reference twin").click();
+    super::gui_measured::step_until_long(
+        &mut h,
+        "the sine-dwell points",
+        Duration::from_secs(120),
+        |a| a.dwell().progress().is_none() && a.dwell().mag.len() >= 10,
+    );
+    h.run_steps(2);
+    h
+}
+
 /// Regression: with A/B on, the transmissibility legends have one entry more and wrap to a
 /// second row. Each legend entry used to be a nested layout that did not wrap, so the row
 /// widened the frequency column past the window's central panel (the plots stopped near
@@ -470,17 +486,8 @@ fn an_injected_engine_panic_shows_the_banner_and_reset_recovers() {
 /// inside the window.
 #[test]
 fn frequency_plots_stay_in_the_window_when_a_legend_wraps() {
-    let mut h = harness();
-    h.run_steps(2);
-    h.get_by_label("A/B: compare with a reference twin").click();
     // The dwell points add the last legend entry.
-    super::gui_measured::step_until_long(
-        &mut h,
-        "the sine-dwell points",
-        Duration::from_secs(120),
-        |a| a.dwell().progress().is_none() && a.dwell().mag.len() >= 10,
-    );
-    h.run_steps(2);
+    let h = harness_with_ab_and_dwell_points();
     let texts = painted_texts(&h);
     let side_left = texts
         .iter()
@@ -522,16 +529,7 @@ fn frequency_plots_stay_in_the_window_when_a_legend_wraps() {
 #[test]
 fn exported_frequency_figure_shows_what_the_view_shows() {
     use seat_twin::plot::SeriesStyle;
-    let mut h = harness();
-    h.run_steps(2);
-    h.get_by_label("A/B: compare with a reference twin").click();
-    super::gui_measured::step_until_long(
-        &mut h,
-        "the sine-dwell points",
-        Duration::from_secs(120),
-        |a| a.dwell().progress().is_none() && a.dwell().mag.len() >= 10,
-    );
-    h.run_steps(2);
+    let h = harness_with_ab_and_dwell_points();
     let figs = h.state().plot_figures();
     let freq = &figs
         .iter()

@@ -82,17 +82,16 @@ impl SeatTwinApp {
     /// draws them (current and stable only), the phase wrapped or unwrapped as in the view,
     /// and no curve the legend has hidden. An unstable loop says so in the title.
     fn frequency_figure(&self) -> Figure {
-        use crate::gui::frequency::{
-            BODE_DWELL_NAME, BODE_NAMES, LINEAR, PASSIVE, REFERENCE_NAME, T_DWELL_NAME, T_NAMES,
-            TWIN, shown_phase,
-        };
+        use crate::gui::frequency::{dwell_shown, freq_panels, shown_phase};
         let c = self.analytic.curves();
-        let rgb = |c: egui::Color32| Rgb(c.r(), c.g(), c.b());
         let unwrapped = self.settings.phase_unwrapped;
         let unstable = c.unstable();
-        let show_dwell =
-            !unstable && (self.dwell.is_current(&self.params) || self.dwell.progress().is_some());
-        // A phase curve as the view draws it: wrapped segments joined by a break.
+        // Dark markers on the figure's white ground (the view's are the theme's strongest
+        // text colour).
+        let dwell_c = dwell_shown(c, &self.dwell, &self.params)
+            .then_some(egui::Color32::from_rgb(30, 30, 30));
+        let rgb = |c: egui::Color32| Rgb(c.r(), c.g(), c.b());
+        // A curve as the view draws it: a phase wrapped into segments joined by a break.
         let points = |pts: &[egui_plot::PlotPoint], phase: bool| -> (Vec<f64>, Vec<f64>) {
             let segments = if phase {
                 shown_phase(pts, unwrapped)
@@ -112,82 +111,38 @@ impl SeatTwinApp {
             }
             xy
         };
-        let reference = self.ab.drawn_curves();
-        let panel = |id: &str,
-                     title: &str,
-                     y_label: &str,
-                     lines: &[(&str, egui::Color32, &[egui_plot::PlotPoint])],
-                     dwell: (&str, &[egui_plot::PlotPoint]),
-                     phase: bool| {
-            let shown = |name: &str| !crate::gui::plotkit::hidden(&self.hidden_curves, id, name);
+        let panels = freq_panels(c, &self.dwell, self.ab.drawn_curves(), dwell_c).map(|fp| {
+            let shown = |name: &str| !crate::gui::plotkit::hidden(&self.hidden_curves, fp.id, name);
+            let title = match fp.id {
+                "t_mag" => "Transmissibility",
+                "bode_mag" => "Valve/actuator (du/dt)/V_in",
+                _ => "",
+            };
+            // The view's short axis title with the full unit.
+            let y_label = if fp.phase {
+                fp.y_label.to_string()
+            } else {
+                let base = fp.y_label.split(" [").next().unwrap_or(fp.y_label);
+                format!("{base} [{}]", fp.unit)
+            };
             let mut p = Panel::new(title, "frequency [Hz]", y_label);
             p.x_scale = Scale::Log10;
-            for (name, color, pts) in lines.iter().filter(|(n, ..)| shown(n)) {
-                let (x, y) = points(pts, phase);
-                p.series.push(Series::line(*name, x, y, rgb(*color)));
-            }
-            if show_dwell && shown(dwell.0) && !dwell.1.is_empty() {
-                let (x, y) = points(dwell.1, phase);
-                // Dark markers on the figure's white ground (the view's are the theme's
-                // strongest text colour).
+            for (style, pts) in fp.lines.iter().filter(|(s, _)| shown(s.name)) {
+                let (x, y) = points(pts, fp.phase);
                 p.series
-                    .push(Series::markers(dwell.0, x, y, Rgb(30, 30, 30)));
+                    .push(Series::line(style.name, x, y, rgb(style.color)));
+            }
+            if let Some((name, color, pts)) = fp.dwell.filter(|(n, ..)| shown(n))
+                && !pts.is_empty()
+            {
+                let (x, y) = points(pts, fp.phase);
+                p.series.push(Series::markers(name, x, y, rgb(color)));
+            }
+            if fp.id == "t_mag" {
+                p.hlines = vec![(0.0, "|T| = 1".into())];
             }
             p
-        };
-        type Lines<'a> = Vec<(&'a str, egui::Color32, &'a [egui_plot::PlotPoint])>;
-        fn t_lines<'a>(
-            curves: &'a [frequency::Curve; 3],
-            r: Option<&'a frequency::Curve>,
-        ) -> Lines<'a> {
-            let colors = [LINEAR, TWIN, PASSIVE];
-            let mut v: Lines<'a> = (0..3)
-                .map(|i| (T_NAMES[i], colors[i], curves[i].as_slice()))
-                .collect();
-            if let Some(r) = r {
-                v.push((REFERENCE_NAME, crate::gui::scopes::REFERENCE, r.as_slice()));
-            }
-            v
-        }
-        fn b_lines(curves: &[frequency::Curve; 2]) -> Lines<'_> {
-            vec![
-                (BODE_NAMES[0], TWIN, curves[0].as_slice()),
-                (BODE_NAMES[1], LINEAR, curves[1].as_slice()),
-            ]
-        }
-        let mut t_mag = panel(
-            "t_mag",
-            "Transmissibility",
-            "|T| [dB]",
-            &t_lines(&c.t_mag, reference.map(|r| &r.t_mag[1])),
-            (T_DWELL_NAME, &self.dwell.mag),
-            false,
-        );
-        t_mag.hlines = vec![(0.0, "|T| = 1".into())];
-        let t_ph = panel(
-            "t_phase",
-            "",
-            "phase T [deg]",
-            &t_lines(&c.t_phase, reference.map(|r| &r.t_phase[1])),
-            (T_DWELL_NAME, &self.dwell.phase),
-            true,
-        );
-        let b_mag = panel(
-            "bode_mag",
-            "Valve/actuator (du/dt)/V_in",
-            "|du/dt / V_in| [dB re (mm/s)/V]",
-            &b_lines(&c.bode_mag),
-            (BODE_DWELL_NAME, &self.dwell.bode_mag),
-            false,
-        );
-        let b_ph = panel(
-            "bode_phase",
-            "",
-            "phase (du/dt)/V_in [deg]",
-            &b_lines(&c.bode_phase),
-            (BODE_DWELL_NAME, &self.dwell.bode_phase),
-            true,
-        );
+        });
         let mut freq = Figure::new(
             format!(
                 "seat-twin — preset {}{} — {}{}",
@@ -204,7 +159,7 @@ impl SeatTwinApp {
                     ""
                 }
             ),
-            vec![t_mag, t_ph, b_mag, b_ph],
+            panels.into(),
         );
         freq.height = 1200;
         freq
