@@ -73,19 +73,36 @@ fn linearisation(c: &mut Criterion) {
             black_box(t)
         })
     });
-    // What the app does on a plant-slider frame (Cd, mass, k, supply): re-linearise, then the
-    // open-loop responses on its 2 000-point margin grid and 240 plot frequencies.
-    let margin = fr::margin_frequencies();
+    // What the app does on a plant-slider frame (Cd, mass, k, supply): re-linearise, the
+    // margin grid refined around the resonances, the 240 plot frequencies, and the verdict.
     let plot = fr::log_space(0.1, 100.0, 240);
-    c.bench_function("linearise_twin_and_2240_open_loop_points", |b| {
+    c.bench_function("linearise_twin_margin_grid_plot_and_verdict", |b| {
         b.iter(|| {
             let lin = fr::linearise_twin(black_box(&params));
-            let n = margin
-                .iter()
-                .chain(&plot)
-                .map(|&f| lin.open_loop(f).u_v.re)
-                .sum::<f64>();
-            black_box(n)
+            let grid = seat_twin::analysis::stability::MarginGrid::new(&lin);
+            let n = plot.iter().map(|&f| lin.open_loop(f).u_v.re).sum::<f64>();
+            let law = seat_twin::control::ControlLaw::new(&params);
+            let s = seat_twin::analysis::stability::Stability::on_grid(
+                &lin,
+                &grid,
+                &law,
+                params.plant.valve.tau_s,
+            );
+            black_box((n, s))
+        })
+    });
+    // What a gain-slider frame costs: the verdict on the cached plant.
+    let lin = fr::linearise_twin(&params);
+    let grid = seat_twin::analysis::stability::MarginGrid::new(&lin);
+    c.bench_function("stability_verdict_on_cached_plant", |b| {
+        b.iter(|| {
+            let law = seat_twin::control::ControlLaw::new(black_box(&params));
+            black_box(seat_twin::analysis::stability::Stability::on_grid(
+                &lin,
+                &grid,
+                &law,
+                params.plant.valve.tau_s,
+            ))
         })
     });
 }

@@ -137,25 +137,63 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     start.controller.kind = kind;
     let files = tune::report::write_outputs(&result, &start, out, wall)?;
     let unit = objective.unit();
+    let value = |e: &tune::Evaluation| {
+        if e.objective.is_finite() {
+            format!("{:.4} {unit}", e.objective)
+        } else if e.unstable_points > 0 {
+            format!(
+                "not simulated (unstable where the rides run; {} of 27 spread points)",
+                e.unstable_points
+            )
+        } else {
+            "diverged".to_string()
+        }
+    };
     println!(
-        "{}: start {:.4} {unit} -> tuned {:.4} {unit} (held out {:.4} -> {:.4}); {} evaluations in {wall:.1} s",
+        "{}: start {} -> tuned {} (held out {} -> {}); {} evaluations in {wall:.1} s",
         objective.name(),
-        result.baseline.objective,
-        result.tuned.objective,
-        result.baseline_heldout.objective,
-        result.tuned_heldout.objective,
+        value(&result.baseline),
+        value(&result.tuned),
+        value(&result.baseline_heldout),
+        value(&result.tuned_heldout),
         result.evaluations
     );
     for (k, v) in &result.tuned.gains {
         println!("  {k} = {v:.4}");
     }
+    let words = |v: f64, scale: f64, digits: usize, unit: &str| {
+        if v.is_finite() {
+            format!("{:.digits$} {unit}", v * scale)
+        } else {
+            "∞ (no crossing)".to_string()
+        }
+    };
+    let stroke = if result.tuned.max_abs_u_m.is_finite() {
+        format!(
+            "max |u| {:.1} mm, contacts {}",
+            result.tuned.max_abs_u_m * 1e3,
+            result.tuned.contacts
+        )
+    } else {
+        "rides not simulated".to_string()
+    };
     println!(
-        "  GM {:.1} dB, PM {:.1} deg, max |u| {:.1} mm, contacts {}",
-        result.tuned.gain_margin_db,
-        result.tuned.phase_margin_deg,
-        result.tuned.max_abs_u_m * 1e3,
-        result.tuned.contacts
+        "  GM {}, PM {}, delay margin {}, {stroke}",
+        words(result.tuned.gain_margin_db, 1.0, 1, "dB"),
+        words(result.tuned.phase_margin_deg, 1.0, 1, "deg"),
+        words(result.tuned.delay_margin_s, 1e3, 2, "ms"),
     );
+    if !result.failures.is_empty() {
+        println!(
+            "wrote {} files to {} (no tuned.toml)",
+            files.len(),
+            out.display()
+        );
+        bail!(
+            "the tuned gains' claim fails, so no tuned.toml was written:\n  - {}",
+            result.failures.join("\n  - ")
+        );
+    }
     println!("wrote {} files to {}", files.len(), out.display());
     Ok(())
 }

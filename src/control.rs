@@ -329,6 +329,11 @@ impl ControlLaw {
         &self.params
     }
 
+    /// G(s) of the Smith predictor's model (read only by `smith`).
+    pub fn model(&self) -> &LinearParams {
+        &self.model
+    }
+
     /// The law with other gains (same structure or not), the same model.
     pub fn with_params(&self, params: ControllerParams) -> Self {
         Self { params, ..*self }

@@ -9,6 +9,7 @@
 //! A numerical blow-up or a panic inside a step is caught, reported as
 //! [`Event::Error`] and leaves the thread alive, waiting for [`Command::Reset`].
 
+use crate::analysis::watch::{Finding, Watch};
 use crate::control::ControlLaw;
 use crate::model::linear::LinearModel;
 use crate::model::passive::PassiveModel;
@@ -277,6 +278,10 @@ pub enum Event {
     Error(String),
     /// The excitation ended and restarted from rest (new seed for the random ride).
     Restarted,
+    /// The running twin watches itself ([`crate::analysis::watch`]): a self-excited
+    /// oscillation or growth (whatever the linear verdict says), or a pressure below zero.
+    /// Each is sent once until the next reset, parameter or excitation change.
+    Watch(Finding),
 }
 
 /// The handle the UI holds.
@@ -441,6 +446,8 @@ struct Loop<W: Fn()> {
     stepped: f64,
     /// A fault injected by [`Command::InjectFault`] waits for the next step.
     fault_armed: bool,
+    /// The live twin's watch over its own samples.
+    watch: Watch,
 }
 
 fn engine_loop<W: Fn()>(
@@ -472,6 +479,7 @@ fn engine_loop<W: Fn()>(
         epoch: 0.0,
         stepped: 0.0,
         fault_armed: false,
+        watch: Watch::new(1.0 / STREAM_RATE_HZ),
     };
     let tick = Duration::from_millis(10);
     loop {
@@ -519,6 +527,7 @@ impl<W: Fn()> Loop<W> {
     }
 
     fn restart(&mut self) {
+        self.watch.reset();
         let excitation = self.excitation.reseeded(self.seed_bump);
         match Sims::new(&self.params, &excitation, self.reference) {
             Ok(sims) => {
@@ -540,6 +549,7 @@ impl<W: Fn()> Loop<W> {
                 if p.validate().is_ok() {
                     self.params = *p;
                     self.sims.set_params(&self.params);
+                    self.watch.reset();
                 } else if let Err(e) = p.validate() {
                     self.send(Event::Error(format!("parameters refused: {e}")));
                 }
@@ -628,6 +638,14 @@ impl<W: Fn()> Loop<W> {
             sims.advance(t_end, &mut batch)
         }));
         self.stepped += (self.sims.time() - t_before).max(0.0);
+        for smp in &batch.twin {
+            if let Some(f) = self
+                .watch
+                .push(self.epoch + smp.t, smp.xdd, smp.ydd, smp.p1, smp.p2)
+            {
+                self.send(Event::Watch(f));
+            }
+        }
         if !batch.twin.is_empty() {
             self.send(Event::Samples(batch));
         }

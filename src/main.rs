@@ -501,6 +501,9 @@ fn write_response(preset: &str, kind: ModelKind, what: Response, sweep: &SweepAr
         Response::Transmissibility => (format!("preset {preset}"), Vec::new()),
     };
     let method = method.unwrap_or(Method::default_for(kind));
+    if let Response::Transmissibility = what {
+        check_loop_stable(&params, kind, preset)?;
+    }
     let values = match response(&params, kind, what, method, freqs) {
         Err(e @ ResponseError::NotFinite { .. }) => {
             bail!("{e}; nothing was written. Check {input}")
@@ -517,6 +520,31 @@ fn write_response(preset: &str, kind: ModelKind, what: Response, sweep: &SweepAr
         .with_context(|| format!("writing {}", out.display()))?;
     println!("{} points written to {}", freqs.len(), out.display());
     Ok(())
+}
+
+/// Refuses a closed loop that the stability verdict calls unstable: its transmissibility is
+/// not a steady state (|T| of an unstable loop is a number, not a response).
+fn check_loop_stable(params: &Params, kind: ModelKind, preset: &str) -> Result<()> {
+    use seat_twin::analysis::frequency_response as fr;
+    use seat_twin::analysis::stability::{LoopPlant, remedy};
+    let (lin, tau) = match kind {
+        ModelKind::Twin => (fr::linearise_twin(params), params.plant.valve.tau_s),
+        ModelKind::Linear => (fr::linearise_linear(params), params.linear.tau_s),
+        ModelKind::Passive => return Ok(()),
+    };
+    let law = seat_twin::control::ControlLaw::new(params);
+    let s = seat_twin::analysis::stability::Stability::of(&lin, &law, tau);
+    if s.stable() {
+        return Ok(());
+    }
+    let plant = LoopPlant::new(&lin);
+    bail!(
+        "the closed loop of preset {preset} on the {} is unstable: {} (closed-loop eigenvalues \
+         of the loop linearised at rest, with the delay). {} Nothing was written.",
+        kind.name(),
+        s.mode_text(),
+        remedy(params, &[(&plant, tau)])
+    )
 }
 
 /// "column "xdd" peaks at 9e5 m/s² at t = 1.2 s (sample 1201)": the largest driving value of

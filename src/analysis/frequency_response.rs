@@ -6,6 +6,7 @@
 //! * the valve/actuator Bode `u̇/V_in` (G(s) for the linear model), open loop, platform still;
 //! * the transmissibility `T = ÿ/ẍ` with the controller `V = Kp·u + (Ki/s)·ẍ` in the loop.
 
+use crate::analysis::stability::Stability;
 use crate::control::ControlLaw;
 use crate::model::linear::{LinearModel, g_of};
 use crate::model::passive::PassiveModel;
@@ -247,7 +248,7 @@ pub fn linearise_twin(params: &Params) -> LinearisedModel {
 impl LinearisedModel {
     /// Prepares `ẏ = A·y + b_v·V_valve + b_x·ẍ` (state order: `u`, `u̇`, …) with the state
     /// scales `scales` and the command delay `tau_s` [s].
-    fn new(
+    pub fn new(
         a: DMatrix<f64>,
         b_v: DVector<f64>,
         b_x: DVector<f64>,
@@ -475,147 +476,33 @@ pub fn delay_from_phase_slope(freqs_hz: &[f64], phases_rad: &[f64]) -> f64 {
     -sxy / sxx
 }
 
-/// Stability of the closed loop from the linearised twin: the largest real part of the
-/// delay-free closed-loop eigenvalues is not enough with a delay, so this evaluates the
-/// Nyquist-style margin of the position loop `L(jω) = −Kp·e^(−jωτ)·u/V` instead.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct LoopMargins {
-    /// Gain margin [-] (how much |Kp| could grow), ∞ if the phase never reaches −180°.
-    pub gain_margin: f64,
-    /// Frequency of the gain margin [Hz].
-    pub gain_margin_freq_hz: f64,
-    /// Phase margin [deg] at the loop's unity-gain frequency.
-    pub phase_margin_deg: f64,
-    /// Unity-gain frequency [Hz].
-    pub crossover_hz: f64,
+/// G(s) as a linearised model (exact: the model is linear), its delay `params.linear.tau_s`.
+pub fn linearise_linear(params: &Params) -> LinearisedModel {
+    let model = LinearModel::new(params);
+    linearise(
+        &model,
+        &model.rest_state(),
+        &[1e-2, 1e-1, 1e1],
+        params.linear.tau_s,
+    )
 }
 
-impl LoopMargins {
-    /// Positive feedback around an integrating plant: unstable at any gain.
-    pub fn positive_feedback() -> Self {
-        Self {
-            gain_margin: 0.0,
-            gain_margin_freq_hz: 0.0,
-            phase_margin_deg: f64::NEG_INFINITY,
-            crossover_hz: f64::NAN,
-        }
-    }
-
-    /// Stable if both margins are positive.
-    pub fn stable(&self) -> bool {
-        self.gain_margin > 1.0 && self.phase_margin_deg > 0.0
-    }
+/// The stability verdict of the twin linearised at rest with the parameters' controller.
+pub fn twin_stability(params: &Params) -> Stability {
+    Stability::of(
+        &linearise_twin(params),
+        &ControlLaw::new(params),
+        params.plant.valve.tau_s,
+    )
 }
 
-/// Frequencies at which the loop margins are evaluated [Hz]: 2 000 points, 0.01–200 Hz.
-pub fn margin_frequencies() -> Vec<f64> {
-    log_space(0.01, 200.0, 2000)
-}
-
-/// Margins of the paper's position loop (`V = Kp·u`) for a `u/V_valve` response function
-/// (without the delay), evaluated on [`margin_frequencies`].
-pub fn loop_margins(
-    u_per_v: impl Fn(f64) -> Complex64,
-    tau_s: f64,
-    kp_v_per_m: f64,
-) -> LoopMargins {
-    let freqs = margin_frequencies();
-    let values = freqs.iter().map(|&f| u_per_v(f));
-    loop_margins_on(&freqs, values, tau_s, kp_v_per_m)
-}
-
-/// Margins of the paper's position loop from `u/V_valve` (without the delay) already evaluated
-/// at `freqs_hz` (ascending; `u_per_v` pairs with them in order, and is not read when Kp > 0).
-pub fn loop_margins_on(
-    freqs_hz: &[f64],
-    u_per_v: impl IntoIterator<Item = Complex64>,
-    tau_s: f64,
-    kp_v_per_m: f64,
-) -> LoopMargins {
-    if kp_v_per_m > 0.0 {
-        return LoopMargins::positive_feedback();
-    }
-    // Pairs up to the shorter of the two.
-    let loop_gain: Vec<Complex64> = freqs_hz
-        .iter()
-        .zip(u_per_v)
-        .map(|(&f, p)| {
-            let w = 2.0 * PI * f;
-            // Negative feedback form: V = Kp·u with Kp < 0 ⇒ L = −Kp·P.
-            -kp_v_per_m * p * Complex64::new(0.0, -w * tau_s).exp()
-        })
-        .collect();
-    margins_of_loop(freqs_hz, &loop_gain)
-}
-
-/// Margins of any controller's loop ([`ControlLaw::loop_gain`]) from the plant's open-loop
-/// responses at `freqs_hz` (ascending, delay excluded) and the command delay `tau_s`.
-pub fn law_margins_on(
-    freqs_hz: &[f64],
-    plant: impl IntoIterator<Item = OpenLoop>,
-    law: &ControlLaw,
-    tau_s: f64,
-) -> LoopMargins {
-    if law.positive_position_feedback() {
-        return LoopMargins::positive_feedback();
-    }
-    let loop_gain: Vec<Complex64> = plant.into_iter().map(|p| p.loop_gain(law, tau_s)).collect();
-    margins_of_loop(freqs_hz, &loop_gain)
-}
-
-/// Gain and phase margins read from a loop gain `L` (negative-feedback form, `1 + L` in the
-/// closed loop's denominator) at ascending frequencies: the first unity-gain and the first
-/// −180° crossings.
-pub fn margins_of_loop(freqs_hz: &[f64], loop_gain: &[Complex64]) -> LoopMargins {
-    let freqs = freqs_hz;
-    let mags: Vec<f64> = loop_gain.iter().map(|l| l.norm()).collect();
-    let phases = unwrap_phase(&loop_gain.iter().map(|l| l.arg()).collect::<Vec<_>>());
-    let mut m = LoopMargins {
-        gain_margin: f64::INFINITY,
-        gain_margin_freq_hz: f64::NAN,
-        phase_margin_deg: f64::INFINITY,
-        crossover_hz: f64::NAN,
-    };
-    for i in 1..loop_gain.len() {
-        if m.crossover_hz.is_nan() && (mags[i - 1] - 1.0) * (mags[i] - 1.0) <= 0.0 {
-            m.crossover_hz = freqs[i];
-            m.phase_margin_deg = 180.0 + phases[i].to_degrees();
-        }
-        let (pa, pb) = (phases[i - 1] + PI, phases[i] + PI);
-        if m.gain_margin_freq_hz.is_nan() && pa * pb <= 0.0 && pa != pb {
-            m.gain_margin_freq_hz = freqs[i];
-            m.gain_margin = 1.0 / mags[i];
-        }
-    }
-    m
-}
-
-/// Loop margins of the linear model G(s) with the parameters' controller.
-pub fn linear_margins(params: &Params) -> LoopMargins {
-    let mut l = params.linear;
-    let tau = l.tau_s;
-    l.tau_s = 0.0;
-    let freqs = margin_frequencies();
-    let plant = freqs.iter().map(|&f| {
-        let w = 2.0 * PI * f;
-        let jw = Complex64::new(0.0, w);
-        let g = g_of(&l, w);
-        OpenLoop {
-            omega: w,
-            u_v: g / jw,
-            u_x: Complex64::new(0.0, 0.0),
-            du_v: g,
-            du_x: Complex64::new(0.0, 0.0),
-        }
-    });
-    law_margins_on(&freqs, plant, &ControlLaw::new(params), tau)
-}
-
-/// Loop margins of the twin linearised at rest with a controller.
-pub fn twin_margins(lin: &LinearisedModel, law: &ControlLaw) -> LoopMargins {
-    let freqs = margin_frequencies();
-    let plant = freqs.iter().map(|&f| lin.open_loop(f));
-    law_margins_on(&freqs, plant, law, lin.tau_s)
+/// The stability verdict of G(s) with the parameters' controller.
+pub fn linear_stability(params: &Params) -> Stability {
+    Stability::of(
+        &linearise_linear(params),
+        &ControlLaw::new(params),
+        params.linear.tau_s,
+    )
 }
 
 #[cfg(test)]

@@ -5,3 +5,6 @@ pub mod dwell;
 pub mod frequency_response;
 pub mod metrics;
 pub mod response;
+pub mod settle;
+pub mod stability;
+pub mod watch;

@@ -19,6 +19,7 @@ use super::schematic;
 use super::scopes;
 use super::traces::{Ch, Traces};
 use super::units::{BAR_PER_PA, MM_PER_M};
+use crate::analysis::watch::Finding;
 use crate::engine::{self, Command, EngineHandle, Event, Speed};
 use crate::params::{ControllerParams, Params};
 use crate::plot::{Figure, Panel, Rgb, Scale, Series};
@@ -211,6 +212,9 @@ pub struct SeatTwinApp {
     field_errors: controls::FieldErrors,
     hidden_curves: BTreeSet<String>,
     last_stable: Option<ControllerParams>,
+    /// What the running twin's watch found since the last reset or change (it can ring while
+    /// the linear verdict at rest says stable).
+    twin_watch: Option<crate::analysis::watch::Finding>,
     scope_frames: Vec<egui::Rect>,
     path_prompt: Option<(Purpose, String)>,
     ab: AbView,
@@ -281,6 +285,7 @@ impl SeatTwinApp {
             field_errors: controls::FieldErrors::new(),
             hidden_curves: BTreeSet::new(),
             last_stable: None,
+            twin_watch: None,
             scope_frames: Vec::new(),
             path_prompt: None,
             ab: AbView::default(),
@@ -352,6 +357,7 @@ impl SeatTwinApp {
                 let p = Box::new(self.params);
                 self.send(Command::SetParams(p));
                 self.traces.reset_metrics();
+                self.twin_watch = None;
             }
             Err(e) => self.param_error = Some(format!("not applied: {e}")),
         }
@@ -381,6 +387,7 @@ impl SeatTwinApp {
         }
         self.traces.clear();
         self.engine_error = None;
+        self.twin_watch = None;
     }
 
     /// The Tune panel.
@@ -441,6 +448,7 @@ impl SeatTwinApp {
         self.send(Command::SetReference(self.ab.command()));
         self.traces.clear();
         self.engine_error = None;
+        self.twin_watch = None;
     }
 
     // ----- per frame -----
@@ -486,6 +494,7 @@ impl SeatTwinApp {
             Event::Contact(_) => self.traces.contact_count += 1,
             Event::Error(msg) => self.engine_error = Some(msg),
             Event::Restarted => self.traces.mark_restart(),
+            Event::Watch(f) => self.twin_watch = Some(f),
         }
     }
 
@@ -575,7 +584,10 @@ impl SeatTwinApp {
         }
         // Same frame as the slider: the analytic curves follow the edited parameters.
         self.analytic.update(&self.params);
-        let unstable = self.analytic.curves().unstable();
+        let unstable = self.analytic.curves().unstable()
+            || self
+                .twin_watch
+                .is_some_and(|f| !matches!(f, Finding::NegativePressure { .. }));
         if !unstable {
             self.last_stable = Some(self.params.controller);
         }
@@ -649,6 +661,7 @@ impl SeatTwinApp {
                         hidden: &mut self.hidden_curves,
                         last_stable,
                         reference,
+                        watch: self.twin_watch,
                     },
                 );
                 self.frame_stats.freq_ms = t_freq.elapsed().as_secs_f64() * 1e3;

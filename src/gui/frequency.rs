@@ -12,12 +12,13 @@ mod stability;
 
 pub use curves::{Analytic, Curve, Curves, PlantCache};
 pub use dwell::Dwell;
-pub use stability::{remedy, stability_ui};
+pub use stability::stability_ui;
 
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};
 use super::units::{db, deg};
 use crate::analysis::dwell::{self as sine_dwell, DwellOptions};
-use crate::analysis::frequency_response::{self as fr, Crossing, LoopMargins, OpenLoop};
+use crate::analysis::frequency_response::{self as fr, Crossing, LinearisedModel, OpenLoop};
+use crate::analysis::stability::{LoopPlant, MarginGrid, Stability};
 use crate::control::ControlLaw;
 use crate::model::ModelKind;
 use crate::params::{ControllerParams, Params};
@@ -160,6 +161,8 @@ pub struct FreqView<'a> {
     /// A/B on: the curves of the reference controller on the same plant (its linearised
     /// twin's transmissibility is drawn with the live one's).
     pub reference: Option<&'a Curves>,
+    /// What the running twin's watch found (an oscillation the linear verdict may not see).
+    pub watch: Option<crate::analysis::watch::Finding>,
 }
 
 /// Legend name of the A/B reference's transmissibility.
@@ -378,7 +381,7 @@ pub fn frequency_ui(
     params: &Params,
     view: FreqView<'_>,
 ) -> FreqAction {
-    let action = stability_ui(ui, curves, view.last_stable);
+    let action = stability_ui(ui, curves, view.last_stable, view.watch);
     let unstable = curves.unstable();
     // Wrapped, so that a long status (progress, failures) never widens the column.
     ui.horizontal_wrapped(|ui| {

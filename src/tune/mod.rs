@@ -2,24 +2,37 @@
 //!
 //! The problem: minimise an ISO 2631-1 objective of the body's acceleration (Wk-weighted
 //! `a_w`, VDV, or the SEAT ratio) averaged over a few random rides, subject to
+//! * **stability at every point of the parameter spread** (Cd ±10 %, τ ±3 ms, mass ±20 %:
+//!   27 points), from the closed-loop eigenvalues of the twin linearised at rest with the
+//!   delay ([`crate::analysis::stability`]) — a hard constraint: a gain set unstable anywhere
+//!   in the spread is never feasible, and one unstable where the rides run is not simulated;
 //! * no end-stop contact and `max |u| ≤ 30 mm` on every tuning ride;
-//! * gain margin ≥ 6 dB and phase margin ≥ 45° of the twin's loop linearised at rest.
+//! * every closed-loop mode at every point of the spread decays at ≥ 0.2 1/s;
+//! * over every crossing of the loop: gain margin ≥ 6 dB, phase margin ≥ 45° and delay margin
+//!   ≥ 3 ms (the τ part of the spread) at the nominal plant (at the corners too with `robust`).
 //!
-//! Constraints enter as a penalty that grows with the violation, so the search (Nelder–Mead,
-//! from the `argmin` crate) is pulled back into the feasible set rather than walled off. Each
-//! evaluation runs the tuning rides in parallel (rayon). With `robust`, the objective is the
-//! worst case over the parameter spread (Cd ±10 %, τ ±3 ms, mass ±20 %, corners and nominal)
-//! and the constraints must hold at every corner.
+//! The soft constraints enter as a penalty that grows with the violation, so the search
+//! (Nelder–Mead, from the `argmin` crate) is pulled back into the feasible set rather than
+//! walled off. Each evaluation runs the tuning rides in parallel (rayon). With `robust`, the
+//! objective is the worst case over the spread's corners and nominal point.
+//!
+//! The result is then checked where instability shows ([`RobustnessRow`]): at each of the 27
+//! points, the eigenvalue verdict, the smallest delay margin, and a settle test at rest after a
+//! bump on the nonlinear twin ([`crate::analysis::settle`]), besides the ride objective. The
+//! best feasible gains that pass every point are the tuned ones; if none do,
+//! [`TuneResult::failures`] says why and no tuned preset should be written.
 //!
 //! What comes out ([`TuneResult`]): the tuned gains; the objective of the starting gains and
 //! of the tuned ones on the tuning rides and on held-out rides (other seeds); the margins and
-//! stroke use of the tuned loop; a robustness table over the spread; and the Pareto front of
-//! objective against stroke use among every feasible evaluation.
+//! stroke use of the tuned loop; the robustness table; and the Pareto front of objective
+//! against stroke use among every feasible evaluation.
 
 pub mod report;
 
-use crate::analysis::frequency_response::{self as fr, LinearisedModel, LoopMargins};
+use crate::analysis::frequency_response::{self as fr, LinearisedModel};
 use crate::analysis::metrics;
+use crate::analysis::settle::{Settle, settle_after_bump};
+use crate::analysis::stability::{ClosedLoopModes, LoopMargins, LoopPlant, MarginGrid};
 use crate::control::ControlLaw;
 use crate::experiments;
 use crate::model::ModelKind;
@@ -38,8 +51,15 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 pub const MAX_ABS_U_M: f64 = 0.030;
 /// Smallest gain margin allowed [dB].
 pub const MIN_GAIN_MARGIN_DB: f64 = 6.0;
-/// Smallest phase margin allowed [deg].
+/// Smallest phase margin allowed [deg] (over every gain crossover, in magnitude).
 pub const MIN_PHASE_MARGIN_DEG: f64 = 45.0;
+/// Smallest delay margin allowed [s]: the τ part of the spread.
+pub const MIN_DELAY_MARGIN_S: f64 = 0.003;
+/// Slowest decay allowed of any closed-loop mode at any point of the spread [1/s] (a time
+/// constant of 5 s: a mode rung by a bump is gone well within the settle test's 10 s).
+pub const MIN_DECAY_RATE_PER_S: f64 = 0.02;
+/// Feasible candidates, best first, put through the robustness check before giving up.
+const MAX_CHECKED_CANDIDATES: usize = 12;
 /// Start of the ride left out of the metrics (the rides fade in over 2 s) [s].
 pub const SETTLE_S: f64 = 2.0;
 /// Recording rate of the tuning runs [Hz].
@@ -205,10 +225,18 @@ pub struct Evaluation {
     pub max_abs_u_m: f64,
     /// End-stop contacts over the rides.
     pub contacts: usize,
-    /// Gain margin of the linearised loop [dB] (worst over the spread when robust).
+    /// Gain margin of the linearised loop, the crossing nearest instability [dB] (worst over
+    /// the corners when robust).
     pub gain_margin_db: f64,
-    /// Phase margin of the linearised loop [deg] (worst over the spread when robust).
+    /// Phase margin of the linearised loop, the crossover nearest instability [deg] (worst over
+    /// the corners when robust).
     pub phase_margin_deg: f64,
+    /// Smallest delay margin over every crossover [s] (worst over the corners when robust).
+    pub delay_margin_s: f64,
+    /// Points of the 27-point spread where the loop linearised at rest is unstable.
+    pub unstable_points: usize,
+    /// Largest closed-loop growth rate over the spread [1/s] (negative: every mode decays).
+    pub worst_growth_rate_per_s: f64,
     /// Every constraint met.
     pub feasible: bool,
 }
@@ -228,6 +256,21 @@ pub struct RobustnessRow {
     pub contacts: usize,
     /// Largest |u| [m].
     pub max_abs_u_m: f64,
+    /// Closed-loop eigenvalue verdict of the loop linearised at rest.
+    pub stable: bool,
+    /// Growth rate of the rightmost closed-loop mode [1/s].
+    pub growth_rate_per_s: f64,
+    /// Smallest delay margin over every crossover [s].
+    pub delay_margin_s: f64,
+    /// The settle test at rest after a bump on the nonlinear twin (`None`: it diverged).
+    pub settle: Option<Settle>,
+}
+
+impl RobustnessRow {
+    /// Stable by the eigenvalues, and settled on the twin.
+    pub fn passes(&self) -> bool {
+        self.stable && self.settle.is_some_and(|s| s.settled())
+    }
 }
 
 /// What tuning found.
@@ -263,10 +306,16 @@ pub struct TuneResult {
     pub robust: bool,
     /// Why the search stopped.
     pub stop_reason: String,
+    /// Why the tuned gains' claim fails (empty when it holds at every point of the spread):
+    /// a tuned preset should only be written when this is empty.
+    pub failures: Vec<String>,
 }
 
 /// The gains a structure tunes, with the scale of one search unit. Corner frequencies stay as
-/// the preset sets them (they are design choices, not gains).
+/// the preset sets them (they are design choices, not gains). `Kp` is searched on a log scale
+/// of |Kp| with its sign fixed negative ([`to_search`]): positive position feedback is unstable
+/// at any gain, and the stable range of |Kp| spans decades (a few V/m at rest, where the oil
+/// column limits it, to tens of V/m on G(s)).
 pub fn tuned_keys(kind: ControllerKind) -> &'static [(&'static str, f64)] {
     match kind {
         ControllerKind::Paper | ControllerKind::Smith => {
@@ -283,6 +332,24 @@ pub fn tuned_keys(kind: ControllerKind) -> &'static [(&'static str, f64)] {
             ("sky_v_s_per_m", 2.0),
         ],
     }
+}
+
+/// The key searched on a log scale (see [`tuned_keys`]).
+const LOG_KEY: &str = "kp_v_per_m";
+
+/// A gain in search units: `ln(|Kp| / 1 V/m)` for Kp (a positive start is mirrored to −|Kp|,
+/// its stable side), `value / scale` for the others.
+fn to_search(key: &str, scale: f64, value: f64) -> f64 {
+    if key == LOG_KEY {
+        value.abs().max(1e-3).ln()
+    } else {
+        value / scale
+    }
+}
+
+/// The inverse of [`to_search`].
+fn from_search(key: &str, scale: f64, x: f64) -> f64 {
+    if key == LOG_KEY { -x.exp() } else { x * scale }
 }
 
 /// The parameter spread of the robustness table: Cd ±10 %, τ ±3 ms, mass ±20 % (3 levels
@@ -361,10 +428,6 @@ fn ride_score(
         .then_some((value, max_u, trace.contacts.len()))
 }
 
-fn margins_db_deg(m: &LoopMargins) -> (f64, f64) {
-    (20.0 * m.gain_margin.log10(), m.phase_margin_deg)
-}
-
 /// Mean objective, max |u| and contacts over rides (in parallel); objective NaN if any ride
 /// diverged.
 fn score_rides(
@@ -389,8 +452,11 @@ fn score_rides(
 
 /// The evaluation problem: a plant (or its spread), rides and an objective.
 struct Problem {
-    /// Plants evaluated: the nominal alone, or the spread's corners and nominal when robust.
-    plants: Vec<(Params, LinearisedModel)>,
+    /// Plants whose rides and margins are evaluated: the nominal alone, or the spread's
+    /// corners and nominal when robust.
+    plants: Vec<(Params, LinearisedModel, MarginGrid)>,
+    /// Every point of the spread, for the stability constraint.
+    spread: Vec<(Params, LoopPlant)>,
     rides: Vec<PlatformMotion>,
     duration_s: f64,
     objective: Objective,
@@ -415,7 +481,7 @@ impl Problem {
         c.kind = self.kind;
         for ((key, scale), xi) in tuned_keys(self.kind).iter().zip(x) {
             let (min, max, _) = ControllerParams::range(key).unwrap_or((-1e4, 1e4, ""));
-            c.set(key, (xi * scale).clamp(min, max));
+            c.set(key, from_search(key, *scale, *xi).clamp(min, max));
         }
         c
     }
@@ -426,23 +492,45 @@ impl Problem {
             q.controller = c;
             ControlLaw::new(&q)
         };
-        // Margins first: a loop without them is not simulated.
-        let (mut gm, mut pm) = (f64::INFINITY, f64::INFINITY);
-        for (p, lin) in &self.plants {
-            let (g, ph) = margins_db_deg(&fr::twin_margins(lin, &law(p)));
-            gm = gm.min(g);
-            pm = pm.min(ph);
+        // Stability at every point of the spread first. The rides are simulated only where
+        // the loop is stable at the plants they run on (the nominal, or the corners when
+        // robust); a gain set unstable elsewhere in the spread is simulated there but can
+        // never be feasible.
+        let (mut unstable, mut growth, mut ride_plants_stable) = (0, f64::NEG_INFINITY, true);
+        for (p, plant) in &self.spread {
+            let stable = match ClosedLoopModes::of(plant, &law(p), p.plant.valve.tau_s) {
+                Some(m) => {
+                    growth = growth.max(m.growth_rate_per_s);
+                    m.stable()
+                }
+                None => {
+                    growth = f64::INFINITY;
+                    false
+                }
+            };
+            if !stable {
+                unstable += 1;
+                ride_plants_stable &= !self.plants.iter().any(|(q, _, _)| q == p);
+            }
+        }
+        let (mut gm, mut pm, mut dm) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        for (p, lin, grid) in &self.plants {
+            let m = LoopMargins::on_grid(lin, grid, &law(p), p.plant.valve.tau_s);
+            gm = gm.min(m.gain_margin_db().abs());
+            pm = pm.min(m.phase_margin_deg().abs());
+            dm = dm.min(m.delay_margin_s());
         }
         let gains = tuned_keys(self.kind)
             .iter()
             .map(|(k, _)| (k.to_string(), c.get(k).unwrap_or(f64::NAN)))
             .collect();
-        let margins_ok = gm >= MIN_GAIN_MARGIN_DB && pm >= MIN_PHASE_MARGIN_DEG;
+        let margins_ok =
+            gm >= MIN_GAIN_MARGIN_DB && pm >= MIN_PHASE_MARGIN_DEG && dm >= MIN_DELAY_MARGIN_S;
         let (mut objective, mut max_u, mut contacts) = (f64::NAN, f64::NAN, 0);
-        if margins_ok || gm > 0.0 {
+        if ride_plants_stable {
             objective = f64::NEG_INFINITY;
             max_u = 0.0;
-            for (p, _) in &self.plants {
+            for (p, _, _) in &self.plants {
                 let mut q = *p;
                 q.controller = c;
                 let (o, u, n) = score_rides(&q, &self.rides, self.duration_s, self.objective);
@@ -455,7 +543,12 @@ impl Problem {
                 }
             }
         }
-        let feasible = margins_ok && objective.is_finite() && contacts == 0 && max_u <= MAX_ABS_U_M;
+        let feasible = unstable == 0
+            && growth <= -MIN_DECAY_RATE_PER_S
+            && margins_ok
+            && objective.is_finite()
+            && contacts == 0
+            && max_u <= MAX_ABS_U_M;
         Evaluation {
             controller: c,
             gains,
@@ -464,6 +557,9 @@ impl Problem {
             contacts,
             gain_margin_db: gm,
             phase_margin_deg: pm,
+            delay_margin_s: dm,
+            unstable_points: unstable,
+            worst_growth_rate_per_s: growth,
             feasible,
         }
     }
@@ -474,6 +570,16 @@ impl Problem {
         let mut violation = 0.0;
         violation += (MIN_GAIN_MARGIN_DB - e.gain_margin_db).max(0.0) / MIN_GAIN_MARGIN_DB;
         violation += (MIN_PHASE_MARGIN_DEG - e.phase_margin_deg).max(0.0) / MIN_PHASE_MARGIN_DEG;
+        violation += (MIN_DELAY_MARGIN_S - e.delay_margin_s).max(0.0) / MIN_DELAY_MARGIN_S;
+        // Unstable points, and a continuous pull towards decay (the growth rate varies
+        // smoothly with the gains, so the search finds its way out of an unstable start).
+        violation += e.unstable_points as f64;
+        if e.worst_growth_rate_per_s.is_finite() {
+            violation +=
+                (e.worst_growth_rate_per_s + MIN_DECAY_RATE_PER_S).max(0.0) / MIN_DECAY_RATE_PER_S;
+        } else {
+            violation += 100.0;
+        }
         if e.max_abs_u_m.is_finite() {
             violation += (e.max_abs_u_m / MAX_ABS_U_M - 1.0).max(0.0);
         }
@@ -481,7 +587,8 @@ impl Problem {
         if e.objective.is_finite() {
             e.objective + scale * 10.0 * violation
         } else {
-            // Not simulated (no margin) or diverged: worse than any simulated point.
+            // Not simulated (unstable where the rides run) or diverged: worse than any
+            // simulated point.
             scale * (20.0 + 10.0 * violation)
         }
     }
@@ -556,9 +663,17 @@ pub fn tune_observed(
     };
     let plants_of = |ps: Vec<Params>| {
         ps.into_iter()
-            .map(|p| (p, fr::linearise_twin(&p)))
+            .map(|p| {
+                let lin = fr::linearise_twin(&p);
+                let grid = MarginGrid::new(&lin);
+                (p, lin, grid)
+            })
             .collect::<Vec<_>>()
     };
+    let spread_plants: Vec<(Params, LoopPlant)> = spread(&nominal)
+        .into_iter()
+        .map(|p| (p, LoopPlant::new(&fr::linearise_twin(&p))))
+        .collect();
     let plants = if opts.robust {
         plants_of(spread_corners(&nominal))
     } else {
@@ -573,6 +688,7 @@ pub fn tune_observed(
     let rides = motions(&opts.tune_seeds)?;
     let problem = Problem {
         plants,
+        spread: spread_plants,
         rides: rides.clone(),
         duration_s: opts.duration_s,
         objective: opts.objective,
@@ -594,16 +710,21 @@ pub fn tune_observed(
     if let Ok(mut s) = problem.scale.lock() {
         *s = Some(scale);
     }
-    // Start simplex: the preset's gains and one step of half a search unit along each axis.
+    // Start simplex: the preset's gains and one step along each axis: |Kp| × 0.6, half a
+    // search unit towards zero for the others.
     let keys = tuned_keys(opts.kind);
     let x0: Vec<f64> = keys
         .iter()
-        .map(|(k, s)| nominal.controller.get(k).unwrap_or(0.0) / s)
+        .map(|(k, s)| to_search(k, *s, nominal.controller.get(k).unwrap_or(0.0)))
         .collect();
     let mut simplex = vec![x0.clone()];
-    for i in 0..x0.len() {
+    for (i, (key, _)) in keys.iter().enumerate() {
         let mut v = x0.clone();
-        v[i] += if v[i] > 0.0 { -0.5 } else { 0.5 } * v[i].abs().max(1.0);
+        if *key == LOG_KEY {
+            v[i] -= 0.5;
+        } else {
+            v[i] += if v[i] > 0.0 { -0.5 } else { 0.5 } * v[i].abs().max(1.0);
+        }
         simplex.push(v);
     }
     let solver = NelderMead::new(simplex)
@@ -622,14 +743,36 @@ pub fn tune_observed(
         Err(e) => return Err(TuneError::Optimiser(e.to_string())),
     };
     let log = problem.log.lock().map(|l| l.clone()).unwrap_or_default();
-    // The best feasible evaluation; the start if none beat it.
-    let tuned = log
+    // The best feasible evaluation that passes the robustness check at every point of the
+    // spread (eigenvalues, settle at rest); the start if none beats it.
+    let mut candidates: Vec<&Evaluation> = log
         .iter()
         .filter(|e| e.feasible)
-        .min_by(|a, b| a.objective.total_cmp(&b.objective))
         .filter(|e| !baseline.feasible || e.objective < baseline.objective)
-        .cloned()
-        .unwrap_or_else(|| baseline.clone());
+        .collect();
+    candidates.sort_by(|a, b| a.objective.total_cmp(&b.objective));
+    candidates.dedup_by(|a, b| a.gains == b.gains);
+    let mut checked = None;
+    for e in candidates.into_iter().take(MAX_CHECKED_CANDIDATES) {
+        if let Some(cancel) = &problem.cancel
+            && cancel.load(Ordering::Relaxed)
+        {
+            return Err(TuneError::Cancelled);
+        }
+        let table = robustness_table(&nominal, e.controller, &rides, opts);
+        if table.iter().all(RobustnessRow::passes) {
+            checked = Some((e.clone(), table));
+            break;
+        }
+    }
+    let (tuned, robustness) = match checked {
+        Some(found) => found,
+        None => {
+            let table = robustness_table(&nominal, baseline.controller, &rides, opts);
+            (baseline.clone(), table)
+        }
+    };
+    let failures = claim_failures(&tuned, &robustness);
     let heldout = motions(&opts.heldout_seeds)?;
     let nominal_problem = Problem {
         plants: plants_of(vec![nominal]),
@@ -639,7 +782,6 @@ pub fn tune_observed(
     };
     let baseline_heldout = nominal_problem.evaluate(nominal.controller);
     let tuned_heldout = nominal_problem.evaluate(tuned.controller);
-    let robustness = robustness_table(&nominal, tuned.controller, &rides, opts);
     Ok(TuneResult {
         kind: opts.kind,
         objective: opts.objective,
@@ -656,11 +798,65 @@ pub fn tune_observed(
         duration_s: opts.duration_s,
         robust: opts.robust,
         stop_reason,
+        failures,
     })
 }
 
-/// The tuned controller over the whole spread (3 levels of Cd, τ and mass) on the tuning rides.
-fn robustness_table(
+/// Why the claim of a tuned controller fails: a constraint at the nominal plant, or a point of
+/// the spread where the loop is unstable or the twin does not settle. Empty when it holds.
+fn claim_failures(tuned: &Evaluation, table: &[RobustnessRow]) -> Vec<String> {
+    let mut out = Vec::new();
+    if !tuned.feasible {
+        out.push(format!(
+            "the gains do not meet the constraints (unstable at {} of 27 spread points, \
+             slowest mode {:.3} 1/s against ≤ −{MIN_DECAY_RATE_PER_S}; GM {:.1} dB, PM {:.0}°, \
+             delay margin {:.1} ms; {})",
+            tuned.unstable_points,
+            tuned.worst_growth_rate_per_s,
+            tuned.gain_margin_db,
+            tuned.phase_margin_deg,
+            tuned.delay_margin_s * 1e3,
+            if tuned.max_abs_u_m.is_finite() {
+                format!(
+                    "max |u| {:.1} mm, {} contact(s)",
+                    tuned.max_abs_u_m * 1e3,
+                    tuned.contacts
+                )
+            } else {
+                "rides not simulated".into()
+            }
+        ));
+    }
+    for row in table.iter().filter(|r| !r.passes()) {
+        let at = format!(
+            "Cd {:.4}, τ {:.1} ms, mass {:.1} kg",
+            row.cd,
+            row.tau_s * 1e3,
+            row.mass_kg
+        );
+        if !row.stable {
+            out.push(format!(
+                "{at}: unstable at rest (a mode grows at {:.3} 1/s)",
+                row.growth_rate_per_s
+            ));
+        }
+        match row.settle {
+            None => out.push(format!("{at}: the twin diverged after the bump")),
+            Some(s) if !s.settled() => out.push(format!(
+                "{at}: the twin does not settle after the bump (ÿ RMS {:.3} m/s² over the last \
+                 2 s, ×{:.2} from one second to the next, ≈ {:.1} Hz)",
+                s.rms_last_2s_m_s2, s.growth_ratio, s.freq_hz
+            )),
+            Some(_) => {}
+        }
+    }
+    out
+}
+
+/// The tuned controller over the whole spread (3 levels of Cd, τ and mass): the objective on
+/// the tuning rides, the eigenvalue verdict and delay margin of the loop linearised at rest,
+/// and the settle test after a bump on the nonlinear twin.
+pub fn robustness_table(
     nominal: &Params,
     c: ControllerParams,
     rides: &[PlatformMotion],
@@ -670,6 +866,8 @@ fn robustness_table(
         .into_iter()
         .map(|mut p| {
             p.controller = c;
+            let stability = fr::twin_stability(&p);
+            let settle = settle_after_bump(&p).ok();
             let (objective, max_u, contacts) =
                 score_rides(&p, rides, opts.duration_s, opts.objective);
             RobustnessRow {
@@ -679,6 +877,12 @@ fn robustness_table(
                 objective,
                 contacts,
                 max_abs_u_m: max_u,
+                stable: stability.stable(),
+                growth_rate_per_s: stability
+                    .modes
+                    .map_or(f64::INFINITY, |m| m.growth_rate_per_s),
+                delay_margin_s: stability.margins.delay_margin_s(),
+                settle,
             }
         })
         .collect()

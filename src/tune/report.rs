@@ -33,6 +33,9 @@ fn eval_json(e: &Evaluation) -> Value {
         "contacts": e.contacts,
         "gain_margin_db": json_number(e.gain_margin_db),
         "phase_margin_deg": json_number(e.phase_margin_deg),
+        "delay_margin_s": json_number(e.delay_margin_s),
+        "unstable_spread_points": e.unstable_points,
+        "worst_growth_rate_per_s": json_number(e.worst_growth_rate_per_s),
         "feasible": e.feasible,
     })
 }
@@ -52,12 +55,16 @@ pub fn report_json(r: &TuneResult, wall_s: f64) -> Value {
         "constraints": {
             "gain_margin_db": json_number(r.tuned.gain_margin_db),
             "phase_margin_deg": json_number(r.tuned.phase_margin_deg),
+            "delay_margin_s": json_number(r.tuned.delay_margin_s),
+            "unstable_spread_points": r.tuned.unstable_points,
             "max_abs_u_mm": json_number(r.tuned.max_abs_u_m * 1e3),
             "contacts": r.tuned.contacts,
             "max_abs_u_mm_heldout": json_number(r.tuned_heldout.max_abs_u_m * 1e3),
             "contacts_heldout": r.tuned_heldout.contacts,
             "limits": {"gain_margin_db": super::MIN_GAIN_MARGIN_DB,
                        "phase_margin_deg": super::MIN_PHASE_MARGIN_DEG,
+                       "delay_margin_s": super::MIN_DELAY_MARGIN_S,
+                       "settle_rms_m_s2": crate::analysis::settle::SETTLE_RMS_M_S2,
                        "max_abs_u_mm": super::MAX_ABS_U_M * 1e3},
         },
         "baseline": eval_json(&r.baseline),
@@ -68,7 +75,19 @@ pub fn report_json(r: &TuneResult, wall_s: f64) -> Value {
             "cd": row.cd, "tau_s": row.tau_s, "mass_kg": row.mass_kg,
             "objective": json_number(row.objective), "contacts": row.contacts,
             "max_abs_u_mm": json_number(row.max_abs_u_m * 1e3),
+            "stable": row.stable,
+            "growth_rate_per_s": json_number(row.growth_rate_per_s),
+            "delay_margin_s": json_number(row.delay_margin_s),
+            "settle": row.settle.map(|st| json!({
+                "rms_last_2s_m_s2": json_number(st.rms_last_2s_m_s2),
+                "growth_ratio": json_number(st.growth_ratio),
+                "freq_hz": json_number(st.freq_hz),
+                "settled": st.settled(),
+            })),
+            "passes": row.passes(),
         })).collect::<Vec<_>>(),
+        "claim_holds": r.failures.is_empty(),
+        "failures": r.failures,
         "pareto": r.pareto.iter().map(|e| json!({
             "objective": json_number(e.objective),
             "max_abs_u_mm": json_number(e.max_abs_u_m * 1e3),
@@ -98,6 +117,15 @@ fn fmt_num(v: f64, digits: usize) -> String {
         format!("{v:.digits$}")
     } else {
         "n/a (diverged or not simulated)".into()
+    }
+}
+
+/// A margin for people: the number, or in words when there is no crossing (infinite).
+fn margin_text(v: f64, digits: usize, none: &str) -> String {
+    if v.is_infinite() && v > 0.0 {
+        format!("∞ ({none})")
+    } else {
+        fmt_num(v, digits)
     }
 }
 
@@ -150,24 +178,42 @@ pub fn report_md(r: &TuneResult, params: &Params, wall_s: f64) -> String {
     let _ = writeln!(s, "## Result\n");
     let _ = writeln!(
         s,
-        "| | gains | objective (tuning) | objective (held-out) | max abs u (mm) | contacts | GM (dB) | PM (deg) |"
+        "| | gains | objective (tuning) | objective (held-out) | max abs u (mm) | contacts | GM (dB) | PM (deg) | delay margin (ms) | unstable spread points |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
     for (name, e, h) in [
         ("start (preset)", &r.baseline, &r.baseline_heldout),
         ("tuned", &r.tuned, &r.tuned_heldout),
     ] {
         let _ = writeln!(
             s,
-            "| {name} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} of 27 |",
             gains_text(e),
             fmt_num(e.objective, 4),
             fmt_num(h.objective, 4),
             fmt_num(e.max_abs_u_m.max(h.max_abs_u_m) * 1e3, 1),
             e.contacts + h.contacts,
-            fmt_num(e.gain_margin_db, 1),
-            fmt_num(e.phase_margin_deg, 1),
+            margin_text(e.gain_margin_db, 1, "no −180° crossing"),
+            margin_text(e.phase_margin_deg, 0, "no unity crossing"),
+            margin_text(e.delay_margin_s * 1e3, 2, "no unity crossing"),
+            e.unstable_points,
         );
+    }
+    if r.failures.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n**The claim holds at every point of the spread**: the loop linearised at rest is \
+             stable (closed-loop eigenvalues with the delay) and the nonlinear twin settles after \
+             a bump at all 27 points."
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "\n**The claim fails — no tuned preset is written.** Why:\n"
+        );
+        for f in &r.failures {
+            let _ = writeln!(s, "- {f}");
+        }
     }
     let _ = writeln!(
         s,
@@ -203,23 +249,38 @@ pub fn report_md(r: &TuneResult, params: &Params, wall_s: f64) -> String {
     let _ = writeln!(s, "## Robustness of the tuned gains\n");
     let _ = writeln!(
         s,
-        "The tuned gains on the tuning rides across Cd ±10 %, τ ±3 ms and mass ±20 %.\n"
+        "The tuned gains across Cd ±10 %, τ ±3 ms and mass ±20 %: the objective on the tuning \
+         rides; the loop linearised at rest (closed-loop eigenvalues with the delay: the growth \
+         rate of the rightmost mode, negative when every mode decays; the smallest delay margin \
+         over every crossover); and the nonlinear twin left at rest after a 30 mm cycloidal \
+         bump for {:.0} s (RMS of ÿ over the last 2 s, settled below {} m/s² and not growing).\n",
+        crate::analysis::settle::SETTLE_RUN_S,
+        crate::analysis::settle::SETTLE_RMS_M_S2,
     );
     let _ = writeln!(
         s,
-        "| Cd | τ (ms) | mass (kg) | objective ({unit}) | max abs u (mm) | contacts |"
+        "| Cd | τ (ms) | mass (kg) | objective ({unit}) | max abs u (mm) | contacts | stable | growth rate (1/s) | delay margin (ms) | settle ÿ RMS (m/s²) | settled |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
     for row in &r.robustness {
+        let (rms, settled) = row.settle.map_or(("diverged".to_string(), "no"), |st| {
+            (
+                format!("{:.2e}", st.rms_last_2s_m_s2),
+                if st.settled() { "yes" } else { "**no**" },
+            )
+        });
         let _ = writeln!(
             s,
-            "| {:.4} | {:.1} | {:.1} | {} | {} | {} |",
+            "| {:.4} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {rms} | {settled} |",
             row.cd,
             row.tau_s * 1e3,
             row.mass_kg,
             fmt_num(row.objective, 4),
             fmt_num(row.max_abs_u_m * 1e3, 1),
-            row.contacts
+            row.contacts,
+            if row.stable { "yes" } else { "**no**" },
+            fmt_num(row.growth_rate_per_s, 3),
+            margin_text(row.delay_margin_s * 1e3, 2, "no unity crossing"),
         );
     }
     let worst = r
@@ -247,13 +308,65 @@ pub fn report_md(r: &TuneResult, params: &Params, wall_s: f64) -> String {
     }
     let _ = writeln!(
         s,
-        "\nFiles: `tuned.toml` (a preset with the tuned controller), `report.json`, \
-         `pareto.png/.svg`, `transmissibility.png/.svg`."
+        "\nFiles: {}`report.json`, `pareto.png/.svg`, `transmissibility.png/.svg`.",
+        if r.failures.is_empty() {
+            "`tuned.toml` (a preset with the tuned controller), "
+        } else {
+            ""
+        }
     );
     s
 }
 
-/// Writes `tuned.toml`, `report.json`, `report.md` and the plots into `dir` (which must exist).
+/// What a tuned preset's header states: what was tuned, the held-out objective, and what was
+/// checked — the spread, the worst margins over every crossing, the worst settle.
+pub fn preset_description(r: &TuneResult) -> String {
+    let worst_settle = r
+        .robustness
+        .iter()
+        .filter_map(|row| row.settle.map(|s| s.rms_last_2s_m_s2))
+        .fold(0.0, f64::max);
+    let worst_growth = r
+        .robustness
+        .iter()
+        .map(|row| row.growth_rate_per_s)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let worst_dm = r
+        .robustness
+        .iter()
+        .map(|row| row.delay_margin_s)
+        .fold(f64::INFINITY, f64::min);
+    format!(
+        "{} controller tuned on the twin (`seat-twin tune --controller {}{}`) for {}: {} -> {} \
+         on {} held-out ride(s) ({}). Checked over the spread Cd ±10 %, τ ±3 ms, mass ±20 % \
+         (27 points): stable at rest at every point (rightmost closed-loop mode {} 1/s at \
+         worst), delay margin ≥ {} ms, the twin settles after a bump at every point (ÿ RMS \
+         over the last 2 s ≤ {:.1e} m/s²); nominal GM {} dB, PM {}°, delay margin {} ms, \
+         max |u| {} mm, no end-stop contact",
+        r.kind,
+        r.kind,
+        if r.robust { " --robust" } else { "" },
+        r.objective.name(),
+        fmt_num(r.baseline_heldout.objective, 4),
+        fmt_num(r.tuned_heldout.objective, 4),
+        r.heldout_seeds.len(),
+        r.input,
+        fmt_num(worst_growth, 3),
+        fmt_num(worst_dm * 1e3, 2),
+        worst_settle,
+        margin_text(r.tuned.gain_margin_db, 1, "no −180° crossing"),
+        margin_text(r.tuned.phase_margin_deg, 0, "no unity crossing"),
+        margin_text(r.tuned.delay_margin_s * 1e3, 2, "no unity crossing"),
+        fmt_num(
+            r.tuned.max_abs_u_m.max(r.tuned_heldout.max_abs_u_m) * 1e3,
+            1
+        ),
+    )
+}
+
+/// Writes `report.json`, `report.md`, the plots and — only when the claim holds at every
+/// point of the spread ([`TuneResult::failures`] empty) — `tuned.toml` into `dir` (which must
+/// exist).
 pub fn write_outputs(
     r: &TuneResult,
     params: &Params,
@@ -261,27 +374,21 @@ pub fn write_outputs(
     wall_s: f64,
 ) -> Result<Vec<PathBuf>, TuneReportError> {
     let mut written = Vec::new();
-    let mut tuned = *params;
-    tuned.controller = r.tuned.controller;
-    let preset = Preset {
-        meta: PresetMeta {
-            name: format!("tuned-{}", r.kind),
-            description: format!(
-                "{} controller tuned on the twin for {}: {} -> {} on the tuning rides, {} -> {} held out",
-                r.kind,
-                r.objective.name(),
-                fmt_num(r.baseline.objective, 4),
-                fmt_num(r.tuned.objective, 4),
-                fmt_num(r.baseline_heldout.objective, 4),
-                fmt_num(r.tuned_heldout.objective, 4),
-            ),
-            ..PresetMeta::default()
-        },
-        params: tuned,
-    };
-    let path = dir.join("tuned.toml");
-    preset.save(&path)?;
-    written.push(path);
+    if r.failures.is_empty() {
+        let mut tuned = *params;
+        tuned.controller = r.tuned.controller;
+        let preset = Preset {
+            meta: PresetMeta {
+                name: format!("tuned-{}", r.kind),
+                description: preset_description(r),
+                ..PresetMeta::default()
+            },
+            params: tuned,
+        };
+        let path = dir.join("tuned.toml");
+        preset.save(&path)?;
+        written.push(path);
+    }
     let path = dir.join("report.json");
     let text = serde_json::to_string_pretty(&report_json(r, wall_s)).unwrap_or_default();
     write_atomic(&path, text.as_bytes()).map_err(OutputError::io(&path))?;

@@ -118,10 +118,13 @@ fn skyhook_feedback_reduces_body_motion_where_the_feed_forward_leaves_it() {
         );
     }
     // And the loop keeps margins (gain ≥ 6 dB, phase ≥ 45°), on G(s) and on the twin.
-    let m = fr::linear_margins(&sky);
-    assert!(m.gain_margin >= 2.0 && m.phase_margin_deg >= 45.0, "{m:?}");
-    let t = fr::twin_margins(&fr::linearise_twin(&sky), &ControlLaw::new(&sky));
-    assert!(t.gain_margin >= 2.0 && t.phase_margin_deg >= 45.0, "{t:?}");
+    let m = fr::linear_stability(&sky);
+    assert!(
+        m.stable() && m.margins.gain_margin_db() >= 6.0 && m.margins.phase_margin_deg() >= 45.0,
+        "{m:?}"
+    );
+    let t = fr::twin_stability(&sky);
+    assert!(t.margins.gain_margin_db() >= 6.0, "{t:?}");
 }
 
 /// Positive position feedback is reported unstable for every structure.
@@ -130,7 +133,8 @@ fn positive_position_feedback_is_unstable_for_every_kind() {
     for kind in ControllerKind::ALL {
         let mut p = with_kind(kind);
         p.controller.kp_v_per_m = 20.0;
-        assert!(!fr::linear_margins(&p).stable(), "{kind}");
+        assert!(!fr::linear_stability(&p).stable(), "{kind}");
+        assert!(!fr::twin_stability(&p).stable(), "{kind}");
     }
 }
 

@@ -295,9 +295,7 @@ fn unstable_state_shows_no_stale_results_and_resets_to_stable_gains() {
     let stable_at = |kp: f64| {
         let mut p = *h.state().params();
         p.controller.kp_v_per_m = kp;
-        let lin = fr::linearise_twin(&p);
-        fr::twin_margins(&lin, &seat_twin::control::ControlLaw::new(&p)).stable()
-            && fr::linear_margins(&p).stable()
+        fr::twin_stability(&p).stable() && fr::linear_stability(&p).stable()
     };
     assert!(stable_at(-0.97 * limit), "−0.97·{limit} should be stable");
     assert!(

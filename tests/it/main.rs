@@ -19,4 +19,5 @@ mod paper;
 mod physics;
 mod presets;
 mod seat_test;
+mod stability;
 mod tune;

@@ -53,7 +53,6 @@ fn a_preset_survives_a_save_and_load_round_trip() {
 fn tuned_presets_beat_the_papers_gains_on_a_held_out_ride() {
     use seat_twin::analysis::frequency_response as fr;
     use seat_twin::analysis::metrics;
-    use seat_twin::control::ControlLaw;
     use seat_twin::experiments;
     use seat_twin::model::ModelKind;
     use seat_twin::simulation::Drive;
@@ -92,10 +91,12 @@ fn tuned_presets_beat_the_papers_gains_on_a_held_out_ride() {
         );
         assert_eq!(contacts, 0, "{name}");
         assert!(max_u <= tune::MAX_ABS_U_M, "{name}: max |u| {max_u}");
-        let m = fr::twin_margins(&fr::linearise_twin(&p), &ControlLaw::new(&p));
+        let m = fr::twin_stability(&p);
         assert!(
-            20.0 * m.gain_margin.log10() >= tune::MIN_GAIN_MARGIN_DB
-                && m.phase_margin_deg >= tune::MIN_PHASE_MARGIN_DEG,
+            m.stable()
+                && m.margins.gain_margin_db().abs() >= tune::MIN_GAIN_MARGIN_DB
+                && m.margins.phase_margin_deg().abs() >= tune::MIN_PHASE_MARGIN_DEG
+                && m.margins.delay_margin_s() >= tune::MIN_DELAY_MARGIN_S,
             "{name}: {m:?}"
         );
         println!(

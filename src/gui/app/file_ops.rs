@@ -99,6 +99,7 @@ impl SeatTwinApp {
             self.send(Command::SetExcitation(Box::new(e)));
             self.traces.clear();
             self.engine_error = None;
+            self.twin_watch = None;
         }
     }
 

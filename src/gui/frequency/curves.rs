@@ -15,13 +15,14 @@ fn plant_key(p: &Params) -> Params {
     k
 }
 
-/// The linearised twin's open-loop responses on the plot grid and the margin grid.
+/// The linearised twin's open-loop responses on the plot grid, and what the stability verdict
+/// needs of it (its loop form and the margin grid refined around its resonances).
 pub struct PlantCache {
     key: Params,
     /// On the plot frequencies (delay excluded).
     pub points: Vec<OpenLoop>,
-    margin_freqs: Vec<f64>,
-    margin_points: Vec<OpenLoop>,
+    lin0: LinearisedModel,
+    grid: MarginGrid,
 }
 
 impl PlantCache {
@@ -30,24 +31,23 @@ impl PlantCache {
         let key = plant_key(params);
         let lin0 = fr::linearise_twin(&key);
         let points = freqs.iter().map(|&f| lin0.open_loop(f)).collect();
-        let margin_freqs = fr::margin_frequencies();
-        let margin_points = margin_freqs.iter().map(|&f| lin0.open_loop(f)).collect();
+        let grid = MarginGrid::new(&lin0);
         Self {
             key,
             points,
-            margin_freqs,
-            margin_points,
+            lin0,
+            grid,
         }
     }
 
-    /// Loop margins of the twin for a controller and delay (as [`fr::twin_margins`]).
-    pub fn margins(&self, law: &ControlLaw, tau_s: f64) -> LoopMargins {
-        fr::law_margins_on(
-            &self.margin_freqs,
-            self.margin_points.iter().copied(),
-            law,
-            tau_s,
-        )
+    /// The twin's stability verdict for a controller and delay (as [`fr::twin_stability`]).
+    pub fn stability(&self, law: &ControlLaw, tau_s: f64) -> Stability {
+        Stability::on_grid(&self.lin0, &self.grid, law, tau_s)
+    }
+
+    /// The twin's loop in state-space form (for the remedy's search).
+    pub fn loop_plant(&self) -> &LoopPlant {
+        &self.grid.loop_plant
     }
 }
 
@@ -69,8 +69,10 @@ pub struct Curves {
     pub bode_phase: [Curve; 2],
     /// |T| = 1 crossings of linear and twin.
     pub crossings: [Vec<Crossing>; 2],
-    /// Position-loop margins of linear and twin.
-    pub margins: [Option<LoopMargins>; 2],
+    /// Stability verdicts (closed-loop eigenvalues and every crossing) of linear and twin.
+    pub stability: [Option<Stability>; 2],
+    /// What to change when a loop is unstable (empty when both are stable).
+    pub remedy: String,
     /// Time the last recomputation took [ms].
     pub compute_ms: f64,
 }
@@ -78,7 +80,7 @@ pub struct Curves {
 impl Curves {
     /// Whether either active loop is unstable.
     pub fn unstable(&self) -> bool {
-        self.margins.iter().flatten().any(|m| !m.stable())
+        self.stability.iter().flatten().any(|s| !s.stable())
     }
 }
 
@@ -146,6 +148,22 @@ impl Analytic {
                 .collect()
         };
         let mags = |v: &[Complex64]| v.iter().map(|c| c.norm()).collect::<Vec<_>>();
+        let law = ControlLaw::new(params);
+        let g = fr::linearise_linear(params);
+        let g_grid = MarginGrid::new(&g);
+        let stab_lin = Stability::on_grid(&g, &g_grid, &law, params.linear.tau_s);
+        let stab_twin = plant.stability(&law, tau);
+        let remedy = if stab_lin.stable() && stab_twin.stable() {
+            String::new()
+        } else {
+            crate::analysis::stability::remedy(
+                params,
+                &[
+                    (&g_grid.loop_plant, params.linear.tau_s),
+                    (plant.loop_plant(), tau),
+                ],
+            )
+        };
         self.curves = Curves {
             params: Some(*params),
             t_mag: [mag(&t_lin, 1.0), mag(&t_twin, 1.0), mag(&t_pas, 1.0)],
@@ -156,10 +174,8 @@ impl Analytic {
                 fr::unity_crossings(f, &mags(&t_lin)),
                 fr::unity_crossings(f, &mags(&t_twin)),
             ],
-            margins: [
-                Some(fr::linear_margins(params)),
-                Some(plant.margins(&ControlLaw::new(params), tau)),
-            ],
+            stability: [Some(stab_lin), Some(stab_twin)],
+            remedy,
             compute_ms: 0.0,
         };
         self.curves.compute_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -198,13 +214,17 @@ mod tests {
             );
         }
         let law = ControlLaw::new(&p);
-        let (a, b) = (cache.margins(&law, 0.021), fr::twin_margins(&lin, &law));
-        assert!(
-            (a.gain_margin - b.gain_margin).abs() <= 1e-6 * b.gain_margin.abs(),
-            "{a:?} {b:?}"
+        let (a, b) = (
+            cache.stability(&law, 0.021),
+            Stability::of(&lin, &law, 0.021),
+        );
+        assert_eq!(a.stable(), b.stable());
+        assert_eq!(
+            a.margins.gain_crossovers.len(),
+            b.margins.gain_crossovers.len()
         );
         assert!(
-            (a.phase_margin_deg - b.phase_margin_deg).abs() < 1e-6,
+            (a.margins.delay_margin_s() - b.margins.delay_margin_s()).abs() < 1e-9,
             "{a:?} {b:?}"
         );
     }

@@ -1,94 +1,111 @@
-//! The stability line above the frequency plots: both loops' margins and isolation band,
-//! or a red banner with the remedy the stability condition gives when a loop is unstable.
+//! The stability line above the frequency plots: the closed-loop verdict of both loops (their
+//! eigenvalues with the delay, [`crate::analysis::stability`]), the worst margins over every
+//! crossing (amber under 6 dB / 45°), the isolation band — or a red banner with the growing
+//! mode and the remedy when a loop is unstable. Hovering the line lists every crossing.
 
 use super::*;
+use crate::analysis::stability::LoopMargins;
+use crate::analysis::watch::Finding;
 
-fn margin_text(m: &LoopMargins) -> String {
-    let gm = if m.gain_margin.is_finite() && m.gain_margin <= 0.0 {
-        // No gain keeps it stable (positive feedback).
-        "−∞ dB".into()
-    } else if m.gain_margin.is_finite() {
-        format!("{:.1} dB", db(m.gain_margin))
-    } else {
-        "∞".into()
+/// Margins under these show amber [dB], [deg].
+const AMBER_GM_DB: f64 = 6.0;
+const AMBER_PM_DEG: f64 = 45.0;
+
+/// The worst margins in words: numbers wrapped to ±180°, "∞" with the reason when there is no
+/// crossing.
+pub fn margin_text(m: &LoopMargins) -> String {
+    let gm = match m.worst_gain() {
+        Some(c) => format!("GM {:.1} dB at {:.2} Hz", c.gain_margin_db, c.freq_hz),
+        None => "GM ∞ (phase never reaches −180°)".into(),
     };
-    let pm = if m.phase_margin_deg.is_finite() {
-        format!("{:.0}°", m.phase_margin_deg)
-    } else if m.phase_margin_deg > 0.0 {
-        "∞".into()
-    } else {
-        "−∞".into()
+    let pm = match m.worst_phase() {
+        Some(c) => format!(
+            "PM {:.0}° at {:.2} Hz, delay margin {:.2} ms",
+            c.phase_margin_deg,
+            c.freq_hz,
+            m.delay_margin_s() * 1e3
+        ),
+        None => "PM ∞ (|L| never reaches 1)".into(),
     };
-    format!("GM {gm}, PM {pm}")
+    format!("{gm}, {pm}")
 }
 
-/// What to change to make the loop stable, from the stability condition itself: a positive
-/// Kp is positive feedback at any gain (the margins are those of `V = Kp·u` with
-/// `Kp < 0`); otherwise the smallest gain margin says how far |Kp| must come down.
-pub fn remedy(curves: &Curves) -> String {
-    let Some(p) = curves.params else {
-        return String::new();
-    };
-    let kp = p.controller.kp_v_per_m;
-    if kp > 0.0 {
-        return format!(
-            "Kp = {kp:.1} V/m feeds the stroke back with the wrong sign (positive feedback, \
-             unstable at any gain): use a negative Kp."
-        );
+/// Every crossing of a loop, one per line (the Stable line's tooltip).
+pub fn crossings_text(m: &LoopMargins) -> String {
+    let mut out = Vec::new();
+    for c in &m.gain_crossovers {
+        out.push(format!(
+            "|L| = 1 at {:.3} Hz: PM {:.1}°, delay margin {:.2} ms",
+            c.freq_hz,
+            c.phase_margin_deg,
+            c.delay_margin_s * 1e3
+        ));
     }
-    let unstable: Vec<&LoopMargins> = curves
-        .margins
-        .iter()
-        .flatten()
-        .filter(|m| !m.stable())
-        .collect();
-    let gm = unstable
-        .iter()
-        .map(|m| m.gain_margin)
-        .filter(|g| g.is_finite() && *g > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    if gm < 1.0 {
-        let limit = kp.abs() * gm;
-        format!(
-            "|Kp| = {:.1} V/m is above the stability limit: keep Kp between −{limit:.1} and 0 V/m \
-             (less |Kp| or a shorter τ).",
-            kp.abs()
-        )
-    } else {
-        "The phase margin is negative: reduce |Kp| or τ.".into()
+    for c in &m.phase_crossovers {
+        out.push(format!(
+            "∠L = −180° at {:.3} Hz: GM {:.1} dB",
+            c.freq_hz, c.gain_margin_db
+        ));
     }
+    if out.is_empty() {
+        out.push("no crossing".into());
+    }
+    out.join("\n")
 }
 
-/// The stability line: margins, and a red banner with the remedy when a loop is unstable.
-/// Returns the button the user pressed.
+/// Whether a margin is under the amber limits.
+fn thin(m: &LoopMargins) -> bool {
+    m.gain_margin_db().abs() < AMBER_GM_DB || m.phase_margin_deg().abs() < AMBER_PM_DEG
+}
+
+/// The stability line: the verdict and margins, and a red banner with the growing mode and
+/// the remedy when a loop is unstable. Returns the button the user pressed.
 pub fn stability_ui(
     ui: &mut egui::Ui,
     curves: &Curves,
     last_stable: Option<ControllerParams>,
+    watch: Option<Finding>,
 ) -> FreqAction {
     let mut action = FreqAction::None;
-    let [lin, twin] = &curves.margins;
+    let [lin, twin] = &curves.stability;
     let (Some(lin), Some(twin)) = (lin, twin) else {
         return action;
     };
-    if curves.unstable() {
+    let hover = format!(
+        "Twin (linearised at rest), every crossing of the loop gain:\n{}\n\nG(s):\n{}\n\n\
+         The verdict comes from the closed-loop eigenvalues with the delay; the margins \
+         describe the loop.",
+        crossings_text(&twin.margins),
+        crossings_text(&lin.margins)
+    );
+    let oscillating = watch.filter(|f| !matches!(f, Finding::NegativePressure { .. }));
+    if curves.unstable() || oscillating.is_some() {
+        let text = if curves.unstable() {
+            format!(
+                "UNSTABLE closed loop — twin: {}; linear: {}. {}{} The faint active curves are \
+                 not a steady state.",
+                twin.mode_text(),
+                lin.mode_text(),
+                curves.remedy,
+                oscillating.map_or(String::new(), |f| format!(" Also: {f}.")),
+            )
+        } else {
+            format!(
+                "UNSTABLE running twin — {}. The loop linearised at rest reads stable ({}), so \
+                 the twin rings away from that point or its own way: lower |Kp| and the \
+                 feedback gains, or shorten τ. Reset restarts from rest.",
+                oscillating.map_or(String::new(), |f| f.to_string()),
+                margin_text(&twin.margins),
+            )
+        };
         egui::Frame::new()
             .fill(Color32::from_rgb(180, 30, 30))
             .inner_margin(6.0)
             .corner_radius(4.0)
             .show(ui, |ui| {
                 ui.set_width(ui.available_width());
-                ui.label(
-                    RichText::new(format!(
-                        "UNSTABLE closed loop — twin: {}; linear: {}. {} The faint active \
-                         curves are not a steady state.",
-                        margin_text(twin),
-                        margin_text(lin),
-                        remedy(curves),
-                    ))
-                    .color(Color32::WHITE)
-                    .strong(),
-                );
+                ui.label(RichText::new(text).color(Color32::WHITE).strong())
+                    .on_hover_text(&hover);
                 if let Some(g) = last_stable
                     && ui
                         .button("Reset to last stable gains")
@@ -108,13 +125,26 @@ pub fn stability_ui(
                 .map(|c| format!("{:.2} Hz", c.freq_hz))
                 .unwrap_or_else(|| "none".into())
         };
-        ui.label(format!(
+        let text = format!(
             "Stable. Twin {}, isolation up to {}; linear {}, up to {}.",
-            margin_text(twin),
+            margin_text(&twin.margins),
             edge(&curves.crossings[1]),
-            margin_text(lin),
+            margin_text(&lin.margins),
             edge(&curves.crossings[0]),
-        ));
+        );
+        let rich = if thin(&twin.margins) || thin(&lin.margins) {
+            RichText::new(format!("{text} Thin margin (< 6 dB or < 45°)."))
+                .color(Color32::from_rgb(230, 150, 20))
+        } else {
+            RichText::new(text)
+        };
+        ui.label(rich).on_hover_text(hover);
+    }
+    if let Some(f @ Finding::NegativePressure { .. }) = watch {
+        ui.label(
+            RichText::new(format!("Outside the model: {f}."))
+                .color(Color32::from_rgb(230, 150, 20)),
+        );
     }
     action
 }
