@@ -390,6 +390,10 @@ pub struct GainCrossover {
     pub phase_margin_deg: f64,
     /// The extra delay that would put a closed-loop pole on the imaginary axis here [s].
     pub delay_margin_s: f64,
+    /// |L| falls through 1 here: added delay moves the pole on the axis into the right half
+    /// plane (destabilising). Where |L| rises through 1 the pole crosses the other way
+    /// (Re ds/dδ = −ω·(d ln|L|/dω)/|…|², for `1 + L(s)·e^(−sδ) = 0`).
+    pub destabilising: bool,
 }
 
 /// A phase crossover, `L(jω)` on the negative real axis.
@@ -434,10 +438,12 @@ impl LoopMargins {
         })
     }
 
-    /// The smallest delay margin over every gain crossover [s]; ∞ without one.
+    /// The delay margin [s]: the smallest extra delay that makes the loop unstable, over the
+    /// destabilising gain crossovers ([`GainCrossover::destabilising`]); ∞ without one.
     pub fn delay_margin_s(&self) -> f64 {
         self.gain_crossovers
             .iter()
+            .filter(|c| c.destabilising)
             .map(|c| c.delay_margin_s)
             .fold(f64::INFINITY, f64::min)
     }
@@ -481,6 +487,7 @@ impl LoopMargins {
                     freq_hz: f,
                     phase_margin_deg: pm,
                     delay_margin_s: pm.rem_euclid(360.0).to_radians() / w,
+                    destabilising: lb.norm() < la.norm(),
                 });
             }
             // L through the negative real axis: Im L changes sign with Re L < 0 between.

@@ -267,10 +267,20 @@ pub struct RobustnessRow {
 }
 
 impl RobustnessRow {
-    /// Stable by the eigenvalues, and settled on the twin.
-    pub fn passes(&self) -> bool {
-        self.stable && self.settle.is_some_and(|s| s.settled())
+    /// Stable by the eigenvalues, settled on the twin, and — with `tau_max_s` the spread's
+    /// largest delay — a delay margin that reaches it, so the loop stays stable for every τ
+    /// between this point's and the top of the spread (stability can switch on and off as
+    /// the delay grows past a lightly damped mode: three levels of τ alone can miss a window).
+    pub fn passes(&self, tau_max_s: f64) -> bool {
+        self.stable
+            && self.settle.is_some_and(|s| s.settled())
+            && self.delay_margin_s >= tau_max_s - self.tau_s - 1e-12
     }
+}
+
+/// The largest delay of a robustness table [s].
+pub fn tau_max_s(table: &[RobustnessRow]) -> f64 {
+    table.iter().map(|r| r.tau_s).fold(0.0, f64::max)
 }
 
 /// What tuning found.
@@ -760,7 +770,8 @@ pub fn tune_observed(
             return Err(TuneError::Cancelled);
         }
         let table = robustness_table(&nominal, e.controller, &rides, opts);
-        if table.iter().all(RobustnessRow::passes) {
+        let top = tau_max_s(&table);
+        if table.iter().all(|r| r.passes(top)) {
             checked = Some((e.clone(), table));
             break;
         }
@@ -827,7 +838,8 @@ fn claim_failures(tuned: &Evaluation, table: &[RobustnessRow]) -> Vec<String> {
             }
         ));
     }
-    for row in table.iter().filter(|r| !r.passes()) {
+    let top = tau_max_s(table);
+    for row in table.iter().filter(|r| !r.passes(top)) {
         let at = format!(
             "Cd {:.4}, τ {:.1} ms, mass {:.1} kg",
             row.cd,
@@ -838,6 +850,13 @@ fn claim_failures(tuned: &Evaluation, table: &[RobustnessRow]) -> Vec<String> {
             out.push(format!(
                 "{at}: unstable at rest (a mode grows at {:.3} 1/s)",
                 row.growth_rate_per_s
+            ));
+        } else if row.delay_margin_s < top - row.tau_s - 1e-12 {
+            out.push(format!(
+                "{at}: the delay margin {:.2} ms does not reach the spread's τ = {:.1} ms (the \
+                 loop goes unstable between the τ levels)",
+                row.delay_margin_s * 1e3,
+                top * 1e3
             ));
         }
         match row.settle {

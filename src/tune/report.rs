@@ -84,7 +84,7 @@ pub fn report_json(r: &TuneResult, wall_s: f64) -> Value {
                 "freq_hz": json_number(st.freq_hz),
                 "settled": st.settled(),
             })),
-            "passes": row.passes(),
+            "passes": row.passes(super::tau_max_s(&r.robustness)),
         })).collect::<Vec<_>>(),
         "claim_holds": r.failures.is_empty(),
         "failures": r.failures,
@@ -340,7 +340,8 @@ pub fn preset_description(r: &TuneResult) -> String {
         "{} controller tuned on the twin (`seat-twin tune --controller {}{}`) for {}: {} -> {} \
          on {} held-out ride(s) ({}). Checked over the spread Cd ±10 %, τ ±3 ms, mass ±20 % \
          (27 points): stable at rest at every point (rightmost closed-loop mode {} 1/s at \
-         worst), delay margin ≥ {} ms, the twin settles after a bump at every point (ÿ RMS \
+         worst) and for every τ up to the spread's top (smallest delay margin {} ms), the twin \
+         settles after a bump at every point (ÿ RMS \
          over the last 2 s ≤ {:.1e} m/s²); nominal GM {} dB, PM {}°, delay margin {} ms, \
          max |u| {} mm, no end-stop contact",
         r.kind,

@@ -34,12 +34,20 @@ pub fn margin_text(m: &LoopMargins) -> String {
 pub fn crossings_text(m: &LoopMargins) -> String {
     let mut out = Vec::new();
     for c in &m.gain_crossovers {
-        out.push(format!(
-            "|L| = 1 at {:.3} Hz: PM {:.1}°, delay margin {:.2} ms",
-            c.freq_hz,
-            c.phase_margin_deg,
-            c.delay_margin_s * 1e3
-        ));
+        out.push(if c.destabilising {
+            format!(
+                "|L| = 1 at {:.3} Hz (falling): PM {:.1}°, delay margin {:.2} ms",
+                c.freq_hz,
+                c.phase_margin_deg,
+                c.delay_margin_s * 1e3
+            )
+        } else {
+            format!(
+                "|L| = 1 at {:.3} Hz (rising): PM {:.1}° (more delay moves the pole on the \
+                 axis leftwards here)",
+                c.freq_hz, c.phase_margin_deg
+            )
+        });
     }
     for c in &m.phase_crossovers {
         out.push(format!(
