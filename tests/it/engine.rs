@@ -496,3 +496,51 @@ fn an_injected_panic_in_a_step_is_reported_and_reset_recovers() {
         |e| matches!(e, Event::Status { t, running: true, .. } if *t > 1.0),
     );
 }
+
+/// The running twin watches itself (issue 19): gains that ring the oil column at rest — the
+/// old tuned-skyhook-robust gains at τ + 3 ms and mass −20 %, which lock into an ≈ 86 Hz limit
+/// cycle — raise a watch event with that frequency after a bump, while the paper's gains on
+/// the nominal plant raise none over the same run.
+#[test]
+fn the_engine_reports_a_ringing_twin_and_not_a_settled_one() {
+    use seat_twin::analysis::watch::Finding;
+    use seat_twin::scenario::Cycloid;
+    let bump = Excitation::Cycloid {
+        bump: Cycloid::default(),
+        period_s: 1000.0,
+    };
+    let mut ringing = Params::paper();
+    ringing.controller = ControllerParams {
+        kind: ControllerKind::Skyhook,
+        kp_v_per_m: -54.7,
+        ki_v_s_per_m: -6.72,
+        sky_v_s_per_m: -3.71,
+        ..ControllerParams::default()
+    };
+    ringing.plant.valve.tau_s += 0.003;
+    ringing.plant.body.mass_kg *= 0.8;
+    let h = engine::spawn(ringing, || {});
+    h.send(Command::SetExcitation(Box::new(bump.clone())));
+    h.send(Command::SetSpeed(Speed::Max));
+    let seen = until(&h, |e| matches!(e, Event::Watch(_)));
+    match seen.last() {
+        Some(Event::Watch(
+            Finding::LimitCycle { freq_hz, .. } | Finding::Growth { freq_hz, .. },
+        )) => {
+            assert!((70.0..100.0).contains(freq_hz), "{freq_hz} Hz")
+        }
+        other => panic!("{other:?}"),
+    }
+    drop(h);
+    let h = engine::spawn(Params::paper(), || {});
+    h.send(Command::SetExcitation(Box::new(bump)));
+    h.send(Command::SetSpeed(Speed::Max));
+    let seen = until(&h, |e| {
+        matches!(e, Event::Status { t, .. } if *t > 12.0) || matches!(e, Event::Watch(_))
+    });
+    assert!(
+        !seen.iter().any(|e| matches!(e, Event::Watch(_))),
+        "{:?}",
+        seen.last()
+    );
+}

@@ -24,10 +24,13 @@ fn short(kind: ControllerKind) -> TuneOptions {
     }
 }
 
+/// From the paper's gains with the predictive structure (the one the stability rules leave
+/// room to improve: its lead acts outside the loop), on one short ride.
 #[test]
 fn tune_improves_the_paper_gains_within_every_constraint() {
     let p = Params::paper();
-    let r = tune::tune(&p, &short(ControllerKind::Paper), None).unwrap();
+    let r = tune::tune(&p, &short(ControllerKind::Predictive), None).unwrap();
+    assert!(r.failures.is_empty(), "{:?}", r.failures);
     assert!(r.tuned.feasible, "{:?}", r.tuned);
     assert!(
         r.tuned.objective < 0.95 * r.baseline.objective,
@@ -98,31 +101,69 @@ fn tune_improves_the_paper_gains_within_every_constraint() {
     );
 }
 
+/// A skyhook tuned from its default gains cannot keep the oil column stable at rest over the
+/// spread (issue 19): the run says why and writes its report, but no tuned.toml.
 #[test]
-fn tune_outputs_load_and_carry_the_interface_keys() {
+fn a_claim_that_fails_writes_no_tuned_preset() {
     let p = Params::paper();
     let mut o = short(ControllerKind::Skyhook);
     o.max_evaluations = 12;
     o.duration_s = 8.0;
     let r = tune::tune(&p, &o, None).unwrap();
+    assert!(!r.failures.is_empty());
+    assert!(
+        r.failures.iter().any(|f| f.contains("unstable")),
+        "{:?}",
+        r.failures
+    );
     let dir = tempfile::tempdir().unwrap();
     let mut start = p;
     start.controller.kind = ControllerKind::Skyhook;
     tune::report::write_outputs(&r, &start, dir.path(), 1.0).unwrap();
-    let preset = Preset::load(&dir.path().join("tuned.toml")).unwrap();
-    assert_eq!(preset.params.controller, r.tuned.controller);
-    assert_eq!(preset.params.controller.kind, ControllerKind::Skyhook);
+    assert!(!dir.path().join("tuned.toml").exists());
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
             .unwrap();
-    assert_eq!(json["controller"]["kind"], "skyhook");
-    assert!(json["controller"]["gains"]["sky_v_s_per_m"].is_number());
+    assert_eq!(json["claim_holds"], false);
+    assert!(!json["failures"].as_array().unwrap().is_empty());
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(md.contains("The claim fails"), "{md}");
+    assert!(!md.contains("NaN") && !md.contains("inf"), "{md}");
+}
+
+#[test]
+fn tune_outputs_load_and_carry_the_interface_keys() {
+    let p = Params::paper();
+    let mut o = short(ControllerKind::Predictive);
+    o.max_evaluations = 12;
+    o.duration_s = 8.0;
+    let r = tune::tune(&p, &o, None).unwrap();
+    assert!(r.failures.is_empty(), "{:?}", r.failures);
+    let dir = tempfile::tempdir().unwrap();
+    let mut start = p;
+    start.controller.kind = ControllerKind::Predictive;
+    tune::report::write_outputs(&r, &start, dir.path(), 1.0).unwrap();
+    let preset = Preset::load(&dir.path().join("tuned.toml")).unwrap();
+    assert_eq!(preset.params.controller, r.tuned.controller);
+    assert_eq!(preset.params.controller.kind, ControllerKind::Predictive);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["controller"]["kind"], "predictive");
+    assert!(json["controller"]["gains"]["lead_s"].is_number());
+    assert_eq!(json["claim_holds"], true);
+    for row in json["robustness"].as_array().unwrap() {
+        assert_eq!(row["stable"], true);
+        assert_eq!(row["passes"], true);
+        assert!(row["settle"]["rms_last_2s_m_s2"].as_f64().unwrap() < 0.02);
+    }
     for key in ["baseline", "tuned", "baseline_heldout", "tuned_heldout"] {
         assert!(json["objective"][key].is_number(), "objective.{key}");
     }
     for key in [
         "gain_margin_db",
         "phase_margin_deg",
+        "delay_margin_s",
         "max_abs_u_mm",
         "contacts",
     ] {
