@@ -381,7 +381,7 @@ fn parse_and_validate(args: &[String]) -> Result<Command, String> {
 /// Every numeric option of an accepted command within its documented range.
 fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
     match cmd {
-        Command::Simulate {
+        Command::Simulate(cli::SimulateArgs {
             scenario,
             duration,
             freq,
@@ -390,7 +390,7 @@ fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
             f1,
             rate,
             ..
-        } => {
+        }) => {
             let random = *scenario == Some(cli::ScenarioArg::Random);
             let r = |o| documented_range("simulate", o, random).expect("documented");
             prop_assert!(in_range(*rate, r("--rate")), "rate {}", rate);
@@ -402,7 +402,7 @@ fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
             prop_assert!(in_range(*f0, r("--f0")), "f0 {}", f0);
             prop_assert!(in_range(*f1, r("--f1")), "f1 {}", f1);
         }
-        Command::Bode { amp, sweep, .. } => {
+        Command::Bode(cli::BodeArgs { amp, sweep, .. }) => {
             prop_assert!(in_range(
                 *amp,
                 documented_range("bode", "--amp", false).unwrap()
@@ -415,7 +415,7 @@ fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
                 ));
             }
         }
-        Command::Transmissibility { sweep, .. } => {
+        Command::Transmissibility(cli::TransmissibilityArgs { sweep, .. }) => {
             prop_assert!(!sweep.freqs.is_empty());
             for f in &sweep.freqs {
                 let r = documented_range("transmissibility", "--freqs", false).unwrap();

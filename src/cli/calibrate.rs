@@ -1,0 +1,98 @@
+//! `seat-twin calibrate`: the twin calibrated on measured records, its report into a folder.
+
+use super::{Run, load_params};
+use crate::dataset::{self, RecordKind};
+use crate::fsutil::OutputDir;
+use crate::identify;
+use anyhow::{Context, Result};
+use std::path::PathBuf;
+
+/// Options of `seat-twin calibrate`.
+#[derive(Debug, clap::Args)]
+pub struct CalibrateArgs {
+    /// Measured records (one or more CSV files).
+    #[arg(long, num_args = 1.., required = true)]
+    pub data: Vec<PathBuf>,
+    /// Preset file or shipped preset name to start from.
+    #[arg(long, default_value = "paper")]
+    pub preset: String,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+impl Run for CalibrateArgs {
+    fn run(&self) -> Result<()> {
+        let Self { data, preset, out } = self;
+        let params = load_params(preset)?;
+        let records = data
+            .iter()
+            .map(|p| dataset::read_record(p, RecordKind::Measured))
+            .collect::<Result<Vec<_>, _>>()?;
+        for r in &records {
+            for w in &r.warnings {
+                eprintln!("warning: {}: {w}", r.path.display());
+            }
+        }
+        // Issue 12: the output set is written whole into a temporary folder beside --out and
+        // moved into place at the end; creating it now checks --out is writable before the
+        // long calibration starts.
+        let out_dir = OutputDir::create(out)
+            .with_context(|| format!("cannot write the results into {}", out.display()))?;
+        let started = std::time::Instant::now();
+        let last = std::sync::Mutex::new(String::new());
+        let report = identify::calibrate(
+            &params,
+            &records,
+            &identify::CalibrationOptions::default(),
+            &|p| {
+                if let Ok(mut l) = last.lock()
+                    && *l != p.stage
+                {
+                    eprintln!("[{:6.1} s] {}", started.elapsed().as_secs_f64(), p.stage);
+                    *l = p.stage.clone();
+                }
+                true
+            },
+        )?;
+        let elapsed = started.elapsed().as_secs_f64();
+        identify::report::write_all(&report, out_dir.path(), Some(elapsed))?;
+        out_dir
+            .commit()
+            .with_context(|| format!("moving the results into {}", out.display()))?;
+        println!("verdict: {}", report.verdict.name());
+        for m in &report.missing {
+            println!("missing: {m}");
+        }
+        for e in &report.effects {
+            let params: Vec<String> = e
+                .params
+                .iter()
+                .map(|(k, v)| format!("{k} = {}", identify::report::format_value(k, *v)))
+                .collect();
+            println!("effect {}: {}", e.effect.name(), params.join(", "));
+        }
+        for v in &report.calibrated {
+            println!(
+                "{}",
+                identify::report::format_parameter(&v.name, v.value, v.std)
+            );
+        }
+        println!(
+            "weighted error: nominal {:.3}, before {:.3}, after {:.3}",
+            report.error_nominal.value, report.error_before.value, report.error_after.value
+        );
+        if let Some(v) = &report.error_validation {
+            println!(
+                "validation (held-out): before {:.3}, after {:.3}",
+                v.before, v.after
+            );
+        }
+        println!(
+            "calibrated in {elapsed:.1} s ({} replays); report in {}",
+            report.evaluations,
+            out.join("report.md").display()
+        );
+        Ok(())
+    }
+}

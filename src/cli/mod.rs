@@ -1,0 +1,262 @@
+//! The command line of `seat-twin`: its subcommands and options (clap), the checks of the
+//! options' values that run before any work, and each subcommand's run.
+//!
+//! One file per subcommand holds its options (a `clap::Args` struct), their checks and its
+//! run, through the [`Run`] trait: `simulate`, `report`, `response` (`bode` and
+//! `transmissibility`), `replay`, `calibrate`, `seat_test`, `tune` and `bench`. This module
+//! holds what they share: the [`Command`] enum and its one dispatch ([`Command::args`]), the
+//! range checks, [`load_params`] and [`Heartbeat`]. Adding a subcommand is a file, a variant
+//! and an arm of that dispatch.
+//!
+//! Numeric options take a value that starts with `-` as their value (`--duration -1`,
+//! `--duration -inf`, `--freqs -1,2`), so that a number out of range gets the range message
+//! rather than clap's "unexpected argument"; [`validate`] checks every numeric option of a
+//! command against its documented range, without reading a file.
+
+mod bench;
+mod calibrate;
+mod replay;
+mod report;
+mod response;
+mod seat_test;
+mod simulate;
+mod tune;
+
+pub use bench::BenchArgs;
+pub use calibrate::CalibrateArgs;
+pub use replay::ReplayArgs;
+pub use report::ReportArgs;
+pub use response::{BodeArgs, SweepArgs, TransmissibilityArgs};
+pub use seat_test::SeatTestArgs;
+pub use simulate::{ScenarioArg, SimulateArgs};
+pub use tune::TuneArgs;
+
+use crate::params::{Params, fmt_value};
+use clap::Parser;
+
+/// Longest `simulate` run [s] (10 h).
+pub const MAX_DURATION_S: f64 = 36_000.0;
+/// Longest random ride [s] (1 h).
+pub const MAX_RANDOM_DURATION_S: f64 = 3600.0;
+/// Largest command amplitude of a sine, chirp or dwell [V] (`--amp`).
+pub const MAX_AMP_V: f64 = 100.0;
+/// Allowed `--rate` [Hz].
+pub const RATE_RANGE_HZ: (f64, f64) = (1.0, 100_000.0);
+/// Allowed frequencies of `--freq`, `--f0`, `--f1` and `--freqs` [Hz].
+pub const FREQ_RANGE_HZ: (f64, f64) = (0.01, 1000.0);
+/// Shortest `--duration` [s].
+pub const MIN_DURATION_S: f64 = 1e-3;
+/// Most samples `simulate` writes to one file: 10 h at 1 kHz and a bit (about 10 GB of CSV).
+pub const MAX_SIMULATE_SAMPLES: u64 = 50_000_000;
+
+/// A command-line option with a value it does not accept.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct OptionError(pub String);
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "seat-twin",
+    version,
+    about = "Digital twin and gain-tuning tool for a hydraulic active seat suspension",
+    long_about = "Without a subcommand, opens the desktop app (when built with the `gui` feature).\n\
+                  The subcommands run the same engine headless; all files are SI unless a column \
+                  name says otherwise."
+)]
+/// The command line.
+pub struct Cli {
+    /// The subcommand; none opens the desktop app.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The subcommands.
+#[derive(Debug, clap::Subcommand)]
+pub enum Command {
+    /// Reproduce the paper's sections 4–6: report.md, numbers.json and PNG+SVG plots.
+    Report(ReportArgs),
+    /// Simulate one model on one scenario and write a CSV trace (SI columns).
+    Simulate(SimulateArgs),
+    /// Bode of u̇/V_in: columns freq_hz, mag_mm_per_s_v, phase_deg.
+    Bode(BodeArgs),
+    /// Transmissibility ÿ/ẍ with the controller: columns freq_hz, mag, phase_deg.
+    Transmissibility(TransmissibilityArgs),
+    /// Replay a measured record through the twin (its v_in and platform motion, open loop):
+    /// columns t,u,ydd,p1,p2,xv,q1,q2 on the record's time grid (SI).
+    Replay(ReplayArgs),
+    /// Calibrate the twin on measured records: Cd, τ (and the mass), then trace the residual
+    /// to a missing effect; writes report.md, report.json, calibrated.toml and plots to DIR.
+    Calibrate(CalibrateArgs),
+    /// A standard laboratory seat test: a seat-test input class on the platform, closed loop;
+    /// writes report.md, numbers.json and PNG+SVG plots to DIR.
+    SeatTest(SeatTestArgs),
+    /// Real-time factors, accuracy against a 10× finer step, and the Table 1 sweep time.
+    Bench(BenchArgs),
+    /// Tune a controller's gains on the nonlinear twin (ISO 2631-1 objective of the body,
+    /// no end-stop contact, max |u| ≤ 30 mm, GM ≥ 6 dB, PM ≥ 45°); writes tuned.toml,
+    /// report.md, report.json and plots to DIR.
+    Tune(TuneArgs),
+}
+
+/// What every subcommand's options do: check their values, then run.
+pub trait Run {
+    /// Checks the options' values against their documented ranges, reading no file (the
+    /// preset and the records are checked when read). The default accepts everything.
+    fn validate(&self) -> Result<(), OptionError> {
+        Ok(())
+    }
+
+    /// Runs the subcommand: reads its inputs, computes, writes its outputs, prints a summary.
+    fn run(&self) -> anyhow::Result<()>;
+}
+
+impl Command {
+    /// The subcommand's options, which know how to check themselves and run.
+    pub fn args(&self) -> &dyn Run {
+        match self {
+            Command::Report(a) => a,
+            Command::Simulate(a) => a,
+            Command::Bode(a) => a,
+            Command::Transmissibility(a) => a,
+            Command::Replay(a) => a,
+            Command::Calibrate(a) => a,
+            Command::SeatTest(a) => a,
+            Command::Bench(a) => a,
+            Command::Tune(a) => a,
+        }
+    }
+}
+
+/// Checks every numeric option of `cmd` against its range, whether the command's scenario
+/// or method uses it or not. Reads no file: the preset and the records are checked when read.
+pub fn validate(cmd: &Command) -> Result<(), OptionError> {
+    cmd.args().validate()
+}
+
+/// Checks `cmd`'s options ([`validate`]), then runs it.
+pub fn run(cmd: &Command) -> anyhow::Result<()> {
+    let args = cmd.args();
+    args.validate()?;
+    args.run()
+}
+
+/// The parameters of a preset given as a file or a shipped preset's name.
+pub fn load_params(name: &str) -> anyhow::Result<Params> {
+    Ok(crate::preset::resolve(name)?.params)
+}
+
+/// The seat-test input class called `name`, or an error listing the classes.
+pub fn find_class(name: &str) -> anyhow::Result<&'static crate::seat_test::InputClass> {
+    use anyhow::Context;
+    crate::seat_test::find(name).with_context(|| {
+        format!(
+            "unknown input class `{name}`; the classes are {}",
+            crate::seat_test::classes::names()
+        )
+    })
+}
+
+/// The error and its chain of causes, each message once: a cause whose text an outer message
+/// already includes (`file: cause` over `cause`) is not repeated.
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let msg = cause.to_string();
+        let msg = msg.trim();
+        if msg.is_empty() || text.contains(msg) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(msg);
+    }
+    text
+}
+
+/// Prints "still running" with the elapsed time on stderr every `every` until dropped.
+pub struct Heartbeat {
+    stop: Option<std::sync::mpsc::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Heartbeat {
+    /// Starts the thread that prints `what: still running` every `every`.
+    pub fn start(what: String, every: std::time::Duration) -> Self {
+        let (stop, rx) = std::sync::mpsc::channel::<()>();
+        let started = std::time::Instant::now();
+        let thread = std::thread::spawn(move || {
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) = rx.recv_timeout(every) {
+                eprintln!(
+                    "[{:6.0} s] {what}: still running (Ctrl-C stops it and leaves nothing behind)",
+                    started.elapsed().as_secs_f64()
+                );
+            }
+        });
+        Self {
+            stop: Some(stop),
+            thread: Some(thread),
+        }
+    }
+}
+
+impl Drop for Heartbeat {
+    fn drop(&mut self) {
+        drop(self.stop.take());
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// Checks `min <= v <= max` (and finiteness) of the option `name`.
+pub fn check_range(name: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<(), OptionError> {
+    if v.is_finite() && v >= min && v <= max {
+        Ok(())
+    } else {
+        Err(OptionError(format!(
+            "{name} {} is outside the allowed range [{}, {}] {unit}",
+            fmt_value(v),
+            fmt_value(min),
+            fmt_value(max)
+        )))
+    }
+}
+
+/// Checks `--freqs`: at least one, each within [`FREQ_RANGE_HZ`].
+pub fn check_freqs(freqs: &[f64]) -> Result<(), OptionError> {
+    if freqs.is_empty() {
+        return Err(OptionError("--freqs needs at least one frequency".into()));
+    }
+    let (lo, hi) = FREQ_RANGE_HZ;
+    for &f in freqs {
+        check_range("--freqs value", f, lo, hi, "Hz")?;
+    }
+    Ok(())
+}
+
+/// Checks a dwell's `--amp`: in (0, [`MAX_AMP_V`]] (a dwell divides by it).
+pub fn check_dwell_amp(amp: f64) -> Result<(), OptionError> {
+    if amp.is_nan() || amp <= 0.0 {
+        return Err(OptionError(format!(
+            "--amp {} is outside the allowed range (0, {}] V: the sine dwell needs a command",
+            fmt_value(amp),
+            fmt_value(MAX_AMP_V)
+        )));
+    }
+    check_range("--amp", amp, 0.0, MAX_AMP_V, "V")
+}
+
+/// Checks that a `simulate` run of `samples` samples (`duration` [s] at `rate` [Hz]) is within
+/// [`MAX_SIMULATE_SAMPLES`].
+pub fn check_sample_count(samples: u64, duration: f64, rate: f64) -> Result<(), OptionError> {
+    if samples > MAX_SIMULATE_SAMPLES {
+        return Err(OptionError(format!(
+            "{} s at --rate {} Hz is {samples} samples, over the limit of \
+             {MAX_SIMULATE_SAMPLES} samples per file; lower --duration or --rate",
+            fmt_value(duration),
+            fmt_value(rate)
+        )));
+    }
+    Ok(())
+}

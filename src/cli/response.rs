@@ -1,0 +1,120 @@
+//! `seat-twin bode` and `seat-twin transmissibility`: a frequency response into one CSV file.
+
+use super::{OptionError, Run, check_dwell_amp, check_freqs, load_params};
+use crate::analysis::response::{Method, Response, ResponseError, response};
+use crate::dataset;
+use crate::model::ModelKind;
+use crate::params::fmt_value;
+use anyhow::{Context, Result, bail};
+use std::path::PathBuf;
+
+/// The options `bode` and `transmissibility` end with: the frequencies, the method, the file.
+#[derive(Debug, clap::Args)]
+pub struct SweepArgs {
+    /// Comma-separated frequencies [Hz].
+    #[arg(
+        long,
+        value_delimiter = ',',
+        required = true,
+        allow_hyphen_values = true
+    )]
+    pub freqs: Vec<f64>,
+    /// Default: simulated for the twin, exact for linear and passive.
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
+    /// Output file (CSV).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Options of `seat-twin bode`.
+#[derive(Debug, clap::Args)]
+pub struct BodeArgs {
+    /// Which model.
+    #[arg(long, value_enum)]
+    pub model: ModelKind,
+    /// Preset file or shipped preset name.
+    #[arg(long, default_value = "paper")]
+    pub preset: String,
+    /// Command amplitude of the sine dwell [V] (twin).
+    #[arg(long, default_value_t = 0.72, allow_hyphen_values = true)]
+    pub amp: f64,
+    /// Frequencies, method and output file.
+    #[command(flatten)]
+    pub sweep: SweepArgs,
+}
+
+/// Options of `seat-twin transmissibility`.
+#[derive(Debug, clap::Args)]
+pub struct TransmissibilityArgs {
+    /// Which model.
+    #[arg(long, value_enum)]
+    pub model: ModelKind,
+    /// Preset file or shipped preset name.
+    #[arg(long, default_value = "paper")]
+    pub preset: String,
+    /// Frequencies, method and output file.
+    #[command(flatten)]
+    pub sweep: SweepArgs,
+}
+
+impl Run for BodeArgs {
+    fn validate(&self) -> Result<(), OptionError> {
+        check_freqs(&self.sweep.freqs)?;
+        check_dwell_amp(self.amp)
+    }
+
+    fn run(&self) -> Result<()> {
+        let what = Response::Bode {
+            amplitude_v: self.amp,
+        };
+        write_response(&self.preset, self.model, what, &self.sweep)
+    }
+}
+
+impl Run for TransmissibilityArgs {
+    fn validate(&self) -> Result<(), OptionError> {
+        check_freqs(&self.sweep.freqs)
+    }
+
+    fn run(&self) -> Result<()> {
+        write_response(
+            &self.preset,
+            self.model,
+            Response::Transmissibility,
+            &self.sweep,
+        )
+    }
+}
+
+/// The response by its entry point, then one CSV file. A non-finite point is refused naming
+/// the frequency and the input it came from.
+fn write_response(preset: &str, kind: ModelKind, what: Response, sweep: &SweepArgs) -> Result<()> {
+    let SweepArgs { freqs, method, out } = sweep;
+    let params = load_params(preset)?;
+    // What a non-finite point is traced back to, and the input's own comment line.
+    let (input, extra) = match what {
+        Response::Bode { amplitude_v } => (
+            format!("--amp {} V", fmt_value(amplitude_v)),
+            vec![("amplitude_v".to_string(), fmt_value(amplitude_v))],
+        ),
+        Response::Transmissibility => (format!("preset {preset}"), Vec::new()),
+    };
+    let method = method.unwrap_or(Method::default_for(kind));
+    let values = match response(&params, kind, what, method, freqs) {
+        Err(e @ ResponseError::NotFinite { .. }) => {
+            bail!("{e}; nothing was written. Check {input}")
+        }
+        r => r?,
+    };
+    let mut comments = vec![
+        ("model".to_string(), kind.name().to_string()),
+        ("preset".to_string(), preset.to_string()),
+    ];
+    comments.extend(extra);
+    let rows = freqs.iter().zip(&values).map(|(&f, &v)| what.row(f, v));
+    dataset::write_csv_atomic(out, &what.columns(), &comments, rows)
+        .with_context(|| format!("writing {}", out.display()))?;
+    println!("{} points written to {}", freqs.len(), out.display());
+    Ok(())
+}
