@@ -10,15 +10,22 @@ use seat_twin::fsutil;
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
-        None => open_app(),
+        None => open_app().map(|()| cli::Outcome::Done),
         Some(cmd) => {
             clean_up_on_signals();
             cli::run(&cmd)
         }
     };
-    if let Err(e) = result {
-        eprintln!("error: {}", cli::error_text(&e));
-        std::process::exit(1);
+    // The exit codes are documented in the README (CLI section) and in `cli`.
+    let code = match result {
+        Ok(outcome) => outcome.exit_code(),
+        Err(e) => {
+            eprintln!("error: {}", cli::error_text(&e));
+            cli::EXIT_ERROR
+        }
+    };
+    if code != 0 {
+        std::process::exit(code);
     }
 }
 

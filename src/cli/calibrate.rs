@@ -1,11 +1,17 @@
 //! `seat-twin calibrate`: the twin calibrated on measured records, its report into a folder.
 
-use super::{Run, load_params};
+use super::{Outcome, Run, announce, estimate_wall_s, load_params};
 use crate::dataset::{self, RecordKind};
 use crate::fsutil::OutputDir;
 use crate::identify;
+use crate::model::ModelKind;
+use crate::params::fmt_value;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
+
+/// Replays of a typical calibration (the stages, the Jacobians and the effect search), the
+/// basis of the up-front estimate; the count of a run is printed with its stages.
+const TYPICAL_REPLAYS: usize = 150;
 
 /// Options of `seat-twin calibrate`.
 #[derive(Debug, clap::Args)]
@@ -14,7 +20,7 @@ pub struct CalibrateArgs {
     #[arg(long, num_args = 1.., required = true)]
     pub data: Vec<PathBuf>,
     /// Preset file or shipped preset name to start from.
-    #[arg(long, default_value = "paper")]
+    #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
     /// Output directory.
     #[arg(long)]
@@ -22,7 +28,7 @@ pub struct CalibrateArgs {
 }
 
 impl Run for CalibrateArgs {
-    fn run(&self) -> Result<()> {
+    fn run(&self) -> Result<Outcome> {
         let Self { data, preset, out } = self;
         let params = load_params(preset)?;
         let records = data
@@ -39,6 +45,17 @@ impl Run for CalibrateArgs {
         // long calibration starts.
         let out_dir = OutputDir::create(out)
             .with_context(|| format!("cannot write the results into {}", out.display()))?;
+        let record_s: f64 = records.iter().map(|r| r.duration_s()).sum();
+        let heartbeat = announce(
+            "calibrate",
+            &format!(
+                "each replay simulates the {} s of the records; a calibration makes about \
+                 {TYPICAL_REPLAYS} replays",
+                fmt_value(record_s.round())
+            ),
+            TYPICAL_REPLAYS as f64
+                * estimate_wall_s(ModelKind::Twin, record_s, params.numerics.max_step_s),
+        );
         let started = std::time::Instant::now();
         let last = std::sync::Mutex::new(String::new());
         let report = identify::calibrate(
@@ -49,12 +66,18 @@ impl Run for CalibrateArgs {
                 if let Ok(mut l) = last.lock()
                     && *l != p.stage
                 {
-                    eprintln!("[{:6.1} s] {}", started.elapsed().as_secs_f64(), p.stage);
+                    eprintln!(
+                        "[{:6.1} s] {} ({} replays so far)",
+                        started.elapsed().as_secs_f64(),
+                        p.stage,
+                        p.evaluations
+                    );
                     *l = p.stage.clone();
                 }
                 true
             },
         )?;
+        drop(heartbeat);
         let elapsed = started.elapsed().as_secs_f64();
         identify::report::write_all(&report, out_dir.path(), Some(elapsed))?;
         out_dir
@@ -72,7 +95,8 @@ impl Run for CalibrateArgs {
                 .collect();
             println!("effect {}: {}", e.effect.name(), params.join(", "));
         }
-        for v in &report.calibrated {
+        let calibrated = report.verdict != identify::Verdict::InsufficientData;
+        for v in report.calibrated.iter().filter(|_| calibrated) {
             println!(
                 "{}",
                 identify::report::format_parameter(&v.name, v.value, v.std)
@@ -93,6 +117,15 @@ impl Run for CalibrateArgs {
             report.evaluations,
             out.join("report.md").display()
         );
-        Ok(())
+        if calibrated {
+            Ok(Outcome::Done)
+        } else {
+            eprintln!(
+                "note: verdict insufficient_data: nothing was calibrated and no calibrated.toml \
+                 was written (exit code {})",
+                super::EXIT_NO_RESULT
+            );
+            Ok(Outcome::NoResult)
+        }
     }
 }

@@ -98,6 +98,34 @@ pub enum Command {
     Tune(TuneArgs),
 }
 
+/// Exit code of an error: bad input, a failed run, an output that could not be written
+/// (nothing is written then, or the old output is left as it was).
+pub const EXIT_ERROR: i32 = 1;
+/// Exit code of a command line clap refuses (unknown option, missing value).
+pub const EXIT_USAGE: i32 = 2;
+/// Exit code of a run that ended and wrote its report but claims no result: `calibrate` with
+/// the verdict `insufficient_data` (report.md and report.json written, no calibrated.toml).
+pub const EXIT_NO_RESULT: i32 = 3;
+
+/// How a subcommand that ran to its end ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// It did what it was asked: exit code 0.
+    Done,
+    /// It wrote its report, which claims no result ([`EXIT_NO_RESULT`]).
+    NoResult,
+}
+
+impl Outcome {
+    /// The process's exit code.
+    pub fn exit_code(self) -> i32 {
+        match self {
+            Outcome::Done => 0,
+            Outcome::NoResult => EXIT_NO_RESULT,
+        }
+    }
+}
+
 /// What every subcommand's options do: check their values, then run.
 pub trait Run {
     /// Checks the options' values against their documented ranges, reading no file (the
@@ -107,7 +135,7 @@ pub trait Run {
     }
 
     /// Runs the subcommand: reads its inputs, computes, writes its outputs, prints a summary.
-    fn run(&self) -> anyhow::Result<()>;
+    fn run(&self) -> anyhow::Result<Outcome>;
 }
 
 impl Command {
@@ -134,7 +162,7 @@ pub fn validate(cmd: &Command) -> Result<(), OptionError> {
 }
 
 /// Checks `cmd`'s options ([`validate`]), then runs it.
-pub fn run(cmd: &Command) -> anyhow::Result<()> {
+pub fn run(cmd: &Command) -> anyhow::Result<Outcome> {
     let args = cmd.args();
     args.validate()?;
     args.run()
@@ -142,7 +170,119 @@ pub fn run(cmd: &Command) -> anyhow::Result<()> {
 
 /// The parameters of a preset given as a file or a shipped preset's name.
 pub fn load_params(name: &str) -> anyhow::Result<Params> {
+    if name.trim().is_empty() {
+        anyhow::bail!(
+            "--preset is empty: give a preset file or the name of a shipped preset ({})",
+            shipped_names()
+        );
+    }
     Ok(crate::preset::resolve(name)?.params)
+}
+
+/// "paper, paper-initial, …": the shipped presets' names.
+fn shipped_names() -> String {
+    let mut names: Vec<String> = crate::preset::shipped_presets()
+        .into_iter()
+        .map(|(n, _)| n)
+        .collect();
+    if names.is_empty() {
+        names.push("paper".into());
+    }
+    names.join(", ")
+}
+
+/// The value parser of `--preset`: a path or a name as text. A path that is not valid UTF-8
+/// is refused naming the option (clap's own message for it names none).
+pub fn preset_parser() -> impl clap::builder::TypedValueParser<Value = String> {
+    use clap::builder::TypedValueParser;
+    clap::builder::OsStringValueParser::new().try_map(|os| {
+        os.into_string().map_err(|os| {
+            format!(
+                "the path {:?} is not valid UTF-8: rename the file (or link to it) with a \
+                 UTF-8 name",
+                os.to_string_lossy()
+            )
+        })
+    })
+}
+
+/// The value parser of `--seed`: a whole number in [0, 2^64 − 1]; a negative or fractional
+/// one gets the range, not clap's "unexpected argument".
+pub fn parse_seed(text: &str) -> Result<u64, String> {
+    text.trim().parse::<u64>().map_err(|_| {
+        format!(
+            "{text} is not a whole number in the allowed range [0, {}]",
+            u64::MAX
+        )
+    })
+}
+
+/// Refuses, before any work, an output file that is one of the inputs (`inputs`: the option
+/// and the file it names): writing it would destroy the input.
+pub fn check_output_is_not_an_input(
+    out: &std::path::Path,
+    inputs: &[(&str, &std::path::Path)],
+) -> Result<(), OptionError> {
+    for (option, input) in inputs {
+        if crate::fsutil::same_file(input, out) {
+            return Err(OptionError(format!(
+                "--out {} is the same file as {option} {}: writing it would destroy the \
+                 input; give another --out",
+                out.display(),
+                input.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The file `--preset NAME` reads, for [`check_output_is_not_an_input`] (none for the
+/// built-in paper preset).
+pub fn preset_file(name: &str) -> Option<std::path::PathBuf> {
+    crate::preset::locate(name)
+}
+
+/// Simulated seconds per wall-clock second and core of the twin at the default step, the
+/// basis of the cost estimates (measured by `seat-twin bench` on the development machine:
+/// about 2000× real time at 0.5 ms).
+const TWIN_REAL_TIME_FACTOR: f64 = 2000.0;
+/// The same for the linear and passive models (60 000–80 000× measured).
+const LTI_REAL_TIME_FACTOR: f64 = 50_000.0;
+
+/// Estimated wall time [s] of simulating `simulated_s` seconds of `kind` at step `step_s`
+/// on `cores` cores in parallel.
+pub fn estimate_wall_s(kind: crate::model::ModelKind, simulated_s: f64, step_s: f64) -> f64 {
+    let default_step = crate::params::NumericsParams::default().max_step_s;
+    let factor = match kind {
+        crate::model::ModelKind::Twin => TWIN_REAL_TIME_FACTOR,
+        _ => LTI_REAL_TIME_FACTOR,
+    } * (step_s / default_step);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    simulated_s / factor / cores
+}
+
+/// "40 s", "12 min", "3.5 h": a duration for people.
+pub fn fmt_duration(s: f64) -> String {
+    if s < 90.0 {
+        format!("{} s", fmt_value(s.ceil()))
+    } else if s < 5400.0 {
+        format!("{} min", fmt_value((s / 60.0).round()))
+    } else {
+        format!("{} h", fmt_value((s / 360.0).round() / 10.0))
+    }
+}
+
+/// Prints the up-front cost of a long job on stderr (when it is over 10 s) and starts a
+/// [`Heartbeat`] that tells its progress every 10 s: `what` names the job, `cost` says what
+/// it computes, `wall_s` is the estimate.
+pub fn announce(what: &str, cost: &str, wall_s: f64) -> Heartbeat {
+    if wall_s > 10.0 {
+        eprintln!(
+            "note: {what}: {cost}; estimated about {} on this machine",
+            fmt_duration(wall_s)
+        );
+    }
+    Heartbeat::start(what.to_string(), std::time::Duration::from_secs(10))
 }
 
 /// The seat-test input class called `name`, or an error listing the classes.

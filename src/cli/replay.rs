@@ -1,6 +1,6 @@
 //! `seat-twin replay`: a measured record replayed through the twin into one CSV file.
 
-use super::{Run, load_params};
+use super::{Outcome, Run, check_output_is_not_an_input, load_params, preset_file};
 use crate::dataset::{self, RecordKind};
 use crate::identify;
 use anyhow::{Context, Result};
@@ -13,7 +13,7 @@ pub struct ReplayArgs {
     #[arg(long)]
     pub data: PathBuf,
     /// Preset file or shipped preset name.
-    #[arg(long, default_value = "paper")]
+    #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
     /// Output file (CSV).
     #[arg(long)]
@@ -21,8 +21,12 @@ pub struct ReplayArgs {
 }
 
 impl Run for ReplayArgs {
-    fn run(&self) -> Result<()> {
+    fn run(&self) -> Result<Outcome> {
         let Self { data, preset, out } = self;
+        let preset_file = preset_file(preset);
+        let mut inputs = vec![("--data", data.as_path())];
+        inputs.extend(preset_file.as_deref().map(|p| ("--preset", p)));
+        check_output_is_not_an_input(out, &inputs)?;
         let params = load_params(preset)?;
         let rec = dataset::read_record(data, RecordKind::Measured)?;
         for w in &rec.warnings {
@@ -54,6 +58,6 @@ impl Run for ReplayArgs {
                 .map(|y| format!(", ydd {y:.3} m/s^2"))
                 .unwrap_or_default()
         );
-        Ok(())
+        Ok(Outcome::Done)
     }
 }

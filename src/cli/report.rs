@@ -1,6 +1,6 @@
 //! `seat-twin report`: the paper's sections 4–6 reproduced into a folder.
 
-use super::{Heartbeat, Run, load_params};
+use super::{Heartbeat, Outcome, Run, load_params};
 use crate::fsutil::OutputDir;
 use crate::params::fmt_value;
 use anyhow::{Context, Result};
@@ -10,7 +10,7 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct ReportArgs {
     /// Preset file or shipped preset name.
-    #[arg(long, default_value = "paper")]
+    #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
     /// Output directory.
     #[arg(long, default_value = "out/report")]
@@ -18,7 +18,7 @@ pub struct ReportArgs {
 }
 
 impl Run for ReportArgs {
-    fn run(&self) -> Result<()> {
+    fn run(&self) -> Result<Outcome> {
         let Self { preset, out } = self;
         let params = load_params(preset)?;
         // The whole set goes into a temporary folder beside --out and is moved into place
@@ -38,12 +38,13 @@ impl Run for ReportArgs {
             );
         }
         let heartbeat = Heartbeat::start("report".into(), std::time::Duration::from_secs(10));
-        let summary = crate::report::write_report(&params, preset, dir.path())?;
+        let summary = crate::report::write_report(&params, preset, dir.path())
+            .with_context(|| format!("the report on preset {preset}"))?;
         drop(heartbeat);
         dir.commit()
             .with_context(|| format!("moving the report into {}", out.display()))?;
         println!("{summary}");
         println!("report written to {}", out.join("report.md").display());
-        Ok(())
+        Ok(Outcome::Done)
     }
 }

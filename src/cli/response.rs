@@ -1,6 +1,10 @@
 //! `seat-twin bode` and `seat-twin transmissibility`: a frequency response into one CSV file.
 
-use super::{OptionError, Run, check_dwell_amp, check_freqs, load_params};
+use super::{
+    OptionError, Outcome, Run, announce, check_dwell_amp, check_freqs,
+    check_output_is_not_an_input, estimate_wall_s, load_params, preset_file,
+};
+use crate::analysis::dwell::{self, DwellOptions};
 use crate::analysis::response::{Method, Response, ResponseError, response};
 use crate::dataset;
 use crate::model::ModelKind;
@@ -34,7 +38,7 @@ pub struct BodeArgs {
     #[arg(long, value_enum)]
     pub model: ModelKind,
     /// Preset file or shipped preset name.
-    #[arg(long, default_value = "paper")]
+    #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
     /// Command amplitude of the sine dwell [V] (twin).
     #[arg(long, default_value_t = 0.72, allow_hyphen_values = true)]
@@ -51,7 +55,7 @@ pub struct TransmissibilityArgs {
     #[arg(long, value_enum)]
     pub model: ModelKind,
     /// Preset file or shipped preset name.
-    #[arg(long, default_value = "paper")]
+    #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
     /// Frequencies, method and output file.
     #[command(flatten)]
@@ -64,7 +68,7 @@ impl Run for BodeArgs {
         check_dwell_amp(self.amp)
     }
 
-    fn run(&self) -> Result<()> {
+    fn run(&self) -> Result<Outcome> {
         let what = Response::Bode {
             amplitude_v: self.amp,
         };
@@ -77,7 +81,7 @@ impl Run for TransmissibilityArgs {
         check_freqs(&self.sweep.freqs)
     }
 
-    fn run(&self) -> Result<()> {
+    fn run(&self) -> Result<Outcome> {
         write_response(
             &self.preset,
             self.model,
@@ -89,8 +93,16 @@ impl Run for TransmissibilityArgs {
 
 /// The response by its entry point, then one CSV file. A non-finite point is refused naming
 /// the frequency and the input it came from.
-fn write_response(preset: &str, kind: ModelKind, what: Response, sweep: &SweepArgs) -> Result<()> {
+fn write_response(
+    preset: &str,
+    kind: ModelKind,
+    what: Response,
+    sweep: &SweepArgs,
+) -> Result<Outcome> {
     let SweepArgs { freqs, method, out } = sweep;
+    if let Some(file) = preset_file(preset) {
+        check_output_is_not_an_input(out, &[("--preset", &file)])?;
+    }
     let params = load_params(preset)?;
     // What a non-finite point is traced back to, and the input's own comment line.
     let (input, extra) = match what {
@@ -101,12 +113,37 @@ fn write_response(preset: &str, kind: ModelKind, what: Response, sweep: &SweepAr
         Response::Transmissibility => (format!("preset {preset}"), Vec::new()),
     };
     let method = method.unwrap_or(Method::default_for(kind));
+    let heartbeat = (method == Method::Simulated).then(|| {
+        let opt = DwellOptions::default();
+        let simulated: f64 = freqs
+            .iter()
+            .map(|&f| match what {
+                Response::Bode { .. } => dwell::bode_dwell_s(f, &opt),
+                Response::Transmissibility => dwell::transmissibility_dwell_s(f, &opt),
+            })
+            .sum();
+        let command = match what {
+            Response::Bode { .. } => "bode",
+            Response::Transmissibility => "transmissibility",
+        };
+        announce(
+            command,
+            &format!(
+                "{} sine dwells, {} s simulated in all on the {} model",
+                freqs.len(),
+                fmt_value(simulated.round()),
+                kind.name()
+            ),
+            estimate_wall_s(kind, simulated, params.numerics.max_step_s),
+        )
+    });
     let values = match response(&params, kind, what, method, freqs) {
         Err(e @ ResponseError::NotFinite { .. }) => {
             bail!("{e}; nothing was written. Check {input}")
         }
         r => r?,
     };
+    drop(heartbeat);
     let mut comments = vec![
         ("model".to_string(), kind.name().to_string()),
         ("preset".to_string(), preset.to_string()),
@@ -116,5 +153,5 @@ fn write_response(preset: &str, kind: ModelKind, what: Response, sweep: &SweepAr
     dataset::write_csv_atomic(out, &what.columns(), &comments, rows)
         .with_context(|| format!("writing {}", out.display()))?;
     println!("{} points written to {}", freqs.len(), out.display());
-    Ok(())
+    Ok(Outcome::Done)
 }

@@ -2,7 +2,8 @@
 
 use super::{
     FREQ_RANGE_HZ, Heartbeat, MAX_AMP_V, MAX_DURATION_S, MAX_RANDOM_DURATION_S, MIN_DURATION_S,
-    OptionError, RATE_RANGE_HZ, Run, check_range, check_sample_count, find_class, load_params,
+    OptionError, Outcome, RATE_RANGE_HZ, Run, check_output_is_not_an_input, check_range,
+    check_sample_count, find_class, load_params, preset_file,
 };
 use crate::analysis::dwell;
 use crate::dataset::{self, RecordKind};
@@ -39,29 +40,29 @@ pub struct SimulateArgs {
     #[arg(long, value_enum)]
     pub model: ModelKind,
     /// Preset file or shipped preset name.
-    #[arg(long, default_value = "paper")]
+    #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
     /// The platform or valve scenario (or give --excitation).
     #[arg(long, value_enum, conflicts_with = "excitation")]
     pub scenario: Option<ScenarioArg>,
-    /// Seed of the random ride.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Seed of the random ride or the class motion, 0..=2^64−1 (default 1).
+    #[arg(long, allow_hyphen_values = true, value_parser = super::parse_seed)]
+    pub seed: Option<u64>,
     /// Duration [s] (default: cycloid 5, random 60, sine max(3 s, 6 periods), chirp 10).
     #[arg(long, allow_hyphen_values = true)]
     pub duration: Option<f64>,
-    /// Sine frequency [Hz].
-    #[arg(long, default_value_t = 5.0, allow_hyphen_values = true)]
-    pub freq: f64,
-    /// Sine/chirp amplitude [V].
-    #[arg(long, default_value_t = 2.1, allow_hyphen_values = true)]
-    pub amp: f64,
-    /// Chirp start frequency [Hz].
-    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
-    pub f0: f64,
-    /// Chirp end frequency [Hz].
-    #[arg(long, default_value_t = 20.0, allow_hyphen_values = true)]
-    pub f1: f64,
+    /// Sine frequency [Hz] (default 5).
+    #[arg(long, allow_hyphen_values = true)]
+    pub freq: Option<f64>,
+    /// Sine/chirp amplitude [V] (default 2.1).
+    #[arg(long, allow_hyphen_values = true)]
+    pub amp: Option<f64>,
+    /// Chirp start frequency [Hz] (default 0.5).
+    #[arg(long, allow_hyphen_values = true)]
+    pub f0: Option<f64>,
+    /// Chirp end frequency [Hz] (default 20).
+    #[arg(long, allow_hyphen_values = true)]
+    pub f1: Option<f64>,
     /// A platform record (CSV: `t` and `x` and/or `xdd`, SI); runs closed loop on it.
     #[arg(long)]
     pub excitation: Option<PathBuf>,
@@ -76,6 +77,28 @@ pub struct SimulateArgs {
     pub out: PathBuf,
 }
 
+/// Defaults of the scenario options.
+const DEFAULT_SEED: u64 = 1;
+const DEFAULT_FREQ_HZ: f64 = 5.0;
+const DEFAULT_AMP_V: f64 = 2.1;
+const DEFAULT_F0_HZ: f64 = 0.5;
+const DEFAULT_F1_HZ: f64 = 20.0;
+
+impl SimulateArgs {
+    /// The scenario options given, each with the scenarios that use it.
+    fn scenario_options(&self) -> [(&'static str, bool, &'static [ScenarioArg]); 6] {
+        use ScenarioArg::{Chirp, Class, Random, Sine};
+        [
+            ("--seed", self.seed.is_some(), &[Random, Class]),
+            ("--freq", self.freq.is_some(), &[Sine]),
+            ("--amp", self.amp.is_some(), &[Sine, Chirp]),
+            ("--f0", self.f0.is_some(), &[Chirp]),
+            ("--f1", self.f1.is_some(), &[Chirp]),
+            ("--class", self.class.is_some(), &[Class]),
+        ]
+    }
+}
+
 impl Run for SimulateArgs {
     fn validate(&self) -> Result<(), OptionError> {
         let (flo, fhi) = FREQ_RANGE_HZ;
@@ -88,14 +111,30 @@ impl Run for SimulateArgs {
             };
             check_range("--duration", d, MIN_DURATION_S, max, "s")?;
         }
-        check_range("--freq", self.freq, flo, fhi, "Hz")?;
-        check_range("--amp", self.amp, 0.0, MAX_AMP_V, "V")?;
-        check_range("--f0", self.f0, flo, fhi, "Hz")?;
-        check_range("--f1", self.f1, flo, fhi, "Hz")?;
+        let given = |v: Option<f64>, default| v.unwrap_or(default);
+        check_range("--freq", given(self.freq, DEFAULT_FREQ_HZ), flo, fhi, "Hz")?;
+        check_range("--amp", given(self.amp, DEFAULT_AMP_V), 0.0, MAX_AMP_V, "V")?;
+        check_range("--f0", given(self.f0, DEFAULT_F0_HZ), flo, fhi, "Hz")?;
+        check_range("--f1", given(self.f1, DEFAULT_F1_HZ), flo, fhi, "Hz")?;
+        // An option the chosen scenario does not use is refused, not silently ignored.
+        let (used_by, name) = match (&self.excitation, self.scenario) {
+            (Some(_), _) => (None, "--excitation".to_string()),
+            (None, Some(s)) => (Some(s), format!("--scenario {}", scenario_name(s))),
+            (None, None) => return Ok(()),
+        };
+        for (option, is_given, scenarios) in self.scenario_options() {
+            if is_given && !used_by.is_some_and(|s| scenarios.contains(&s)) {
+                let names: Vec<&str> = scenarios.iter().map(|&s| scenario_name(s)).collect();
+                return Err(OptionError(format!(
+                    "{option} is not used with {name}: it applies to --scenario {} only",
+                    names.join(" or ")
+                )));
+            }
+        }
         Ok(())
     }
 
-    fn run(&self) -> Result<()> {
+    fn run(&self) -> Result<Outcome> {
         let SimulateArgs {
             model: kind,
             preset,
@@ -111,8 +150,17 @@ impl Run for SimulateArgs {
             rate,
             out,
         } = self;
-        let (kind, seed, freq, amp, f0, f1, rate) = (*kind, *seed, *freq, *amp, *f0, *f1, *rate);
-        // Every numeric option has been checked by validate.
+        let (kind, rate) = (*kind, *rate);
+        let seed = seed.unwrap_or(DEFAULT_SEED);
+        let freq = freq.unwrap_or(DEFAULT_FREQ_HZ);
+        let amp = amp.unwrap_or(DEFAULT_AMP_V);
+        let (f0, f1) = (f0.unwrap_or(DEFAULT_F0_HZ), f1.unwrap_or(DEFAULT_F1_HZ));
+        // Every numeric option has been checked by validate; no input is overwritten.
+        let mut inputs: Vec<(&str, &std::path::Path)> = Vec::new();
+        inputs.extend(excitation.as_deref().map(|p| ("--excitation", p)));
+        let preset_file = preset_file(preset);
+        inputs.extend(preset_file.as_deref().map(|p| ("--preset", p)));
+        check_output_is_not_an_input(out, &inputs)?;
         let params = load_params(preset)?;
         let mut warnings: Vec<String> = Vec::new();
         let mut peak_input: Option<String> = None;
@@ -246,32 +294,48 @@ impl Run for SimulateArgs {
                 std::time::Duration::from_secs(10),
             )
         });
-        let summary = match spec.write_csv(out, &comments) {
-            Ok(s) => s,
-            Err(CsvRunError::Sim(e)) => {
-                return Err(
-                    anyhow::Error::new(e).context(match (excitation, peak_input) {
-                        (Some(path), Some(peak)) => format!(
-                            "the run on the excitation record {} diverged; {peak}: is the \
+        let summary =
+            match spec.write_csv(out, &comments) {
+                Ok(s) => s,
+                Err(CsvRunError::Sim(e)) => {
+                    return Err(
+                        anyhow::Error::new(e).context(match (excitation, peak_input) {
+                            (Some(path), Some(peak)) => format!(
+                                "the run on the excitation record {} diverged; {peak}: is the \
                              record in SI units (m, m/s²)?",
-                            path.display()
-                        ),
-                        (Some(path), None) => format!(
-                            "the run on the excitation record {} diverged",
-                            path.display()
-                        ),
-                        (None, _) => format!(
-                            "the {label} run diverged (preset {preset}, --rate {})",
-                            fmt_value(rate)
-                        ),
-                    }),
-                );
-            }
-            Err(CsvRunError::Io(e)) => {
-                return Err(anyhow::Error::new(e))
-                    .with_context(|| format!("writing {}", out.display()));
-            }
-        };
+                                path.display()
+                            ),
+                            (Some(path), None) => format!(
+                                "the run on the excitation record {} diverged",
+                                path.display()
+                            ),
+                            (None, _) => format!(
+                                "the {label} run diverged (preset {preset}, --rate {})",
+                                fmt_value(rate)
+                            ),
+                        }),
+                    );
+                }
+                // A value beyond what a record holds (the writer's bounds) comes from the run's
+                // input, not from the output file.
+                Err(CsvRunError::Io(e)) if e.kind() == std::io::ErrorKind::InvalidInput => {
+                    return Err(anyhow::Error::new(e).context(match (excitation, peak_input) {
+                    (Some(path), Some(peak)) => format!(
+                        "the run on the excitation record {} left the range a record holds, \
+                         so nothing was written; {peak}: is the record in SI units (m, m/s²)?",
+                        path.display()
+                    ),
+                    _ => format!(
+                        "the {label} run left the range a record holds, so nothing was \
+                         written (preset {preset})"
+                    ),
+                }));
+                }
+                Err(CsvRunError::Io(e)) => {
+                    return Err(anyhow::Error::new(e))
+                        .with_context(|| format!("writing {}", out.display()));
+                }
+            };
         drop(heartbeat);
         report_contacts(kind, &summary.contacts);
         println!(
@@ -280,7 +344,18 @@ impl Run for SimulateArgs {
             kind.name(),
             out.display()
         );
-        Ok(())
+        Ok(Outcome::Done)
+    }
+}
+
+/// The scenario's name as on the command line.
+fn scenario_name(s: ScenarioArg) -> &'static str {
+    match s {
+        ScenarioArg::Cycloid => "cycloid",
+        ScenarioArg::Random => "random",
+        ScenarioArg::Sine => "sine",
+        ScenarioArg::Chirp => "chirp",
+        ScenarioArg::Class => "class",
     }
 }
 

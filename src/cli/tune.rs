@@ -1,6 +1,11 @@
 //! `seat-twin tune`: a controller's gains tuned on the twin, the result into a folder.
 
-use super::{Run, check_range, find_class, load_params};
+use super::{
+    OptionError, Outcome, Run, announce, check_range, estimate_wall_s, find_class, load_params,
+};
+use crate::fsutil::OutputDir;
+use crate::model::ModelKind;
+use crate::params::fmt_value;
 use crate::tune;
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
@@ -9,7 +14,7 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct TuneArgs {
     /// Preset file or shipped preset name (its plant, and its gains as the start).
-    #[arg(long, default_value = "paper")]
+    #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
     /// Controller structure: paper, predictive, skyhook or smith (default: the preset's).
     #[arg(long)]
@@ -23,7 +28,7 @@ pub struct TuneArgs {
     /// Number of tuning rides (seeds 1..=N); as many held-out rides use seeds 101...
     #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
     pub seeds: i64,
-    /// Duration of each ride [s], 5..=600.
+    /// Duration of each ride [s], 5..=600 (20..=600 with `--excitation class:NAME`).
     #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
     pub duration: f64,
     /// Optimise the worst case over Cd ±10 %, τ ±3 ms, mass ±20 %.
@@ -37,18 +42,83 @@ pub struct TuneArgs {
     pub out: PathBuf,
 }
 
+/// Allowed `--seeds`.
+const SEEDS_RANGE: (f64, f64) = (1.0, 20.0);
+/// Allowed `--duration` [s] with `--excitation ride`.
+const DURATION_RANGE_S: (f64, f64) = (5.0, 600.0);
+/// Allowed `--evaluations`.
+const EVALUATIONS_RANGE: (f64, f64) = (10.0, 10_000.0);
+
+impl TuneArgs {
+    /// The tuning input named by `--excitation`.
+    fn input(&self) -> Result<tune::TuneInput> {
+        match self.excitation.as_str() {
+            "ride" => Ok(tune::TuneInput::Ride),
+            other => match other.strip_prefix("class:") {
+                Some(name) => Ok(tune::TuneInput::Class(find_class(name)?)),
+                None => bail!(
+                    "--excitation {other}: expected `ride` or `class:NAME` (classes: {})",
+                    crate::seat_test::classes::names()
+                ),
+            },
+        }
+    }
+}
+
 impl Run for TuneArgs {
-    fn run(&self) -> Result<()> {
+    fn validate(&self) -> Result<(), OptionError> {
+        let option = |e: anyhow::Error| OptionError(e.to_string());
+        if let Some(k) = &self.controller {
+            k.parse::<crate::params::ControllerKind>()
+                .map_err(|e| OptionError(e.to_string()))?;
+        }
+        self.objective
+            .parse::<tune::Objective>()
+            .map_err(|e| OptionError(e.to_string()))?;
+        let input = self.input().map_err(option)?;
+        check_range(
+            "--seeds",
+            self.seeds as f64,
+            SEEDS_RANGE.0,
+            SEEDS_RANGE.1,
+            "",
+        )?;
+        let (lo, hi) = DURATION_RANGE_S;
+        check_range("--duration", self.duration, lo, hi, "s")?;
+        if let tune::TuneInput::Class(class) = input {
+            // A class record has its own shortest length (the fades and the spectrum).
+            if let Err(crate::seat_test::signal::SignalError::OutOfRange { min, max, .. }) =
+                crate::seat_test::ClassMotion::new(class, self.duration).validate()
+            {
+                check_range(
+                    "--duration",
+                    self.duration,
+                    min.max(lo),
+                    max.min(hi),
+                    &format!("s with --excitation {}", self.excitation),
+                )?;
+            }
+        }
+        check_range(
+            "--evaluations",
+            self.evaluations as f64,
+            EVALUATIONS_RANGE.0,
+            EVALUATIONS_RANGE.1,
+            "",
+        )
+    }
+
+    fn run(&self) -> Result<Outcome> {
         let TuneArgs {
             preset,
             controller,
             objective,
-            excitation,
             seeds,
             duration,
             robust,
             evaluations,
             out,
+            ..
         } = self;
         let (seeds, duration, robust, evaluations) = (*seeds, *duration, *robust, *evaluations);
         let params = load_params(preset)?;
@@ -57,20 +127,7 @@ impl Run for TuneArgs {
             None => params.controller.kind,
         };
         let objective: tune::Objective = objective.parse().map_err(anyhow::Error::msg)?;
-        let input = match excitation.as_str() {
-            "ride" => tune::TuneInput::Ride,
-            other => match other.strip_prefix("class:") {
-                Some(name) => tune::TuneInput::Class(find_class(name)?),
-                None => bail!(
-                    "--excitation {other}: expected `ride` or `class:NAME` (classes: {})",
-                    crate::seat_test::classes::names()
-                ),
-            },
-        };
-        check_range("--seeds", seeds as f64, 1.0, 20.0, "")?;
-        check_range("--duration", duration, 5.0, 600.0, "s")?;
-        check_range("--evaluations", evaluations as f64, 10.0, 10_000.0, "")?;
-        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+        let input = self.input()?;
         let n = seeds as u64;
         let opts = tune::TuneOptions {
             kind,
@@ -82,6 +139,11 @@ impl Run for TuneArgs {
             robust,
             max_evaluations: evaluations as usize,
         };
+        // The whole set is written into a hidden folder beside --out and moved into place at
+        // the end: an error or a signal leaves --out as it was. Creating it now checks that
+        // --out is writable before the long search.
+        let out_dir = OutputDir::create(out)
+            .with_context(|| format!("cannot write the results into {}", out.display()))?;
         let started = std::time::Instant::now();
         eprintln!(
             "tuning {kind} for {} on {n} ride(s) of {duration:.0} s of {} (held out: {n}){}",
@@ -93,11 +155,43 @@ impl Run for TuneArgs {
                 ""
             }
         );
-        let result = tune::tune(&params, &opts, None)?;
+        // Each evaluation runs every ride on every plant (9 of the spread when robust); then
+        // the start, the held-out rides and the 27-plant robustness table.
+        let plants = if robust { 9.0 } else { 1.0 };
+        let rides = n as f64 * duration;
+        let simulated = (evaluations as f64 + 1.0) * plants * rides + 2.0 * rides + 27.0 * rides;
+        let heartbeat = announce(
+            "tune",
+            &format!(
+                "at most {evaluations} evaluations of {} twin run(s) of {} s each, {} s \
+                 simulated in all",
+                n as f64 * plants,
+                fmt_value(duration),
+                fmt_value(simulated.round())
+            ),
+            estimate_wall_s(ModelKind::Twin, simulated, params.numerics.max_step_s),
+        );
+        let last = std::sync::Mutex::new(std::time::Instant::now());
+        let progress: tune::Progress = std::sync::Arc::new(move |done, budget| {
+            if let Ok(mut l) = last.lock()
+                && (l.elapsed().as_secs_f64() >= 10.0 || done == budget)
+            {
+                eprintln!(
+                    "[{:6.0} s] tune: evaluation {done} of at most {budget}",
+                    started.elapsed().as_secs_f64()
+                );
+                *l = std::time::Instant::now();
+            }
+        });
+        let result = tune::tune_observed(&params, &opts, None, Some(progress))?;
+        drop(heartbeat);
         let wall = started.elapsed().as_secs_f64();
         let mut start = params;
         start.controller.kind = kind;
-        let files = tune::report::write_outputs(&result, &start, out, wall)?;
+        let files = tune::report::write_outputs(&result, &start, out_dir.path(), wall)?;
+        out_dir
+            .commit()
+            .with_context(|| format!("moving the results into {}", out.display()))?;
         let unit = objective.unit();
         println!(
             "{}: start {:.4} {unit} -> tuned {:.4} {unit} (held out {:.4} -> {:.4}); {} evaluations in {wall:.1} s",
@@ -119,6 +213,6 @@ impl Run for TuneArgs {
             result.tuned.contacts
         );
         println!("wrote {} files to {}", files.len(), out.display());
-        Ok(())
+        Ok(Outcome::Done)
     }
 }

@@ -397,10 +397,11 @@ fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
             if let Some(d) = duration {
                 prop_assert!(in_range(*d, r("--duration")), "duration {}", d);
             }
-            prop_assert!(in_range(*freq, r("--freq")), "freq {}", freq);
-            prop_assert!(in_range(*amp, r("--amp")), "amp {}", amp);
-            prop_assert!(in_range(*f0, r("--f0")), "f0 {}", f0);
-            prop_assert!(in_range(*f1, r("--f1")), "f1 {}", f1);
+            for (name, v) in [("--freq", freq), ("--amp", amp), ("--f0", f0), ("--f1", f1)] {
+                if let Some(v) = v {
+                    prop_assert!(in_range(*v, r(name)), "{} {}", name, v);
+                }
+            }
         }
         Command::Bode(cli::BodeArgs { amp, sweep, .. }) => {
             prop_assert!(in_range(
