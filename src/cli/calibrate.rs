@@ -1,6 +1,6 @@
 //! `seat-twin calibrate`: the twin calibrated on measured records, its report into a folder.
 
-use super::{Outcome, Run, announce, estimate_wall_s, load_params};
+use super::{Outcome, RowCost, Run, announce, check_record_memory, estimate_wall_s, load_params};
 use crate::dataset::{self, RecordKind};
 use crate::fsutil::OutputDir;
 use crate::identify;
@@ -9,9 +9,16 @@ use crate::params::fmt_value;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
+/// Peak memory of a calibration per record row: measured 1240 bytes a row on a 200 000-row
+/// record of 3 columns (`/usr/bin/time -v`); the columns' share is an estimate.
+const MEMORY: RowCost = RowCost {
+    row: 1100,
+    column: 50,
+};
+
 /// Replays of a typical calibration (the stages, the Jacobians and the effect search), the
 /// basis of the up-front estimate; the count of a run is printed with its stages.
-const TYPICAL_REPLAYS: usize = 150;
+const TYPICAL_REPLAYS: usize = 100;
 
 /// Options of `seat-twin calibrate`.
 #[derive(Debug, clap::Args)]
@@ -30,6 +37,8 @@ pub struct CalibrateArgs {
 impl Run for CalibrateArgs {
     fn run(&self) -> Result<Outcome> {
         let Self { data, preset, out } = self;
+        let files: Vec<&std::path::Path> = data.iter().map(|p| p.as_path()).collect();
+        check_record_memory("calibrate", &files, MEMORY)?;
         let params = load_params(preset)?;
         let records = data
             .iter()

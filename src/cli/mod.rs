@@ -400,3 +400,102 @@ pub fn check_sample_count(samples: u64, duration: f64, rate: f64) -> Result<(), 
     }
     Ok(())
 }
+
+/// The most memory this process may use [bytes] and what sets it: the smallest of the
+/// address-space limit (`ulimit -v`), the cgroup's memory limit and the memory available on
+/// the machine (Linux); `None` when none is known.
+pub fn memory_limit() -> Option<(u64, &'static str)> {
+    let mut limits: Vec<(u64, &'static str)> = Vec::new();
+    #[cfg(unix)]
+    {
+        let mut r = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: getrlimit writes into the struct it is given and reads nothing else.
+        if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } == 0
+            && r.rlim_cur != libc::RLIM_INFINITY
+        {
+            // `rlim_t` is u64 on Linux and the BSDs.
+            #[allow(clippy::useless_conversion)]
+            let cur = u64::from(r.rlim_cur);
+            limits.push((cur, "the address-space limit (ulimit -v)"));
+        }
+    }
+    let read = |p: &str| std::fs::read_to_string(p).ok();
+    if let Some(v) = read("/sys/fs/cgroup/memory.max").and_then(|t| t.trim().parse().ok()) {
+        limits.push((v, "the cgroup's memory.max"));
+    }
+    if let Some(kb) = read("/proc/meminfo").and_then(|t| {
+        t.lines()
+            .find_map(|l| l.strip_prefix("MemAvailable:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+    }) {
+        limits.push((kb * 1024, "the memory available on this machine"));
+    }
+    limits.into_iter().min_by_key(|l| l.0)
+}
+
+/// Data rows of a record file and its header's fields, estimated from the file's size and
+/// the length of its first lines.
+fn estimated_rows(path: &std::path::Path) -> Option<(u64, u64)> {
+    use std::io::Read;
+    let size = std::fs::metadata(path).ok()?.len();
+    let mut head = Vec::new();
+    crate::fsutil::open_input(path)
+        .ok()?
+        .take(64 * 1024)
+        .read_to_end(&mut head)
+        .ok()?;
+    let lines: Vec<&[u8]> = head
+        .split(|&b| b == b'\n')
+        .filter(|l| !l.is_empty() && l[0] != b'#')
+        .collect();
+    let fields = lines.first()?.iter().filter(|&&b| b == b',').count() as u64 + 1;
+    // The last piece may be cut; the header is not a row.
+    let rows = lines.len().saturating_sub(2).max(1);
+    let bytes: usize = lines.iter().skip(1).take(rows).map(|l| l.len() + 1).sum();
+    Some((size / (bytes as u64 / rows as u64).max(1), fields))
+}
+
+/// Memory a job holds per record row [bytes]: `row` plus `column` for each of the header's
+/// fields (measured peaks, see the README's CLI section).
+#[derive(Debug, Clone, Copy)]
+pub struct RowCost {
+    /// Bytes a row whatever its columns.
+    pub row: u64,
+    /// Bytes a row for each column.
+    pub column: u64,
+}
+
+/// Refuses up front a job on records whose rows would need more memory than this process may
+/// use ([`memory_limit`]): the message states the rows, the estimate and the limit, instead
+/// of an allocation failure part-way through.
+pub fn check_record_memory(
+    what: &str,
+    files: &[&std::path::Path],
+    cost: RowCost,
+) -> Result<(), OptionError> {
+    let Some((limit, source)) = memory_limit() else {
+        return Ok(());
+    };
+    let (mut rows, mut need) = (0, BASE_MEMORY_BYTES);
+    for (r, fields) in files.iter().filter_map(|f| estimated_rows(f)) {
+        rows += r;
+        need += r * (cost.row + cost.column * fields);
+    }
+    if need > limit {
+        let mb = |b: u64| fmt_value((b as f64 / 1e6).round());
+        return Err(OptionError(format!(
+            "{what} on about {} thousand record rows would need about {} MB, over the {} MB \
+             of {source}; split the record or shorten it",
+            fmt_value((rows as f64 / 1e3).round()),
+            mb(need),
+            mb(limit)
+        )));
+    }
+    Ok(())
+}
+
+/// Memory of the process before any record is read [bytes] (the binary, the threads).
+const BASE_MEMORY_BYTES: u64 = 50_000_000;

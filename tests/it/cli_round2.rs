@@ -595,3 +595,46 @@ fn an_option_the_scenario_does_not_use_is_refused() {
     }
     assert!(!Path::new("never.csv").exists());
 }
+
+// ---------------------------------------------------------------------------------------------
+// 7. Memory.
+
+/// Before: a record too large for the memory the process may use aborted part-way with
+/// "memory allocation of … bytes failed", exit 134, and calibrate left its hidden `.cal.*.tmp`
+/// folder. Now the job is refused up front with the estimate and the limit, and nothing is
+/// left. (Under a 250 MB address-space limit: a million rows.)
+#[cfg(target_os = "linux")]
+#[test]
+fn a_record_too_large_for_the_memory_limit_is_refused_up_front() {
+    let dir = tmp();
+    let rec = dir.path().join("long.csv");
+    crate::cli_hardening::measured_record(&rec, 1000.0, 0.5, 0.001);
+    let out = dir.path().join("o.csv");
+    let cal = dir.path().join("cal");
+    for (args, what) in [
+        (
+            vec!["replay", "--data", s(&rec), "--out", s(&out)],
+            "replay",
+        ),
+        (
+            vec!["calibrate", "--data", s(&rec), "--out", s(&cal)],
+            "calibrate",
+        ),
+    ] {
+        let o = std::process::Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 250000 && exec \"$0\" \"$@\"")
+            .arg(env!("CARGO_BIN_EXE_seat-twin"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(&format!("error: {what} on about")), "{err}");
+        assert!(
+            err.contains("MB, over the 256 MB of the address-space limit (ulimit -v)"),
+            "{err}"
+        );
+        assert_eq!(entry_count(dir.path()), 1, "something was left: {err}");
+    }
+}
