@@ -599,42 +599,41 @@ fn an_option_the_scenario_does_not_use_is_refused() {
 // ---------------------------------------------------------------------------------------------
 // 7. Memory.
 
-/// Before: a record too large for the memory the process may use aborted part-way with
-/// "memory allocation of … bytes failed", exit 134, and calibrate left its hidden `.cal.*.tmp`
-/// folder. Now the job is refused up front with the estimate and the limit, and nothing is
-/// left. (Under a 250 MB address-space limit: a million rows.)
+/// Before: under a 250 MB address-space limit, `replay` and `calibrate` of a million-row
+/// record aborted part-way with "memory allocation of … bytes failed", exit 134, and
+/// calibrate left its hidden `.cal.*.tmp` folder. Now `replay` streams the twin's channels
+/// to the file and runs within the limit (the same file as an unlimited run), and `calibrate`
+/// is refused up front with its estimate and the limit, leaving nothing.
 #[cfg(target_os = "linux")]
 #[test]
-fn a_record_too_large_for_the_memory_limit_is_refused_up_front() {
+fn a_million_row_record_under_a_memory_limit_replays_or_is_refused_up_front() {
     let dir = tmp();
     let rec = dir.path().join("long.csv");
     crate::cli_hardening::measured_record(&rec, 1000.0, 0.5, 0.001);
-    let out = dir.path().join("o.csv");
-    let cal = dir.path().join("cal");
-    for (args, what) in [
-        (
-            vec!["replay", "--data", s(&rec), "--out", s(&out)],
-            "replay",
-        ),
-        (
-            vec!["calibrate", "--data", s(&rec), "--out", s(&cal)],
-            "calibrate",
-        ),
-    ] {
-        let o = std::process::Command::new("sh")
+    let limited = |args: &[&str]| {
+        std::process::Command::new("sh")
             .arg("-c")
             .arg("ulimit -v 250000 && exec \"$0\" \"$@\"")
             .arg(env!("CARGO_BIN_EXE_seat-twin"))
-            .args(&args)
+            .args(args)
             .output()
-            .unwrap();
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
-        assert!(err.contains(&format!("error: {what} on about")), "{err}");
-        assert!(
-            err.contains("MB, over the 256 MB of the address-space limit (ulimit -v)"),
-            "{err}"
-        );
-        assert_eq!(entry_count(dir.path()), 1, "something was left: {err}");
-    }
+            .unwrap()
+    };
+    let out = dir.path().join("o.csv");
+    let o = limited(&["replay", "--data", s(&rec), "--out", s(&out)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let free = dir.path().join("free.csv");
+    let o = run(&["replay", "--data", s(&rec), "--out", s(&free)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read(&out).unwrap() == std::fs::read(&free).unwrap());
+    let cal = dir.path().join("cal");
+    let o = limited(&["calibrate", "--data", s(&rec), "--out", s(&cal)]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("error: calibrate on about"), "{err}");
+    assert!(
+        err.contains("MB, over the 256 MB of the address-space limit (ulimit -v)"),
+        "{err}"
+    );
+    assert_eq!(entry_count(dir.path()), 3, "something was left: {err}");
 }
