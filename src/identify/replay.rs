@@ -198,11 +198,12 @@ fn replay_samples(
     let every = (dt / h).round().max(1.0) as u64;
     let t_end = (len.saturating_sub(1)) as f64 * dt;
     let mut done = 0;
-    let mut last = None;
+    // The state at rest until the run records its first sample (which it always does, at 0).
+    let mut last = sim.sample();
     sim.run_until(t_end, every, |s| {
         if done < len {
             sink(s);
-            last = Some(s);
+            last = s;
             done += 1;
         }
     })
@@ -212,25 +213,9 @@ fn replay_samples(
     })?;
     // Pad (rounding of the last step) so the channels align with the record exactly.
     for i in done..len {
-        let t = i as f64 * dt;
-        sink(match last {
-            Some(s) => Sample { t, ..s },
-            None => Sample {
-                t,
-                x: 0.0,
-                xd: 0.0,
-                xdd: 0.0,
-                u: 0.0,
-                du: 0.0,
-                ydd: 0.0,
-                v_in: 0.0,
-                xv: 0.0,
-                p1: 0.0,
-                p2: 0.0,
-                q1: 0.0,
-                q2: 0.0,
-                contact: false,
-            },
+        sink(Sample {
+            t: i as f64 * dt,
+            ..last
         });
     }
     Ok(())

@@ -6,8 +6,19 @@ use crate::cli::{bin, run, stderr, tmp};
 use crate::cli_hardening::{entry_count, measured_record, run_within, s};
 use std::io::Read;
 use std::path::Path;
-use std::process::Stdio;
+use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
+
+/// Checks that a run failed with exit code `code` and that its stderr says each of `said`;
+/// returns the stderr.
+fn refused(o: &Output, code: i32, said: &[&str]) -> String {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(code), "{err}");
+    for s in said {
+        assert!(err.contains(s), "{s:?} not in {err}");
+    }
+    err
+}
 
 /// A short excitation record (`t, x`) of `secs` s at 1 kHz, a 2 Hz sine of 5 mm.
 fn excitation_record(path: &Path, secs: f64) {
@@ -171,13 +182,10 @@ fn tune_on_a_class_too_short_fails_before_creating_out() {
         "--out",
         s(&out),
     ]);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains(
-            "--duration 10 is outside the allowed range [20, 600] s with --excitation class:AG1"
-        ),
-        "{err}"
+    refused(
+        &o,
+        1,
+        &["--duration 10 is outside the allowed range [20, 600] s with --excitation class:AG1"],
     );
     assert!(!out.exists(), "--out was created");
     assert_eq!(entry_count(dir.path()), 0);
@@ -325,14 +333,13 @@ fn a_run_leaving_the_bounds_names_the_excitation_not_the_output() {
         "--out",
         s(&out),
     ]);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains(&format!(
+    let err = refused(
+        &o,
+        1,
+        &[&format!(
             "the run on the excitation record {}",
             exc.display()
-        )),
-        "{err}"
+        )],
     );
     assert!(err.contains("its column \"xdd\" peaks at"), "{err}");
     assert!(!err.contains("writing"), "{err}");
@@ -363,9 +370,7 @@ fn a_step_limit_below_the_smallest_step_is_not_an_empty_range() {
         "--out",
         s(&out),
     ]);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains(s(&preset)), "{err}");
+    let err = refused(&o, 1, &[s(&preset)]);
     assert!(
         err.contains("`numerics.max_step_s` has no allowed value with these parameters"),
         "{err}"
@@ -392,11 +397,10 @@ fn the_seat_test_duration_range_is_the_one_that_runs() {
         "--out",
         s(&out),
     ]);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("--duration 20 is outside the allowed range [20.384, 3600] s"),
-        "{err}"
+    refused(
+        &o,
+        1,
+        &["--duration 20 is outside the allowed range [20.384, 3600] s"],
     );
     assert!(!out.exists());
     let o = run(&[
@@ -430,9 +434,7 @@ fn a_negative_seed_names_the_option_and_its_range() {
         vec!["seat-test", "--class", "EM6", "--seed", "-1", "--out", "st"],
     ] {
         let o = run(&args);
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(2), "{err}");
-        assert!(err.contains("--seed"), "{err}");
+        let err = refused(&o, 2, &["--seed"]);
         assert!(
             err.contains("is not a whole number in the allowed range [0, 18446744073709551615]"),
             "{err}"
@@ -459,12 +461,7 @@ fn a_divergence_in_bench_or_report_names_the_preset_and_the_run() {
         ),
     ] {
         let o = run_within(&args, Duration::from_secs(120)).expect("ends within 2 min");
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
-        assert!(
-            err.contains(&format!("{run_named} {}", preset.display())),
-            "{err}"
-        );
+        let err = refused(&o, 1, &[&format!("{run_named} {}", preset.display())]);
         assert!(err.contains("diverged"), "{err}");
     }
     assert!(!out.exists());
@@ -494,9 +491,7 @@ fn a_link_loop_or_an_empty_preset_is_named_for_what_it_is() {
         ])
     };
     let o = sim(s(&a));
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains(s(&a)), "{err}");
+    let err = refused(&o, 1, &[s(&a)]);
     assert!(err.to_lowercase().contains("symbolic links"), "{err}");
     assert!(!err.contains("no such preset file"), "{err}");
     let o = sim("");
@@ -531,9 +526,7 @@ fn a_non_utf8_preset_path_names_the_option() {
         .arg(std::ffi::OsStr::from_bytes(b"p\xff.toml"))
         .output()
         .unwrap();
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("--preset"), "{err}");
+    let err = refused(&o, 2, &["--preset"]);
     assert!(err.contains("is not valid UTF-8"), "{err}");
 }
 
@@ -554,9 +547,7 @@ fn cr_only_line_ends_are_named() {
         "--out",
         s(&out),
     ]);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains(s(&exc)), "{err}");
+    let err = refused(&o, 1, &[s(&exc)]);
     assert!(
         err.contains("line 1: a carriage return (CR) with no line feed after it"),
         "{err}"
@@ -589,9 +580,7 @@ fn an_option_the_scenario_does_not_use_is_refused() {
         let mut all = vec!["simulate", "--model", "linear", "--out", "never.csv"];
         all.extend(args);
         let o = run(&all);
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{all:?}: {err}");
-        assert!(err.contains(expected), "{err}");
+        refused(&o, 1, &[expected]);
     }
     assert!(!Path::new("never.csv").exists());
 }
@@ -628,9 +617,7 @@ fn a_million_row_record_under_a_memory_limit_replays_or_is_refused_up_front() {
     assert!(std::fs::read(&out).unwrap() == std::fs::read(&free).unwrap());
     let cal = dir.path().join("cal");
     let o = limited(&["calibrate", "--data", s(&rec), "--out", s(&cal)]);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("error: calibrate on about"), "{err}");
+    let err = refused(&o, 1, &["error: calibrate on about"]);
     assert!(
         err.contains("MB, over the 256 MB of the address-space limit (ulimit -v)"),
         "{err}"
