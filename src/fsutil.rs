@@ -269,6 +269,67 @@ fn move_entries(from: &Path, to: &Path) -> io::Result<()> {
     Ok(())
 }
 
+/// Opens an input file for reading without ever blocking: a named pipe (FIFO) or a socket is
+/// refused by its type before it is opened (opening a FIFO with no writer blocks forever), and
+/// on Unix the file is opened non-blocking, so a device with nothing to read fails at once
+/// instead of hanging. Directories are left to the caller, whose message names what it wanted.
+pub fn open_input(path: &Path) -> io::Result<std::fs::File> {
+    let meta = std::fs::metadata(path)?;
+    if let Some(kind) = special_kind(&meta) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("is {kind}, not a regular file: give a file"),
+        ));
+    }
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        // O_NONBLOCK: ignored by regular files, makes a device's empty read fail at once.
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    options.open(path)
+}
+
+/// "a named pipe (FIFO)" or "a socket" for the file types that block a reader; `None` else.
+fn special_kind(meta: &std::fs::Metadata) -> Option<&'static str> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = meta.file_type();
+        if t.is_fifo() {
+            return Some("a named pipe (FIFO)");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = meta;
+    None
+}
+
+/// Whether `output` names the same file as `input` (the same path after resolving links, or
+/// the same inode through a hard link). `false` when `output` does not exist yet.
+pub fn same_file(input: &Path, output: &Path) -> bool {
+    let (Ok(a), Ok(b)) = (std::fs::metadata(input), std::fs::metadata(output)) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if a.dev() == b.dev() && a.ino() == b.ino() {
+            return true;
+        }
+    }
+    let _ = (a, b);
+    match (std::fs::canonicalize(input), std::fs::canonicalize(output)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
 /// 1-based line and column of byte offset `at` in a file's bytes, for messages that point into
 /// a file. The column counts characters (a byte that is not valid UTF-8 counts as one); an
 /// offset inside a character points at that character; one past the end is allowed.

@@ -314,7 +314,7 @@ impl Preset {
             file: path.to_path_buf(),
             error,
         };
-        let file = std::fs::File::open(path).map_err(io)?;
+        let file = crate::fsutil::open_input(path).map_err(io)?;
         let meta = file.metadata().map_err(io)?;
         if meta.is_dir() {
             return Err(io(std::io::Error::new(
@@ -369,28 +369,34 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 
 /// Loads a preset given as a path or as the name of a shipped preset (`paper`,
 /// `paper-initial`, `consistent-delay`), looked up in `presets/` next to the working
-/// directory or the executable.
+/// directory or the executable ([`locate`]).
 pub fn resolve(name_or_path: &str) -> Result<Preset, PresetError> {
+    match locate(name_or_path) {
+        Some(path) => Preset::load(&path),
+        None if name_or_path == "paper" => Ok(Preset::paper()),
+        None => Err(PresetError::Io {
+            file: PathBuf::from(name_or_path),
+            error: std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "no such preset file, and no shipped preset of that name in presets/",
+            ),
+        }),
+    }
+}
+
+/// The file [`resolve`] reads for `name_or_path`: the path itself when something is there
+/// (a dangling link or a link loop included, so that its own error is told rather than "no
+/// such file"), else `presets/NAME.toml` in the first of [`preset_dirs`] that has it; `None`
+/// when neither exists (the built-in `paper` preset needs no file).
+pub fn locate(name_or_path: &str) -> Option<PathBuf> {
     let direct = Path::new(name_or_path);
-    if direct.exists() {
-        return Preset::load(direct);
+    if std::fs::symlink_metadata(direct).is_ok() {
+        return Some(direct.to_path_buf());
     }
-    for dir in preset_dirs() {
-        let candidate = dir.join(format!("{name_or_path}.toml"));
-        if candidate.exists() {
-            return Preset::load(&candidate);
-        }
-    }
-    if name_or_path == "paper" {
-        return Ok(Preset::paper());
-    }
-    Err(PresetError::Io {
-        file: direct.to_path_buf(),
-        error: std::io::Error::new(
-            std::io::ErrorKind::NotFound,
-            "no such preset file, and no shipped preset of that name in presets/",
-        ),
-    })
+    preset_dirs()
+        .into_iter()
+        .map(|dir| dir.join(format!("{name_or_path}.toml")))
+        .find(|candidate| candidate.exists())
 }
 
 /// Directories searched for shipped presets: `./presets`, the crate's `presets/` (when run

@@ -35,6 +35,28 @@ fn dwell_periods(freq_hz: f64, opt: &DwellOptions) -> usize {
     ((opt.min_window_s * freq_hz).ceil() as usize).max(2)
 }
 
+/// Simulated time of one [`simulated_bode`] dwell [s]: the settling time and the whole
+/// periods of the analysis window (for cost estimates as well as the run).
+pub fn bode_dwell_s(freq_hz: f64, opt: &DwellOptions) -> f64 {
+    opt.settle_s + dwell_periods(freq_hz, opt) as f64 / freq_hz
+}
+
+/// Fade-in of a transmissibility dwell's platform sine [s].
+const TRANSMISSIBILITY_FADE_S: f64 = 1.0;
+
+fn transmissibility_periods(freq_hz: f64, opt: &DwellOptions) -> usize {
+    dwell_periods(freq_hz, opt).max(freq_hz.ceil() as usize)
+}
+
+/// Simulated time of one [`simulated_transmissibility`] dwell [s]: the fade-in, 2 s, the
+/// settling time and the analysis window.
+pub fn transmissibility_dwell_s(freq_hz: f64, opt: &DwellOptions) -> f64 {
+    TRANSMISSIBILITY_FADE_S
+        + 2.0
+        + opt.settle_s
+        + transmissibility_periods(freq_hz, opt) as f64 / freq_hz
+}
+
 /// `u̇/V_in` of a model by an open-loop sine dwell `V = A·cos(2πft)`, platform still.
 pub fn simulated_bode(
     params: &Params,
@@ -44,7 +66,7 @@ pub fn simulated_bode(
     opt: &DwellOptions,
 ) -> Result<Complex64, SimError> {
     let periods = dwell_periods(freq_hz, opt);
-    let t_end = opt.settle_s + periods as f64 / freq_hz;
+    let t_end = bode_dwell_s(freq_hz, opt);
     let rate = 1.0 / step_for_rate(params.numerics.max_step_s, 1.0 / params.numerics.max_step_s);
     let trace = experiments::valve_sine(params, kind, freq_hz, amplitude_v, t_end, rate)?;
     let dt = 1.0 / rate;
@@ -71,9 +93,9 @@ pub fn simulated_transmissibility(
 ) -> Result<Complex64, SimError> {
     let w = 2.0 * PI * freq_hz;
     let amp = dwell_platform_acceleration(freq_hz) / (w * w);
-    let periods = dwell_periods(freq_hz, opt).max((1.0 * freq_hz).ceil() as usize);
-    let fade = 1.0;
-    let t_end = fade + 2.0 + opt.settle_s + periods as f64 / freq_hz;
+    let periods = transmissibility_periods(freq_hz, opt);
+    let fade = TRANSMISSIBILITY_FADE_S;
+    let t_end = transmissibility_dwell_s(freq_hz, opt);
     let h = step_for_rate(params.numerics.max_step_s, 1000.0);
     let platform = PlatformMotion::Sine(PlatformSine {
         amplitude_m: amp,

@@ -29,6 +29,18 @@ pub enum DatasetError {
         /// Which byte, where, and a hint.
         detail: String,
     },
+    /// A carriage return with no line feed after it: CR-only (classic Mac) line ends, which
+    /// would make the whole file one line.
+    #[error(
+        "{file}: line {line}: a carriage return (CR) with no line feed after it: the file has \
+         CR-only line ends; save it with LF or CR LF line ends"
+    )]
+    LoneCarriageReturn {
+        /// The file.
+        file: PathBuf,
+        /// 1-based line (counting LF line ends) of the first lone CR.
+        line: usize,
+    },
     /// No header row, or no data row after it.
     #[error("{file}: {detail}")]
     Empty {

@@ -4,7 +4,6 @@ use super::columns::{COLUMNS, RecordKind, T, column_limit, column_unit};
 use super::error::{DatasetError, fmt_num, quote, shorten};
 use super::{MAX_FILE_BYTES, MAX_ROWS, Record, validate};
 use std::collections::HashMap;
-use std::fs::File;
 use std::io::{self, Read};
 use std::path::Path;
 
@@ -23,7 +22,7 @@ pub fn read_record(path: &Path, kind: RecordKind) -> Result<Record, DatasetError
         file: path.to_path_buf(),
         error,
     };
-    let file = File::open(path).map_err(io_err)?;
+    let file = crate::fsutil::open_input(path).map_err(io_err)?;
     let meta = file.metadata().map_err(io_err)?;
     if meta.is_dir() {
         return Err(io_err(io::Error::new(
@@ -146,6 +145,19 @@ impl LineMap {
     }
 }
 
+/// Byte offset of the first `\r` not followed by `\n`, if any.
+fn lone_carriage_return(bytes: &[u8]) -> Option<usize> {
+    let mut from = 0;
+    while let Some(i) = bytes[from..].iter().position(|&b| b == b'\r') {
+        let at = from + i;
+        if bytes.get(at + 1) != Some(&b'\n') {
+            return Some(at);
+        }
+        from = at + 1;
+    }
+    None
+}
+
 /// Parses a record from CSV text (see the [module docs](super) for the format); `path` is
 /// used in messages only.
 pub fn parse_record(text: &str, path: &Path, kind: RecordKind) -> Result<Record, DatasetError> {
@@ -168,6 +180,12 @@ pub(super) fn parse_with_row_limit(
         });
     }
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if let Some(at) = lone_carriage_return(text.as_bytes()) {
+        return Err(DatasetError::LoneCarriageReturn {
+            file: file(),
+            line: crate::fsutil::line_column(text.as_bytes(), at).0,
+        });
+    }
     let mut lines = text
         .split('\n')
         .enumerate()

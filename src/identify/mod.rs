@@ -343,7 +343,33 @@ pub fn calibrate_with(
         bic,
         notes,
     };
-    stages::report(params, found, options, &monitor)
+    let report = stages::report(params, found, options, &monitor)?;
+    Ok(refuse_undetermined(report))
+}
+
+/// The final fit's own uncertainty decides as the declared fit's does (issue 21): a Cd or τ
+/// that the final parameters leave undetermined ([`stages::undetermined`]: τ with 1-σ over
+/// 5 ms) means the twin is not calibrated — verdict `insufficient_data`, no calibrated.toml,
+/// and `missing` says which value and why.
+fn refuse_undetermined(mut report: CalibrationReport) -> CalibrationReport {
+    let undetermined: Vec<String> = report
+        .calibrated
+        .iter()
+        .filter(|v| stages::undetermined(v))
+        .map(|v| {
+            format!(
+                "excitation: the final fit does not determine `{}` ({}); nothing is \
+                 calibrated: record longer or larger command and platform motions",
+                v.name,
+                report::format_parameter(&v.name, v.value, v.std)
+            )
+        })
+        .collect();
+    if !undetermined.is_empty() {
+        report.verdict = Verdict::InsufficientData;
+        report.missing.extend(undetermined);
+    }
+    report
 }
 
 /// [`calibrate_with`] for callers that print the stage: `progress` gets it as text with the
@@ -370,6 +396,35 @@ pub fn calibrate(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 21, item 6: a τ the final fit leaves at 6.0 ± 20.9 ms (the issue's record) is
+    /// undetermined by the tool's own 5 ms rule: the verdict is `insufficient_data`, `missing`
+    /// names τ with its value, and no calibrated.toml is written. A determined τ is kept.
+    #[test]
+    fn an_undetermined_final_tau_is_insufficient_data() {
+        let rec = testdata::twin_record(&testdata::true_params(), 3.0, "a.csv");
+        let good = calibrate(&Params::paper(), &[rec], &Default::default(), &|_| true).unwrap();
+        assert_ne!(good.verdict, Verdict::InsufficientData);
+        assert_eq!(refuse_undetermined(good.clone()).verdict, good.verdict);
+        let mut bad = good;
+        let tau = bad
+            .calibrated
+            .iter_mut()
+            .find(|v| v.knob == Knob::Tau)
+            .expect("τ is calibrated");
+        (tau.value, tau.std) = (6.0e-3, 20.9e-3);
+        let bad = refuse_undetermined(bad);
+        assert_eq!(bad.verdict, Verdict::InsufficientData);
+        let said = bad.missing.last().expect("a missing entry");
+        assert!(
+            said.contains("`tau_s`") && said.contains("6.00 ± 20.90 ms"),
+            "{said}"
+        );
+        let dir = tempfile::tempdir().unwrap();
+        report::write_all(&bad, dir.path(), None).unwrap();
+        assert!(!dir.path().join("calibrated.toml").exists());
+        assert!(dir.path().join("report.md").exists());
+    }
 
     #[test]
     fn effect_names_round_trip_and_each_effect_has_its_knobs() {

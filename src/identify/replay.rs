@@ -40,7 +40,7 @@ use super::IdentifyError;
 use crate::dataset::Record;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, PlatformMotion, SampledMotion};
-use crate::simulation::{Drive, Run, Simulation, step_for_rate};
+use crate::simulation::{Drive, Run, Sample, Simulation, step_for_rate};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -143,6 +143,84 @@ impl SimChannels {
     }
 }
 
+/// The platform motion a record drives the twin's base with (its `xdd`, else its `x`,
+/// conditioned: see [`EXCITATION_CONDITIONING`]), and whether the platform moved at all.
+fn record_platform(record: &Record) -> (PlatformMotion, bool) {
+    let dt = record.dt;
+    // A platform channel that is indistinguishable from its own sensor noise means the
+    // platform was still: replaying that noise would only add noise to the twin.
+    let moving = |v: &Vec<f64>| {
+        let n = noise_rms(v, dt);
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        let dev: Vec<f64> = v.iter().map(|x| x - mean).collect();
+        rms(&dev) > 3.0 * n.max(1e-15)
+    };
+    let xdd = record.xdd.as_ref().filter(|v| moving(v));
+    let x = record.x.as_ref().filter(|v| moving(v));
+    match (xdd, x) {
+        (Some(xdd), _) => {
+            let m = SampledMotion::from_acceleration(dt, condition_excitation(xdd, dt));
+            let m = match &record.x {
+                Some(x) => m.with_reported_position(x.clone()),
+                None => m,
+            };
+            (PlatformMotion::Sampled(m), true)
+        }
+        (None, Some(x)) => (
+            PlatformMotion::Sampled(SampledMotion::from_position(
+                dt,
+                condition_excitation(x, dt),
+            )),
+            true,
+        ),
+        (None, None) => (PlatformMotion::Still, false),
+    }
+}
+
+/// Replays `len` samples at `dt` through the twin: `v_in` drives the valve in open loop and
+/// `platform` the base; every sample on the record's grid goes to `sink`, the last repeated
+/// (with its own time) if rounding of the last step left the run a sample short.
+fn replay_samples(
+    params: &Params,
+    dt: f64,
+    v_in: Arc<Vec<f64>>,
+    platform: PlatformMotion,
+    len: usize,
+    name: &str,
+    mut sink: impl FnMut(Sample),
+) -> Result<(), IdentifyError> {
+    let h = step_for_rate(
+        params.numerics.max_step_s.min(0.9 * params.step_limit_s()),
+        1.0 / dt,
+    );
+    let drive = Drive::OpenLoop(CommandSignal::Sampled { dt, values: v_in });
+    let mut sim = Simulation::twin(params, h, drive, platform);
+    let every = (dt / h).round().max(1.0) as u64;
+    let t_end = (len.saturating_sub(1)) as f64 * dt;
+    let mut done = 0;
+    // The state at rest until the run records its first sample (which it always does, at 0).
+    let mut last = sim.sample();
+    sim.run_until(t_end, every, |s| {
+        if done < len {
+            sink(s);
+            last = s;
+            done += 1;
+        }
+    })
+    .map_err(|e| IdentifyError::Simulation {
+        file: name.to_string(),
+        source: e,
+    })?;
+    // Pad (rounding of the last step) so the channels align with the record exactly.
+    for i in done..len {
+        sink(Sample {
+            t: i as f64 * dt,
+            ..last
+        });
+    }
+    Ok(())
+}
+
 /// A record made ready for repeated replays: inputs, filtered measured channels, weights.
 #[derive(Debug, Clone)]
 pub struct PreparedRecord {
@@ -208,34 +286,7 @@ impl PreparedRecord {
         let v_in = record.v_in.clone().ok_or_else(|| missing("v_in"))?;
         let u = record.u.clone().ok_or_else(|| missing("u"))?;
         let dt = record.dt;
-        // A platform channel that is indistinguishable from its own sensor noise means the
-        // platform was still: replaying that noise would only add noise to the twin.
-        let moving = |v: &Vec<f64>| {
-            let n = noise_rms(v, dt);
-            let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
-            let dev: Vec<f64> = v.iter().map(|x| x - mean).collect();
-            rms(&dev) > 3.0 * n.max(1e-15)
-        };
-        let xdd = record.xdd.as_ref().filter(|v| moving(v));
-        let x = record.x.as_ref().filter(|v| moving(v));
-        let (platform, platform_moves) = match (xdd, x) {
-            (Some(xdd), _) => {
-                let m = SampledMotion::from_acceleration(dt, condition_excitation(xdd, dt));
-                let m = match &record.x {
-                    Some(x) => m.with_reported_position(x.clone()),
-                    None => m,
-                };
-                (PlatformMotion::Sampled(m), true)
-            }
-            (None, Some(x)) => (
-                PlatformMotion::Sampled(SampledMotion::from_position(
-                    dt,
-                    condition_excitation(x, dt),
-                )),
-                true,
-            ),
-            (None, None) => (PlatformMotion::Still, false),
-        };
+        let (platform, platform_moves) = record_platform(record);
         let fs = 1.0 / dt;
         let lowpass_hz = opt.lowpass_hz.min(0.4 * fs);
         let decimate = ((fs / opt.eval_rate_hz).round() as usize).max(1);
@@ -327,16 +378,6 @@ impl PreparedRecord {
 
     /// Replays the record through the twin with `params`.
     pub fn simulate(&self, params: &Params) -> Result<SimChannels, IdentifyError> {
-        let h = step_for_rate(
-            params.numerics.max_step_s.min(0.9 * params.step_limit_s()),
-            1.0 / self.dt,
-        );
-        let drive = Drive::OpenLoop(CommandSignal::Sampled {
-            dt: self.dt,
-            values: self.v_in.clone(),
-        });
-        let mut sim = Simulation::twin(params, h, drive, self.platform.clone());
-        let every = (self.dt / h).round().max(1.0) as u64;
         let n = self.len;
         let mut out = SimChannels {
             t: Vec::with_capacity(n),
@@ -349,42 +390,18 @@ impl PreparedRecord {
             q1: Vec::with_capacity(n),
             q2: Vec::with_capacity(n),
         };
-        let t_end = self.duration_s();
-        sim.run_until(t_end, every, |s| {
-            if out.t.len() < n {
-                out.t.push(s.t);
-                out.u.push(s.u);
-                out.du.push(s.du);
-                out.ydd.push(s.ydd);
-                out.p1.push(s.p1);
-                out.p2.push(s.p2);
-                out.xv.push(s.xv);
-                out.q1.push(s.q1);
-                out.q2.push(s.q2);
-            }
-        })
-        .map_err(|e| IdentifyError::Simulation {
-            file: self.name.clone(),
-            source: e,
+        let (v_in, platform) = (self.v_in.clone(), self.platform.clone());
+        replay_samples(params, self.dt, v_in, platform, n, &self.name, |s| {
+            out.t.push(s.t);
+            out.u.push(s.u);
+            out.du.push(s.du);
+            out.ydd.push(s.ydd);
+            out.p1.push(s.p1);
+            out.p2.push(s.p2);
+            out.xv.push(s.xv);
+            out.q1.push(s.q1);
+            out.q2.push(s.q2);
         })?;
-        // Pad (rounding of the last step) so channels align with the record exactly.
-        while out.t.len() < n {
-            let i = out.t.len();
-            for v in [
-                &mut out.u,
-                &mut out.du,
-                &mut out.ydd,
-                &mut out.p1,
-                &mut out.p2,
-                &mut out.xv,
-                &mut out.q1,
-                &mut out.q2,
-            ] {
-                let last = v.last().copied().unwrap_or(0.0);
-                v.push(last);
-            }
-            out.t.push(i as f64 * self.dt);
-        }
         Ok(out)
     }
 
@@ -626,9 +643,121 @@ pub fn replay_prepared(params: &Params, rec: &PreparedRecord) -> Result<Replay, 
     })
 }
 
+/// Errors of a streamed replay ([`replay_streamed`]): the channel errors `seat-twin replay`
+/// prints, computed as [`ChannelErrors`] computes them over the whole record.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StreamedErrors {
+    /// Samples replayed.
+    pub samples: usize,
+    /// RMS error of the filtered relative velocity [m/s] ([`ChannelErrors::du`]).
+    pub du: f64,
+    /// The same divided by the RMS of the measured filtered velocity [-].
+    pub du_nrmse: f64,
+    /// RMS error of the relative displacement [m] ([`ChannelErrors::u`]).
+    pub u: f64,
+    /// RMS error of the filtered body acceleration [m/s²], if measured.
+    pub ydd: Option<f64>,
+}
+
+/// [`replay`] of a long record in bounded memory: every sample of the twin goes to `sample`
+/// with the record's own time as it is made (for a CSV written row by row), and only what the
+/// errors need is kept (the twin's `u`, and `ÿ` when the record has it), so the peak is the
+/// record's columns plus about four values a row. Same run, same numbers as [`replay`].
+pub fn replay_streamed(
+    params: &Params,
+    mut record: Record,
+    opt: &MetricOptions,
+    mut sample: impl FnMut(f64, &Sample),
+) -> Result<StreamedErrors, IdentifyError> {
+    params.validate()?;
+    let missing = |col: &str| IdentifyError::MissingColumn {
+        file: record.path.clone(),
+        column: col.to_string(),
+    };
+    let v_in = record.v_in.take().ok_or_else(|| missing("v_in"))?;
+    let u_meas = record.u.take().ok_or_else(|| missing("u"))?;
+    let (dt, len) = (record.dt, record.len());
+    let name = record
+        .path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| record.path.display().to_string());
+    let (platform, _) = record_platform(&record);
+    // The platform columns now live in `platform`: drop the record's copies.
+    (record.x, record.xdd, record.p1, record.p2) = (None, None, None, None);
+    let keep_ydd = record.ydd.is_some();
+    let mut u_sim = Vec::with_capacity(len);
+    let mut ydd_sim = Vec::with_capacity(if keep_ydd { len } else { 0 });
+    let mut i = 0;
+    replay_samples(params, dt, Arc::new(v_in), platform, len, &name, |s| {
+        sample(record.t[i], &s);
+        u_sim.push(s.u);
+        if keep_ydd {
+            ydd_sim.push(s.ydd);
+        }
+        i += 1;
+    })?;
+    let lowpass_hz = opt.lowpass_hz.min(0.4 / dt);
+    let diff_rms = |a: &[f64], b: &[f64]| {
+        let sum: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+        (sum / a.len().max(1) as f64).sqrt()
+    };
+    let u = diff_rms(&u_sim, &u_meas);
+    let du_meas_f = filtered_derivative(&u_meas, dt, lowpass_hz);
+    drop(u_meas);
+    let du_sim_f = filtered_derivative(&u_sim, dt, lowpass_hz);
+    drop(u_sim);
+    let du = diff_rms(&du_sim_f, &du_meas_f);
+    let du_nrmse = du / rms(&du_meas_f).max(1e-12);
+    drop((du_sim_f, du_meas_f));
+    let ydd = record.ydd.take().map(|ym| {
+        let ym = lowpass(&ym, dt, lowpass_hz);
+        diff_rms(&lowpass(&ydd_sim, dt, lowpass_hz), &ym)
+    });
+    Ok(StreamedErrors {
+        samples: len,
+        du,
+        du_nrmse,
+        u,
+        ydd,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 21, item 7: the streamed replay (bounded memory) is the same run as the held
+    /// one, sample for sample, and gives the same errors bit for bit.
+    #[test]
+    fn a_streamed_replay_equals_the_held_one() {
+        let params = crate::identify::testdata::true_params();
+        let rec = crate::identify::testdata::twin_record(&params, 2.0, "a.csv");
+        let held = super::super::replay(&Params::paper(), &rec).unwrap();
+        let mut rows = Vec::new();
+        let e = replay_streamed(
+            &Params::paper(),
+            rec.clone(),
+            &MetricOptions::default(),
+            |t, s| rows.push((t, s.u, s.ydd, s.p1, s.q2)),
+        )
+        .unwrap();
+        assert_eq!(rows.len(), held.sim.t.len());
+        for (i, r) in rows.iter().enumerate() {
+            let h = &held.sim;
+            assert_eq!(
+                *r,
+                (rec.t[i], h.u[i], h.ydd[i], h.p1[i], h.q2[i]),
+                "sample {i}"
+            );
+        }
+        let h = &held.errors;
+        assert_eq!(
+            (e.du, e.du_nrmse, e.u, e.ydd),
+            (h.du, h.du_nrmse, h.u, h.ydd)
+        );
+        assert_eq!(e.samples, h.samples);
+    }
 
     /// The written replay holds the record's times and the twin's channels, number for
     /// number, in the documented columns.

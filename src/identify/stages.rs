@@ -10,7 +10,7 @@ use super::evaluate::{
     diagnostics, fmt_signed, raw_pooled, replay_all, stage_errors, summary, weighted_of,
     worst_channel,
 };
-use super::fit::{self, Bic, Evaluator, FitResult, Knob};
+use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
 use super::paper::paper_baseline;
 use super::progress::{Monitor, Stage};
 use super::replay::Replay;
@@ -116,6 +116,16 @@ pub const CD_MAX_REL_STD: f64 = 0.2;
 /// Largest 1-σ of τ for τ to count as determined [s].
 pub const TAU_MAX_STD_S: f64 = 5e-3;
 
+/// Whether a fitted Cd or τ is left undetermined by its 1-σ ([`CD_MAX_REL_STD`],
+/// [`TAU_MAX_STD_S`]); other knobs are judged elsewhere.
+pub(super) fn undetermined(v: &FittedValue) -> bool {
+    match v.knob {
+        Knob::Cd => !(v.std.is_finite() && v.std <= CD_MAX_REL_STD * v.value),
+        Knob::Tau => !(v.std.is_finite() && v.std <= TAU_MAX_STD_S),
+        _ => false,
+    }
+}
+
 /// Fits Cd, τ and — when a one-Jacobian probe shows its relative 1-σ below
 /// [`CalibrationOptions::mass_max_rel_std`] — the mass, from `start`. Says which of Cd and τ
 /// the data leave undetermined.
@@ -165,24 +175,18 @@ pub fn declared_fit(
     let undetermined = fit
         .values
         .iter()
-        .filter_map(|v| {
-            let bad = match v.knob {
-                Knob::Cd => !(v.std.is_finite() && v.std <= CD_MAX_REL_STD * v.value),
-                Knob::Tau => !(v.std.is_finite() && v.std <= TAU_MAX_STD_S),
-                _ => false,
-            };
-            bad.then(|| {
-                format!(
-                    "excitation: the records do not determine `{}` (1-σ {}); record longer or \
-                     larger command and platform motions",
-                    v.name,
-                    if v.std.is_finite() {
-                        format!("{:.3e}", v.std)
-                    } else {
-                        "unbounded".into()
-                    }
-                )
-            })
+        .filter(|v| undetermined(v))
+        .map(|v| {
+            format!(
+                "excitation: the records do not determine `{}` (1-σ {}); record longer or \
+                 larger command and platform motions",
+                v.name,
+                if v.std.is_finite() {
+                    format!("{:.3e}", v.std)
+                } else {
+                    "unbounded".into()
+                }
+            )
         })
         .collect();
     Ok(Declared {

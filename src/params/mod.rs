@@ -156,6 +156,15 @@ impl Params {
             ),
         ];
         for (name, value, min, max, unit, strict) in relations {
+            if max < min {
+                // No value can pass: say why, not an empty range `[min, max]`.
+                return Err(ParamError::Inconsistent(format!(
+                    "`{name}` has no allowed value with these parameters: the largest it may \
+                     be is {} {unit}, below its smallest allowed value {}",
+                    fmt_value(max),
+                    fmt_value(min)
+                )));
+            }
             if value > max || (strict && value == max) {
                 return Err(ParamError::OutOfRange {
                     name: name.into(),

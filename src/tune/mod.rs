@@ -479,7 +479,10 @@ struct Problem {
     cancel: Option<std::sync::Arc<AtomicBool>>,
     /// Told `(evaluations done, budget)` after each search evaluation.
     progress: Option<Progress>,
+    /// Most search evaluations ([`TuneOptions::max_evaluations`]).
     budget: usize,
+    /// Set when the search asked for an evaluation past `budget` and was stopped.
+    budget_used: AtomicBool,
 }
 
 /// A progress observer: called with `(evaluations done, budget)` from the tuning thread.
@@ -615,6 +618,11 @@ impl CostFunction for &Problem {
         {
             return Err(argmin::core::Error::msg("cancelled"));
         }
+        // The budget is a hard maximum (issue 21): the evaluation past it stops the search.
+        if self.count.load(Ordering::Relaxed) >= self.budget {
+            self.budget_used.store(true, Ordering::Relaxed);
+            return Err(argmin::core::Error::msg("budget of evaluations used"));
+        }
         let e = self.evaluate(self.controller_at(x));
         let done = self.count.fetch_add(1, Ordering::Relaxed) + 1;
         if let Some(p) = &self.progress {
@@ -710,6 +718,7 @@ pub fn tune_observed(
         cancel,
         progress,
         budget: opts.max_evaluations,
+        budget_used: AtomicBool::new(false),
     };
     let baseline = problem.evaluate(nominal.controller);
     let scale = if baseline.objective.is_finite() {
@@ -740,7 +749,9 @@ pub fn tune_observed(
     let solver = NelderMead::new(simplex)
         .with_sd_tolerance(1e-4)
         .map_err(|e| TuneError::Optimiser(e.to_string()))?;
-    let max_iters = (opts.max_evaluations / 2).max(5) as u64;
+    // Every iteration evaluates at least once, so the evaluation budget bounds the iterations;
+    // the budget itself is enforced in `cost`.
+    let max_iters = opts.max_evaluations as u64;
     let res = Executor::new(&problem, solver)
         .configure(|state| state.max_iters(max_iters))
         .run();
@@ -749,6 +760,9 @@ pub fn tune_observed(
             || "budget of iterations used".to_string(),
             |t| t.text().to_string(),
         ),
+        Err(_) if problem.budget_used.load(Ordering::Relaxed) => {
+            "budget of evaluations used".to_string()
+        }
         Err(e) if e.to_string().contains("cancelled") => return Err(TuneError::Cancelled),
         Err(e) => return Err(TuneError::Optimiser(e.to_string())),
     };

@@ -381,7 +381,7 @@ fn parse_and_validate(args: &[String]) -> Result<Command, String> {
 /// Every numeric option of an accepted command within its documented range.
 fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
     match cmd {
-        Command::Simulate {
+        Command::Simulate(cli::SimulateArgs {
             scenario,
             duration,
             freq,
@@ -390,19 +390,20 @@ fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
             f1,
             rate,
             ..
-        } => {
+        }) => {
             let random = *scenario == Some(cli::ScenarioArg::Random);
             let r = |o| documented_range("simulate", o, random).expect("documented");
             prop_assert!(in_range(*rate, r("--rate")), "rate {}", rate);
             if let Some(d) = duration {
                 prop_assert!(in_range(*d, r("--duration")), "duration {}", d);
             }
-            prop_assert!(in_range(*freq, r("--freq")), "freq {}", freq);
-            prop_assert!(in_range(*amp, r("--amp")), "amp {}", amp);
-            prop_assert!(in_range(*f0, r("--f0")), "f0 {}", f0);
-            prop_assert!(in_range(*f1, r("--f1")), "f1 {}", f1);
+            for (name, v) in [("--freq", freq), ("--amp", amp), ("--f0", f0), ("--f1", f1)] {
+                if let Some(v) = v {
+                    prop_assert!(in_range(*v, r(name)), "{} {}", name, v);
+                }
+            }
         }
-        Command::Bode { amp, sweep, .. } => {
+        Command::Bode(cli::BodeArgs { amp, sweep, .. }) => {
             prop_assert!(in_range(
                 *amp,
                 documented_range("bode", "--amp", false).unwrap()
@@ -415,7 +416,7 @@ fn check_accepted(cmd: &Command) -> Result<(), TestCaseError> {
                 ));
             }
         }
-        Command::Transmissibility { sweep, .. } => {
+        Command::Transmissibility(cli::TransmissibilityArgs { sweep, .. }) => {
             prop_assert!(!sweep.freqs.is_empty());
             for f in &sweep.freqs {
                 let r = documented_range("transmissibility", "--freqs", false).unwrap();

@@ -5,6 +5,7 @@
 mod cli;
 mod cli_hardening;
 mod cli_input;
+mod cli_round2;
 mod control;
 mod dataset_props;
 mod engine;

@@ -38,7 +38,7 @@ fn tune_improves_the_paper_gains_within_every_constraint() {
         r.tuned.objective,
         r.baseline.objective
     );
-    assert!(r.evaluations <= 2 * 24 + 4, "{} evaluations", r.evaluations);
+    assert!(r.evaluations <= 24, "{} evaluations", r.evaluations);
     // The constraints, recomputed here: margins of the linearised twin with the tuned law.
     let mut q = p;
     q.controller = r.tuned.controller;
@@ -200,4 +200,38 @@ fn tune_runs_on_a_seat_test_class() {
     assert!(r.tuned.objective <= r.baseline.objective || !r.baseline.feasible);
     // The class is far stronger than the paper's ride (AG1: 2.26 m/s² rms against 0.47).
     assert!(r.baseline.objective > 0.3, "{}", r.baseline.objective);
+}
+
+/// Issue 21, item 4: the budget is a maximum. Before, `--evaluations 10` ran 11–29 search
+/// evaluations (the iteration limit was half the budget, and an iteration of Nelder–Mead
+/// makes one to n + 2 evaluations).
+#[test]
+fn the_evaluation_budget_is_a_hard_maximum() {
+    for kind in [ControllerKind::Paper, ControllerKind::Skyhook] {
+        let opts = TuneOptions {
+            duration_s: 5.0,
+            max_evaluations: 10,
+            ..short(kind)
+        };
+        let most = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let seen = most.clone();
+        let progress: tune::Progress = std::sync::Arc::new(move |done, budget| {
+            assert_eq!(budget, 10);
+            seen.fetch_max(done, std::sync::atomic::Ordering::Relaxed);
+        });
+        let r = tune::tune_observed(&Params::paper(), &opts, None, Some(progress)).unwrap();
+        assert!(
+            r.evaluations <= 10,
+            "{kind:?}: {} evaluations",
+            r.evaluations
+        );
+        assert_eq!(
+            most.load(std::sync::atomic::Ordering::Relaxed),
+            r.evaluations
+        );
+        // Nelder–Mead does not stop on its tolerance within 10 evaluations here: the budget
+        // is used whole, and the report says so.
+        assert_eq!(r.evaluations, 10, "{kind:?}");
+        assert_eq!(r.stop_reason, "budget of evaluations used", "{kind:?}");
+    }
 }
