@@ -105,6 +105,9 @@ fn log_grid(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     out
 }
 
+/// Space kept free right of a frequency plot for its last x tick label [px].
+const X_LABEL_OVERHANG: f32 = 28.0;
+
 fn freq_plot<'a>(id: &str, y_label: &str, unit: &'static str, height: f32) -> Plot<'a> {
     Plot::new(id)
         .height(height)
@@ -254,7 +257,8 @@ impl FreqPanel<'_> {
         legend_ui(ui, self.id, &items, hidden);
         let legend_h = 18.0 + ui.spacing().item_spacing.y;
         let n = remaining.max(1) as f32;
-        let height = ((ui.available_height() - 12.0 - (n - 1.0) * legend_h) / n).max(80.0);
+        // Below this the phase keeps only one tick label: the centre scrolls instead.
+        let height = ((ui.available_height() - 12.0 - (n - 1.0) * legend_h) / n).max(120.0);
         let shown = |name: &str| !plotkit::hidden(hidden, self.id, name);
         let segments = |c: &[PlotPoint]| {
             if self.phase {
@@ -263,28 +267,33 @@ impl FreqPanel<'_> {
                 vec![c.to_vec()]
             }
         };
-        freq_plot(self.id, self.y_label, self.unit, height).show(ui, |pu| {
-            for (c, points) in self.lines.iter().filter(|(c, _)| shown(c.name)) {
-                for seg in segments(points) {
-                    pu.line(
-                        Line::new(c.name, PlotPoints::Owned(seg))
-                            .color(c.color)
-                            .width(c.width)
-                            .style(c.style),
+        // Room on the right for half of the last tick label ("100" sits on the plot's
+        // right edge and was clipped by the column).
+        let width = (ui.available_width() - X_LABEL_OVERHANG).max(100.0);
+        freq_plot(self.id, self.y_label, self.unit, height)
+            .width(width)
+            .show(ui, |pu| {
+                for (c, points) in self.lines.iter().filter(|(c, _)| shown(c.name)) {
+                    for seg in segments(points) {
+                        pu.line(
+                            Line::new(c.name, PlotPoints::Owned(seg))
+                                .color(c.color)
+                                .width(c.width)
+                                .style(c.style),
+                        );
+                    }
+                }
+                if let Some((name, color, points)) = self.dwell.filter(|(n, ..)| shown(n)) {
+                    pu.points(
+                        Points::new(name, PlotPoints::Owned(segments(points).concat()))
+                            .color(color)
+                            .shape(MarkerShape::Diamond)
+                            .radius(5.0)
+                            .filled(true),
                     );
                 }
-            }
-            if let Some((name, color, points)) = self.dwell.filter(|(n, ..)| shown(n)) {
-                pu.points(
-                    Points::new(name, PlotPoints::Owned(segments(points).concat()))
-                        .color(color)
-                        .shape(MarkerShape::Diamond)
-                        .radius(5.0)
-                        .filled(true),
-                );
-            }
-            extra(pu);
-        });
+                extra(pu);
+            });
     }
 }
 
