@@ -142,7 +142,7 @@ enum Pending {
 const REPAINT_PERIOD: Duration = Duration::from_millis(33);
 
 /// Narrowest centre [points] that shows the scopes and the frequency plots side by side.
-const TWO_COLUMNS_MIN_W: f32 = 820.0;
+const TWO_COLUMNS_MIN_W: f32 = 700.0;
 /// Height of the scopes when stacked above the frequency plots, at least [points].
 const STACKED_SCOPES_MIN_H: f32 = 900.0;
 /// Height of the frequency plots when stacked, at least [points].
@@ -802,11 +802,19 @@ impl SeatTwinApp {
     }
 }
 
-/// The window size to set when `window` [points] does not fit on `monitor` (with room for
-/// the desktop's panels and the title bar): 90 % of the monitor, or `None` if it fits.
+/// The window size to set at start for a `window` [points] on `monitor`, or `None` to keep
+/// it: a window that does not fit (with room for the desktop's panels and the title bar) is
+/// cut to 90 % of the monitor; one smaller than half the monitor both ways (remembered from
+/// a smaller screen) grows to 75 % of it.
 pub fn fitted_window(window: egui::Vec2, monitor: egui::Vec2) -> Option<egui::Vec2> {
     let room = monitor * 0.95 - egui::vec2(0.0, 40.0);
-    (window.x > room.x || window.y > room.y).then(|| window.min(monitor * 0.9))
+    if window.x > room.x || window.y > room.y {
+        Some(window.min(monitor * 0.9))
+    } else if window.x < monitor.x * 0.5 && window.y < monitor.y * 0.5 {
+        Some(monitor * 0.75)
+    } else {
+        None
+    }
 }
 
 fn spawn_engine(params: &Params, waker: &Waker) -> EngineHandle {

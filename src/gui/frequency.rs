@@ -105,8 +105,9 @@ fn log_grid(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     out
 }
 
-/// Space kept free right of a frequency plot for its last x tick label [px].
-const X_LABEL_OVERHANG: f32 = 28.0;
+/// Room right of 100 Hz on the frequency axes [decades]: the "100" tick label is centred
+/// on the plot's right edge otherwise, and the panel cut off its right half.
+const X_LABEL_ROOM_DECADES: f64 = 0.12;
 
 fn freq_plot<'a>(id: &str, y_label: &str, unit: &'static str, height: f32) -> Plot<'a> {
     Plot::new(id)
@@ -132,7 +133,10 @@ fn freq_plot<'a>(id: &str, y_label: &str, unit: &'static str, height: f32) -> Pl
                 }
             })
         })
-        .default_x_bounds(F_RANGE_HZ.0.log10(), F_RANGE_HZ.1.log10())
+        .default_x_bounds(
+            F_RANGE_HZ.0.log10(),
+            F_RANGE_HZ.1.log10() + X_LABEL_ROOM_DECADES,
+        )
         .allow_scroll(false)
         .link_axis(egui::Id::unique("freq"), [true, false])
 }
@@ -267,33 +271,28 @@ impl FreqPanel<'_> {
                 vec![c.to_vec()]
             }
         };
-        // Room on the right for half of the last tick label ("100" sits on the plot's
-        // right edge and was clipped by the column).
-        let width = (ui.available_width() - X_LABEL_OVERHANG).max(100.0);
-        freq_plot(self.id, self.y_label, self.unit, height)
-            .width(width)
-            .show(ui, |pu| {
-                for (c, points) in self.lines.iter().filter(|(c, _)| shown(c.name)) {
-                    for seg in segments(points) {
-                        pu.line(
-                            Line::new(c.name, PlotPoints::Owned(seg))
-                                .color(c.color)
-                                .width(c.width)
-                                .style(c.style),
-                        );
-                    }
-                }
-                if let Some((name, color, points)) = self.dwell.filter(|(n, ..)| shown(n)) {
-                    pu.points(
-                        Points::new(name, PlotPoints::Owned(segments(points).concat()))
-                            .color(color)
-                            .shape(MarkerShape::Diamond)
-                            .radius(5.0)
-                            .filled(true),
+        freq_plot(self.id, self.y_label, self.unit, height).show(ui, |pu| {
+            for (c, points) in self.lines.iter().filter(|(c, _)| shown(c.name)) {
+                for seg in segments(points) {
+                    pu.line(
+                        Line::new(c.name, PlotPoints::Owned(seg))
+                            .color(c.color)
+                            .width(c.width)
+                            .style(c.style),
                     );
                 }
-                extra(pu);
-            });
+            }
+            if let Some((name, color, points)) = self.dwell.filter(|(n, ..)| shown(n)) {
+                pu.points(
+                    Points::new(name, PlotPoints::Owned(segments(points).concat()))
+                        .color(color)
+                        .shape(MarkerShape::Diamond)
+                        .radius(5.0)
+                        .filled(true),
+                );
+            }
+            extra(pu);
+        });
     }
 }
 

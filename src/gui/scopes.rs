@@ -24,6 +24,9 @@ const CONTACT: Color32 = Color32::from_rgba_premultiplied(200, 30, 30, 60);
 /// Number of scopes stacked in [`scopes_ui`].
 pub const N_SCOPES: usize = 6;
 
+/// Height of the time axis title under the last scope [px].
+const X_TITLE_H: f32 = 18.0;
+
 /// Height of a legend row above a scope [px].
 const LEGEND_H: f32 = 18.0;
 
@@ -121,7 +124,7 @@ fn window(pu: &mut PlotUi<'_>, t_now: f64, span_s: f64) {
 
 /// Most points drawn per curve; a longer window is reduced to the minimum and maximum of
 /// each group of samples, so peaks and spikes stay visible.
-const MAX_LINE_POINTS: usize = 4000;
+const MAX_LINE_POINTS: usize = 6000;
 
 /// `pts`, or its min/max envelope when it has more than `max` points.
 fn envelope(pts: &[PlotPoint], max: usize) -> PlotPoints<'_> {
@@ -184,7 +187,8 @@ pub fn scopes_ui(
         v
     };
     let spacing = ui.spacing().item_spacing.y;
-    let h = ((ui.available_height() - (spacing * 2.0 + LEGEND_H) * N_SCOPES as f32)
+    // The last scope's "time [s]" title takes a line below all of them.
+    let h = ((ui.available_height() - X_TITLE_H - (spacing * 2.0 + LEGEND_H) * N_SCOPES as f32)
         / N_SCOPES as f32)
         // Below this a scope loses its tick labels: the centre scrolls instead.
         .max(90.0);

@@ -84,7 +84,9 @@ fn paused_app_with_an_error_notice_asks_for_no_repaint() {
     h.step();
     assert!(h.state().notice().is_some_and(|n| n.error));
     // egui may ask for a frame or two after a layout change; then nothing, for ever.
-    let frames = h.try_run().expect("the app settles: no repaint stream while paused");
+    let frames = h
+        .try_run()
+        .expect("the app settles: no repaint stream while paused");
     assert!(frames < 5, "{frames} frames to settle");
     assert_eq!(repaint_delay(&h), Duration::MAX, "paused: no repaint");
 
@@ -302,8 +304,8 @@ fn wildcards_match_whole_file_names() {
     assert!(m("a*b*c", "aXXbYYc") && !m("a*b*c", "aXXbYY"));
 }
 
-/// Item 2: a window remembered from a larger screen is cut to fit a smaller one; one that
-/// fits is left alone.
+/// Item 2: a window remembered from a larger screen is cut to fit a smaller one, one from a
+/// much smaller screen grows, one that fits is left alone.
 #[test]
 fn a_remembered_window_larger_than_the_screen_is_fitted() {
     use seat_twin::gui::app::fitted_window;
@@ -311,6 +313,11 @@ fn a_remembered_window_larger_than_the_screen_is_fitted() {
     let fitted = fitted_window(big, egui::vec2(1280.0, 720.0)).expect("too large");
     assert!(fitted.x <= 1280.0 * 0.9 + 0.1 && fitted.y <= 720.0 * 0.9 + 0.1);
     assert_eq!(fitted_window(big, egui::vec2(2560.0, 1440.0)), None);
+    // A 1280×720 window remembered from a laptop, reopened on a 2560×1440 screen, grows.
+    assert_eq!(
+        fitted_window(egui::vec2(1180.0, 660.0), egui::vec2(2560.0, 1440.0)),
+        Some(egui::vec2(1920.0, 1080.0))
+    );
 }
 
 /// Item 6: Pareto points never read the same a_w (one would look dominated), and the
