@@ -524,7 +524,7 @@ mod tests {
     #[test]
     fn a_parameter_change_restarts_metrics_and_contacts_with_one_marker() {
         let mut tr = Traces::new();
-        tr.push_batch(&batch(0.0, 1000, |_| false));
+        tr.push_batch(&batch(0.0, 2000, |_| false));
         tr.contact_count = 3;
         assert!(tr.metrics.counted_s() > 1.0);
         tr.reset_metrics();

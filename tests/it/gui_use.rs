@@ -416,3 +416,25 @@ fn a_tune_result_for_another_structure_is_not_offered() {
     );
     assert!(h.query_by_label_contains("tuned the paper gains").is_some());
 }
+
+/// Item 2: in a small window the scopes are not squeezed: the centre stacks them above the
+/// frequency plots at a readable height and scrolls (before: six scopes shared 700 px with
+/// the window's furniture, and the last one lost its time axis).
+#[test]
+fn a_small_window_stacks_and_scrolls_instead_of_squeezing() {
+    let app = SeatTwinApp::new(seat_twin::gui::app::Settings::default(), || {});
+    let mut h = egui_kittest::Harness::builder()
+        .with_size([1100.0, 700.0])
+        .build_ui_state(|ui, app: &mut SeatTwinApp| app.ui(ui), app);
+    h.run_steps(3);
+    let frames = h.state().scope_frames().to_vec();
+    assert_eq!(frames.len(), 6);
+    for f in &frames {
+        assert!(f.height() >= 60.0, "a squeezed scope: {f:?}");
+    }
+    let last = frames.last().unwrap();
+    assert!(
+        last.bottom() > 700.0,
+        "the scopes run below the window (the centre scrolls): {last:?}"
+    );
+}
