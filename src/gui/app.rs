@@ -804,13 +804,13 @@ impl SeatTwinApp {
 
 /// The window size to set at start for a `window` [points] on `monitor`, or `None` to keep
 /// it: a window that does not fit (with room for the desktop's panels and the title bar) is
-/// cut to 90 % of the monitor; one smaller than half the monitor both ways (remembered from
-/// a smaller screen) grows to 75 % of it.
+/// cut to 90 % of the monitor; one at most half the monitor both ways (remembered from a
+/// smaller screen) grows to 75 % of it.
 pub fn fitted_window(window: egui::Vec2, monitor: egui::Vec2) -> Option<egui::Vec2> {
     let room = monitor * 0.95 - egui::vec2(0.0, 40.0);
     if window.x > room.x || window.y > room.y {
         Some(window.min(monitor * 0.9))
-    } else if window.x < monitor.x * 0.5 && window.y < monitor.y * 0.5 {
+    } else if window.x <= monitor.x * 0.5 && window.y <= monitor.y * 0.5 {
         Some(monitor * 0.75)
     } else {
         None

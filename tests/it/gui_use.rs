@@ -315,7 +315,7 @@ fn a_remembered_window_larger_than_the_screen_is_fitted() {
     assert_eq!(fitted_window(big, egui::vec2(2560.0, 1440.0)), None);
     // A 1280×720 window remembered from a laptop, reopened on a 2560×1440 screen, grows.
     assert_eq!(
-        fitted_window(egui::vec2(1180.0, 660.0), egui::vec2(2560.0, 1440.0)),
+        fitted_window(egui::vec2(1280.0, 720.0), egui::vec2(2560.0, 1440.0)),
         Some(egui::vec2(1920.0, 1080.0))
     );
 }
