@@ -500,13 +500,13 @@ fn engine_loop<W: Fn()>(
                 return;
             }
         }
+        // Paused or stopped, nothing changes between commands, and each command already
+        // sent its status: no event, so the app is not woken (idle means idle).
         if l.running && !l.failed {
             l.step_paced();
             if l.speed != Speed::Max {
                 std::thread::sleep(tick);
             }
-        } else {
-            l.status();
         }
     }
 }

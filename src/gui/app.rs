@@ -73,6 +73,12 @@ pub struct Settings {
     pub excitation: ExcitationEditor,
     /// Unwrapped phase in the frequency plots (default: wrapped into ±180°).
     pub phase_unwrapped: bool,
+    /// UI scale (egui's zoom factor: 1 = 100 %), also changed with Ctrl + / Ctrl −.
+    pub ui_scale: f32,
+    /// Length of the scopes' time window [s], 1 … 60.
+    pub scope_window_s: f64,
+    /// The folder of the last file opened or saved (dialogs and typed paths start there).
+    pub last_dir: Option<PathBuf>,
 }
 
 impl Default for Settings {
@@ -86,6 +92,9 @@ impl Default for Settings {
             dwell_auto: true,
             excitation: ExcitationEditor::default(),
             phase_unwrapped: false,
+            last_dir: None,
+            ui_scale: 1.0,
+            scope_window_s: super::traces::WINDOW_S,
         }
     }
 }
@@ -129,6 +138,22 @@ enum Pending {
     LoadFile(PathBuf),
     Quit,
 }
+
+/// Longest wait between a wake from a worker (engine, jobs) and the frame that shows it.
+const REPAINT_PERIOD: Duration = Duration::from_millis(33);
+
+/// Narrowest centre [points] that shows the scopes and the frequency plots side by side.
+const TWO_COLUMNS_MIN_W: f32 = 700.0;
+/// Height of the scopes when stacked above the frequency plots, at least [points].
+const STACKED_SCOPES_MIN_H: f32 = 900.0;
+/// Height of the frequency plots when stacked, at least [points].
+const STACKED_FREQ_MIN_H: f32 = 760.0;
+
+/// The scales offered in the View menu.
+pub const UI_SCALES: [f32; 6] = [0.8, 1.0, 1.25, 1.5, 1.75, 2.0];
+
+/// How long an information notice stays (errors stay until replaced).
+const NOTICE_LIFETIME: Duration = Duration::from_secs(8);
 
 /// A message line under the toolbar.
 #[derive(Debug, Clone)]
@@ -219,6 +244,8 @@ pub struct SeatTwinApp {
     path_prompt: Option<(Purpose, String)>,
     ab: AbView,
     tune: super::tune::TunePanel,
+    scopes_frozen: bool,
+    window_checked: bool,
 }
 
 impl SeatTwinApp {
@@ -290,6 +317,8 @@ impl SeatTwinApp {
             path_prompt: None,
             ab: AbView::default(),
             tune: super::tune::TunePanel::default(),
+            scopes_frozen: false,
+            window_checked: false,
         };
         if app.settings.excitation.kind == ExcitationKind::Record {
             // The record itself is not persisted.
@@ -306,8 +335,14 @@ impl SeatTwinApp {
             .and_then(|s| eframe::get_value(s, eframe::APP_KEY))
             .unwrap_or_default();
         cc.egui_ctx.set_theme(settings.theme.preference());
+        if settings.ui_scale.is_finite() && (0.5..=3.0).contains(&settings.ui_scale) {
+            cc.egui_ctx.set_zoom_factor(settings.ui_scale);
+        }
         let ctx = cc.egui_ctx.clone();
-        Self::new(settings, move || ctx.request_repaint())
+        // The engine wakes the app after every step (~100 times a second while running):
+        // a repaint at most REPAINT_PERIOD after the first wake folds them into ~30 frames
+        // a second, smooth for the scopes at a third of the CPU.
+        Self::new(settings, move || ctx.request_repaint_after(REPAINT_PERIOD))
     }
 
     fn send_engine_setup(&mut self) {
@@ -361,6 +396,13 @@ impl SeatTwinApp {
             }
             Err(e) => self.param_error = Some(format!("not applied: {e}")),
         }
+    }
+
+    /// Sets the UI scale (zoom factor, clamped to 0.5 … 3) and remembers it.
+    pub fn set_ui_scale(&mut self, ctx: &egui::Context, scale: f32) {
+        let z = scale.clamp(0.5, 3.0);
+        ctx.set_zoom_factor(z);
+        self.settings.ui_scale = z;
     }
 
     /// Toggles run/pause.
@@ -516,7 +558,10 @@ impl SeatTwinApp {
     fn handle_measured(&mut self, action: MeasuredAction, ctx: &egui::Context) {
         match action {
             MeasuredAction::None => {}
-            MeasuredAction::OpenDialog => self.dialogs.request(Purpose::LoadMeasured, "", ctx),
+            MeasuredAction::OpenDialog => self.request_file(Purpose::LoadMeasured, "", ctx),
+            MeasuredAction::ExportReport => {
+                self.request_file(Purpose::ExportReport, "calibration", ctx)
+            }
             MeasuredAction::Apply(p) | MeasuredAction::ApplyAndSave(p) if p.validate().is_err() => {
                 self.error("calibrated parameters refused (out of range)");
             }
@@ -536,9 +581,136 @@ impl SeatTwinApp {
             MeasuredAction::ApplyAndSave(p) => {
                 self.params = *p;
                 self.apply_params();
-                self.dialogs
-                    .request(Purpose::SavePreset, "calibrated.toml", ctx);
+                self.request_file(Purpose::SavePreset, "calibrated.toml", ctx);
             }
+        }
+    }
+
+    /// The scopes' window length and Freeze.
+    fn scope_bar_ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.label("scopes:");
+            egui::ComboBox::from_id_salt("scope_window")
+                .selected_text(format!("{:.0} s", self.settings.scope_window_s))
+                .width(64.0)
+                .show_ui(ui, |ui| {
+                    for w in scopes::WINDOWS_S {
+                        ui.selectable_value(
+                            &mut self.settings.scope_window_s,
+                            w,
+                            format!("{w:.0} s"),
+                        );
+                    }
+                })
+                .response
+                .on_hover_text("Length of the time window shown");
+            ui.toggle_value(&mut self.scopes_frozen, "Freeze")
+                .on_hover_text(
+                    "Stops the scrolling while the simulation runs on; frozen or paused, drag to \
+                 pan in time, Ctrl + wheel to zoom, double-click for all that is kept (60 s)",
+                );
+        });
+    }
+
+    /// The scopes with their bar (window, Freeze).
+    fn scopes_column_ui(&mut self, ui: &mut egui::Ui) {
+        let t_scopes = Instant::now();
+        self.scope_bar_ui(ui);
+        let view = scopes::ScopeView {
+            window_s: self.settings.scope_window_s,
+            live: self.want_running && !self.scopes_frozen && self.engine_error.is_none(),
+        };
+        self.scope_frames = scopes::scopes_ui(
+            ui,
+            &self.traces,
+            &self.params,
+            &mut self.hidden_curves,
+            self.ab.is_on(),
+            view,
+        );
+        self.frame_stats.scopes_ms = t_scopes.elapsed().as_secs_f64() * 1e3;
+    }
+
+    /// The stability line and the four frequency plots.
+    fn frequency_column_ui(&mut self, ui: &mut egui::Ui) -> FreqAction {
+        let t_freq = Instant::now();
+        let last_stable = self.last_stable.filter(|g| *g != self.params.controller);
+        let reference = self.ab.curves(&self.params);
+        let action = frequency::frequency_ui(
+            ui,
+            self.analytic.curves(),
+            &mut self.dwell,
+            &self.params,
+            FreqView {
+                phase_unwrapped: &mut self.settings.phase_unwrapped,
+                hidden: &mut self.hidden_curves,
+                last_stable,
+                reference,
+                watch: self.twin_watch,
+            },
+        );
+        self.frame_stats.freq_ms = t_freq.elapsed().as_secs_f64() * 1e3;
+        action
+    }
+
+    /// The centre: the engine banner, the scopes and the frequency plots.
+    fn centre_ui(&mut self, ui: &mut egui::Ui, unstable: bool) {
+        if let Some(err) = self.engine_error.clone() {
+            egui::Frame::new()
+                .fill(Color32::from_rgb(150, 20, 20))
+                .inner_margin(6.0)
+                .corner_radius(4.0)
+                .show(ui, |ui| {
+                    ui.horizontal_wrapped(|ui| {
+                        ui.label(
+                            RichText::new(format!(
+                                "Engine stopped: {}",
+                                super::format::shorten_numbers(&err)
+                            ))
+                            .color(Color32::WHITE)
+                            .strong(),
+                        );
+                        if ui.button("Reset").clicked() {
+                            self.reset();
+                        }
+                        if unstable
+                            && self.last_stable.is_some()
+                            && ui
+                                .button("Reset to last stable gains")
+                                .on_hover_text(
+                                    "The current gains make the loop unstable: Reset alone \
+                                         would diverge again",
+                                )
+                                .clicked()
+                        {
+                            self.reset_to_last_stable_gains();
+                        }
+                    });
+                });
+        }
+        let mut action = FreqAction::None;
+        // Side by side when the centre is wide enough; stacked (scopes, then the
+        // frequency plots, each a screen high at most) on a small window or with a
+        // large UI scale, where two columns would squeeze both unreadable.
+        if ui.available_width() >= TWO_COLUMNS_MIN_W {
+            ui.columns(2, |cols| {
+                let [left, right] = cols else { return };
+                self.scopes_column_ui(left);
+                action = self.frequency_column_ui(right);
+            });
+        } else {
+            let w = ui.available_width();
+            let h = ui.available_height();
+            ui.allocate_ui(egui::vec2(w, h.max(STACKED_SCOPES_MIN_H)), |ui| {
+                self.scopes_column_ui(ui)
+            });
+            ui.separator();
+            ui.allocate_ui(egui::vec2(w, h.max(STACKED_FREQ_MIN_H)), |ui| {
+                action = self.frequency_column_ui(ui);
+            });
+        }
+        if action == FreqAction::ResetToStableGains {
+            self.reset_to_last_stable_gains();
         }
     }
 
@@ -547,6 +719,8 @@ impl SeatTwinApp {
         let t0 = Instant::now();
         let ctx = ui.ctx().clone();
         self.drain_engine();
+        // Ctrl + / Ctrl − change the zoom inside egui: remember it with the settings.
+        self.settings.ui_scale = ctx.zoom_factor();
         self.poll_files(&ctx);
         self.measured.poll(&self.params);
         self.tune.poll();
@@ -569,6 +743,8 @@ impl SeatTwinApp {
         if self.path_prompt.is_some() {
             egui::Panel::top("path_prompt").show(ui, |ui| self.path_prompt_ui(ui, &ctx));
         }
+        // Windows stay below the menu, the toolbar and the path prompt.
+        let below_toolbar = ui.available_rect_before_wrap();
 
         let mut params_changed = false;
         egui::Panel::left("controls")
@@ -588,7 +764,10 @@ impl SeatTwinApp {
             || self
                 .twin_watch
                 .is_some_and(|f| !matches!(f, Finding::NegativePressure { .. }));
-        if !unstable {
+        // "Last stable" means last *committed*: gains a drag only passes through (the
+        // pointer still down, or a widget still dragged) are not remembered.
+        let editing = ctx.dragged_id().is_some() || ui.input(|i| i.pointer.any_down());
+        if !unstable && !editing {
             self.last_stable = Some(self.params.controller);
         }
         // No sine dwell of an unstable loop: it would only diverge.
@@ -604,91 +783,50 @@ impl SeatTwinApp {
             });
 
         egui::CentralPanel::default().show(ui, |ui| {
-            if let Some(err) = self.engine_error.clone() {
-                egui::Frame::new()
-                    .fill(Color32::from_rgb(150, 20, 20))
-                    .inner_margin(6.0)
-                    .corner_radius(4.0)
-                    .show(ui, |ui| {
-                        ui.horizontal_wrapped(|ui| {
-                            ui.label(
-                                RichText::new(format!(
-                                    "Engine stopped: {}",
-                                    super::format::shorten_numbers(&err)
-                                ))
-                                .color(Color32::WHITE)
-                                .strong(),
-                            );
-                            if ui.button("Reset").clicked() {
-                                self.reset();
-                            }
-                            if unstable
-                                && self.last_stable.is_some()
-                                && ui
-                                    .button("Reset to last stable gains")
-                                    .on_hover_text(
-                                        "The current gains make the loop unstable: Reset alone \
-                                         would diverge again",
-                                    )
-                                    .clicked()
-                            {
-                                self.reset_to_last_stable_gains();
-                            }
-                        });
-                    });
-            }
-            let mut action = FreqAction::None;
-            ui.columns(2, |cols| {
-                let t_scopes = Instant::now();
-                self.scope_frames = scopes::scopes_ui(
-                    &mut cols[0],
-                    &self.traces,
-                    &self.params,
-                    &mut self.hidden_curves,
-                    self.ab.is_on(),
-                );
-                self.frame_stats.scopes_ms = t_scopes.elapsed().as_secs_f64() * 1e3;
-                let t_freq = Instant::now();
-                let last_stable = self.last_stable.filter(|g| *g != self.params.controller);
-                let reference = self.ab.curves(&self.params);
-                action = frequency::frequency_ui(
-                    &mut cols[1],
-                    self.analytic.curves(),
-                    &mut self.dwell,
-                    &self.params,
-                    FreqView {
-                        phase_unwrapped: &mut self.settings.phase_unwrapped,
-                        hidden: &mut self.hidden_curves,
-                        last_stable,
-                        reference,
-                        watch: self.twin_watch,
-                    },
-                );
-                self.frame_stats.freq_ms = t_freq.elapsed().as_secs_f64() * 1e3;
-            });
-            if action == FreqAction::ResetToStableGains {
-                self.reset_to_last_stable_gains();
-            }
+            // On a small window or with large text the plots keep a readable height and the
+            // centre scrolls, instead of squeezing or cutting the last scope.
+            egui::ScrollArea::vertical()
+                .auto_shrink(false)
+                .show(ui, |ui| self.centre_ui(ui, unstable));
         });
 
         if self.measured.open {
-            let action = self.measured.window_ui(&ctx, &self.params);
+            let action = self.measured.window_ui(&ctx, &self.params, below_toolbar);
             self.handle_measured(action, &ctx);
         }
         self.confirm_ui(&ctx);
         if self.settings.show_debug {
             self.debug_overlay(&ctx);
         }
+        // An information notice expires after NOTICE_LIFETIME: one repaint is booked for
+        // that moment. An error stays until replaced, and needs no repaint at all.
         if let Some(n) = &self.notice
             && !n.error
-            && n.at.elapsed() > Duration::from_secs(8)
         {
-            self.notice = None;
+            match NOTICE_LIFETIME.checked_sub(n.at.elapsed()) {
+                Some(left) if !left.is_zero() => ctx.request_repaint_after(left),
+                _ => self.notice = None,
+            }
         }
-        if dwell_busy || self.writer.busy() > 0 || self.notice.is_some() || self.measured.busy() {
+        if dwell_busy || self.writer.busy() > 0 || self.measured.busy() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
         self.frame_stats.record(t0.elapsed().as_secs_f64() * 1e3);
+    }
+}
+
+/// The window size to set at start for a `window` [points] on `monitor`, or `None` to keep
+/// it: a window that does not fit (with room for the desktop's panels and the title bar) is
+/// cut to 90 % of the monitor; one at most half the monitor both ways (remembered from a
+/// smaller screen) grows to 75 % of it.
+pub fn fitted_window(window: egui::Vec2, monitor: egui::Vec2) -> Option<egui::Vec2> {
+    let room = monitor * 0.95 - egui::vec2(0.0, 40.0);
+    if window.x > room.x || window.y > room.y {
+        Some(window.min(monitor * 0.9))
+    } else if window.x <= monitor.x * 0.5 && window.y <= monitor.y * 0.5 {
+        Some(monitor * 0.75)
+    } else {
+        None
     }
 }
 
@@ -700,6 +838,18 @@ fn spawn_engine(params: &Params, waker: &Waker) -> EngineHandle {
 impl eframe::App for SeatTwinApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.frame_stats.cpu_ms = frame.info().cpu_usage.map(|c| f64::from(c) * 1e3);
+        if !self.window_checked {
+            // A window size remembered from a larger screen is cut to fit this one.
+            let (monitor, inner) =
+                ui.input(|i| (i.viewport().monitor_size, i.viewport().inner_rect));
+            if let (Some(m), Some(r)) = (monitor, inner) {
+                self.window_checked = true;
+                if let Some(size) = fitted_window(r.size(), m) {
+                    ui.ctx()
+                        .send_viewport_cmd(egui::ViewportCommand::InnerSize(size));
+                }
+            }
+        }
         let title = self.window_title();
         if title != self.title {
             ui.ctx()

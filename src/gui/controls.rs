@@ -1,6 +1,7 @@
 //! Unit-aware sliders (with typed entry) for the parameters and the excitation editor.
 //! Values stay SI in [`Params`]; the sliders show display units and convert at the edge.
 
+use super::gain::GainSlider;
 use super::units::MM_PER_M;
 use crate::engine::Excitation;
 use crate::params::{ControllerKind, ParamSpec, Params, spec};
@@ -25,6 +26,9 @@ struct Knob {
     follows: Option<&'static str>,
     /// What to add to the table's description, if anything.
     note: &'static str,
+    /// A gain: drawn as a [`GainSlider`] with this resolution [display units] (a relative,
+    /// symmetric-log rail; Shift for fine steps) instead of egui's absolute slider.
+    steer: Option<f64>,
 }
 
 const fn knob(
@@ -42,6 +46,21 @@ const fn knob(
         decimals,
         follows: None,
         note: "",
+        steer: None,
+    }
+}
+
+/// A controller gain: a [`GainSlider`] with resolution `resolution` [display units].
+const fn gain(
+    key: &'static str,
+    label: &'static str,
+    span: RangeInclusive<f64>,
+    decimals: usize,
+    resolution: f64,
+) -> Knob {
+    Knob {
+        steer: Some(resolution),
+        ..knob(key, label, span, true, decimals)
     }
 }
 
@@ -75,22 +94,22 @@ const RIG: [Knob; 4] = [
 const GAINS: [Knob; 7] = [
     Knob {
         note: "Negative is negative feedback.",
-        ..knob("controller.kp_v_per_m", "Kp", -2000.0..=200.0, true, 2)
+        ..gain("controller.kp_v_per_m", "Kp", -2000.0..=200.0, 2, 1.0)
     },
-    knob("controller.ki_v_s_per_m", "Ki", -200.0..=200.0, true, 2),
+    gain("controller.ki_v_s_per_m", "Ki", -200.0..=200.0, 2, 0.1),
     Knob {
         note: "Default 20.7 ms: the valve's delay plus the spool's lag.",
         ..knob("controller.lead_s", "lead", 0.0..=100.0, false, 1)
     },
-    knob("controller.lead_cutoff_hz", "lead fc", 0.5..=200.0, true, 1),
+    gain("controller.lead_cutoff_hz", "lead fc", 0.5..=200.0, 1, 0.1),
     Knob {
         note: "Negative opposes the body's motion.",
-        ..knob("controller.sky_v_s_per_m", "Ksky", -200.0..=200.0, true, 2)
+        ..gain("controller.sky_v_s_per_m", "Ksky", -200.0..=200.0, 2, 0.1)
     },
-    knob("controller.leak_hz", "leak", 0.01..=10.0, true, 2),
+    gain("controller.leak_hz", "leak", 0.01..=10.0, 2, 0.001),
     Knob {
         note: "Keeps the feedback off the valve's 80 Hz resonance.",
-        ..knob("controller.sky_cutoff_hz", "sky fc", 0.5..=200.0, true, 1)
+        ..gain("controller.sky_cutoff_hz", "sky fc", 0.5..=200.0, 1, 0.1)
     },
 ];
 
@@ -138,6 +157,25 @@ impl Knob {
             "" => String::new(),
             u => format!(" {u}"),
         };
+        let hover = match self.steer {
+            Some(_) => format!(
+                "{} Drag: a decade per {} px; Shift-drag or Shift-arrows: {}× finer; a click jumps.",
+                self.hover(),
+                super::gain::PX_PER_DECADE,
+                super::gain::FINE
+            ),
+            None => self.hover(),
+        };
+        if let Some(resolution) = self.steer {
+            let response = ui
+                .add(
+                    GainSlider::new(&mut shown, self.span.clone(), resolution, self.label)
+                        .suffix(suffix)
+                        .decimals(self.decimals),
+                )
+                .on_hover_text(hover);
+            return self.commit(ui, response, shown, before, p, errors);
+        }
         let mut slider = Slider::new(&mut shown, self.span.clone())
             .text(self.label)
             .suffix(suffix)
@@ -149,7 +187,22 @@ impl Knob {
         if self.logarithmic {
             slider = slider.smallest_positive(0.1);
         }
-        let response = ui.add(slider).on_hover_text(self.hover());
+        let response = ui.add(slider).on_hover_text(hover);
+        self.commit(ui, response, shown, before, p, errors)
+    }
+
+    /// Writes an edited value `shown` [display units] to `p` if accepted (see [`try_edit`]);
+    /// shows the refusal otherwise. Returns true if `p` changed.
+    fn commit(
+        &self,
+        ui: &mut egui::Ui,
+        response: Response,
+        shown: f64,
+        before: f64,
+        p: &mut Params,
+        errors: &mut FieldErrors,
+    ) -> bool {
+        let s = self.spec();
         let changed = response.changed()
             && shown != before
             && try_edit(
@@ -651,7 +704,7 @@ pub fn excitation_ui(
                 if let Some(p) =
                     super::files::typed_path_ui(ui, &mut ed.typed_path, "record.csv", 170.0)
                 {
-                    action = ExcitationAction::LoadRecordPath(p);
+                    action = ExcitationAction::LoadRecordPath(p.into());
                 }
             });
         }

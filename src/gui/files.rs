@@ -24,6 +24,9 @@ pub enum Purpose {
     ExportCsv,
     /// Export the plots (PNG + SVG).
     ExportPng,
+    /// Export the calibration report (a folder: report.md, report.json, calibrated.toml,
+    /// plots), as `seat-twin calibrate --out` writes it.
+    ExportReport,
 }
 
 impl Purpose {
@@ -36,13 +39,14 @@ impl Purpose {
             Purpose::LoadMeasured => "Load measured records (CSV)",
             Purpose::ExportCsv => "Export traces (CSV)",
             Purpose::ExportPng => "Export plots (PNG)",
+            Purpose::ExportReport => "Export the calibration report (folder)",
         }
     }
 
     fn saves(self) -> bool {
         matches!(
             self,
-            Purpose::SavePreset | Purpose::ExportCsv | Purpose::ExportPng
+            Purpose::SavePreset | Purpose::ExportCsv | Purpose::ExportPng | Purpose::ExportReport
         )
     }
 
@@ -51,6 +55,7 @@ impl Purpose {
             Purpose::OpenPreset | Purpose::SavePreset => ("preset", &["toml"]),
             Purpose::LoadRecord | Purpose::LoadMeasured | Purpose::ExportCsv => ("CSV", &["csv"]),
             Purpose::ExportPng => ("PNG", &["png"]),
+            Purpose::ExportReport => ("folder", &[]),
         }
     }
 }
@@ -73,32 +78,51 @@ impl Dialogs {
         self.open.as_ref().map(|(p, _)| *p)
     }
 
-    /// Opens a dialog on its own thread; ignored while another is open.
-    pub fn request(&mut self, purpose: Purpose, suggested_name: &str, ctx: &egui::Context) {
+    /// Opens a dialog on its own thread, in folder `dir`; ignored while another is open.
+    pub fn request(
+        &mut self,
+        purpose: Purpose,
+        suggested_name: &str,
+        dir: &Path,
+        ctx: &egui::Context,
+    ) {
         if self.open.is_some() {
             return;
         }
         let name = suggested_name.to_owned();
+        let dir = dir.to_path_buf();
         let job = Job::spawn("seat-twin-dialog", waker_of(ctx), move |_| {
             let (fname, ext) = purpose.filter();
             let mut dialog = rfd::AsyncFileDialog::new()
                 .set_title(purpose.title())
-                .add_filter(fname, ext);
-            if let Ok(dir) = std::env::current_dir() {
-                dialog = dialog.set_directory(dir);
+                .set_directory(dir);
+            if !ext.is_empty() {
+                dialog = dialog.add_filter(fname, ext);
             }
-            let picked = if purpose.saves() {
-                pollster::block_on(dialog.set_file_name(name).save_file())
+            let path = |h: rfd::FileHandle| h.path().to_path_buf();
+            let picked: Vec<PathBuf> = if purpose == Purpose::ExportReport {
+                pollster::block_on(dialog.pick_folder())
+                    .map(|d| path(d).join(&name))
                     .into_iter()
-                    .collect::<Vec<_>>()
+                    .collect()
+            } else if purpose.saves() {
+                pollster::block_on(dialog.set_file_name(name).save_file())
+                    .map(path)
+                    .into_iter()
+                    .collect()
             } else if purpose == Purpose::LoadMeasured {
-                pollster::block_on(dialog.pick_files()).unwrap_or_default()
+                pollster::block_on(dialog.pick_files())
+                    .unwrap_or_default()
+                    .into_iter()
+                    .map(path)
+                    .collect()
             } else {
                 pollster::block_on(dialog.pick_file())
+                    .map(path)
                     .into_iter()
-                    .collect::<Vec<_>>()
+                    .collect()
             };
-            Ok(picked.into_iter().map(|h| h.path().to_path_buf()).collect())
+            Ok(picked)
         });
         self.open = Some((purpose, job));
     }
@@ -114,14 +138,40 @@ impl Dialogs {
     }
 }
 
+/// The folder files are saved to and opened from when the user has not chosen one yet: the
+/// desktop's documents folder (`XDG_DOCUMENTS_DIR`, else `~/Documents`), else the home
+/// folder, else the working directory. Always absolute.
+pub fn documents_dir() -> PathBuf {
+    let home = std::env::var_os("HOME")
+        .map(PathBuf::from)
+        .filter(|h| h.is_dir());
+    let candidates = [
+        std::env::var_os("XDG_DOCUMENTS_DIR").map(PathBuf::from),
+        home.as_ref().map(|h| h.join("Documents")),
+        home,
+    ];
+    candidates
+        .into_iter()
+        .flatten()
+        .find(|d| d.is_absolute() && d.is_dir())
+        .or_else(|| std::env::current_dir().ok())
+        .unwrap_or_else(|| PathBuf::from("/"))
+}
+
+/// `path` made absolute against the working directory (as the file system will read it), for
+/// showing people where a file went.
+pub fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
 /// "or path: [____] Load": a typed path, for desktops without a file dialog. Returns the
-/// path when Load is clicked or Enter pressed in a non-empty field.
+/// text when Load is clicked or Enter pressed in a non-empty field.
 pub fn typed_path_ui(
     ui: &mut egui::Ui,
     text: &mut String,
     hint: &str,
     width: f32,
-) -> Option<PathBuf> {
+) -> Option<String> {
     ui.label("or path:");
     let r = ui.add(
         egui::TextEdit::singleline(text)
@@ -130,7 +180,94 @@ pub fn typed_path_ui(
     );
     let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
     let load = ui.button("Load").clicked() || enter;
-    (load && !text.trim().is_empty()).then(|| PathBuf::from(text.trim()))
+    (load && !text.trim().is_empty()).then(|| text.trim().to_string())
+}
+
+/// The files a typed path names: several paths separated by `;` (or new lines), each a
+/// file, a folder (its `*.csv` files) or a pattern with `*` / `?` in the file name
+/// (`campaign/*.csv`). Sorted within a folder or pattern; duplicates dropped. A folder or a
+/// pattern that matches no CSV file, or a path that does not exist, is an error naming it.
+pub fn expand_paths(text: &str) -> Result<Vec<PathBuf>, String> {
+    let mut out: Vec<PathBuf> = Vec::new();
+    let parts = text
+        .split([';', '\n'])
+        .map(|p| p.trim().trim_matches('"').trim_matches('\''))
+        .filter(|p| !p.is_empty());
+    for part in parts {
+        let path = PathBuf::from(part);
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let found = if name.contains(['*', '?']) {
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            let v = list_dir(&dir, |f| wildcard_match(&name, f))?;
+            if v.is_empty() {
+                return Err(format!("{part}: no file matches"));
+            }
+            v
+        } else if path.is_dir() {
+            let v = list_dir(&path, |f| {
+                Path::new(f)
+                    .extension()
+                    .is_some_and(|x| x.eq_ignore_ascii_case("csv"))
+            })?;
+            if v.is_empty() {
+                return Err(format!("{part}: no .csv file in this folder"));
+            }
+            v
+        } else if path.is_file() {
+            vec![path]
+        } else {
+            return Err(format!("{part}: no such file or folder"));
+        };
+        for f in found {
+            if !out.contains(&f) {
+                out.push(f);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The files in `dir` whose names pass `keep`, sorted.
+fn list_dir(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBuf>, String> {
+    let entries = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut v: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .filter(|p| p.file_name().is_some_and(|n| keep(&n.to_string_lossy())))
+        .collect();
+    v.sort();
+    Ok(v)
+}
+
+/// `*` (any run of characters) and `?` (one character) against a whole file name.
+pub fn wildcard_match(pattern: &str, name: &str) -> bool {
+    let p: Vec<char> = pattern.chars().collect();
+    let n: Vec<char> = name.chars().collect();
+    // The classic two-pointer match with backtracking to the last `*`.
+    let (mut i, mut j) = (0, 0);
+    let mut star: Option<(usize, usize)> = None;
+    while j < n.len() {
+        if i < p.len() && (p[i] == '?' || p[i] == n[j]) {
+            i += 1;
+            j += 1;
+        } else if i < p.len() && p[i] == '*' {
+            star = Some((i, j));
+            i += 1;
+        } else if let Some((si, sj)) = star {
+            i = si + 1;
+            j = sj + 1;
+            star = Some((si, sj + 1));
+        } else {
+            return false;
+        }
+    }
+    p[i..].iter().all(|&c| c == '*')
 }
 
 /// Reads a platform record (CSV with `t` and `x` and/or `xdd`, SI) for the live simulation.
@@ -204,6 +341,26 @@ impl Writer {
                 written.push(png.display().to_string());
             }
             Ok(format!("plots written: {} (and .svg)", written.join(", ")))
+        });
+    }
+
+    /// Writes a calibration report into folder `dir` as `seat-twin calibrate --out` does
+    /// (staged in a hidden folder beside it and moved there at the end).
+    pub fn write_report(
+        &mut self,
+        ctx: &egui::Context,
+        dir: PathBuf,
+        report: crate::identify::CalibrationReport,
+    ) {
+        self.spawn(ctx, move || {
+            let fail = |e: &dyn std::fmt::Display| format!("{}: {e}", dir.display());
+            let out = crate::fsutil::OutputDir::create(&dir).map_err(|e| fail(&e))?;
+            crate::identify::report::write_all(&report, out.path(), None).map_err(|e| fail(&e))?;
+            out.commit().map_err(|e| fail(&e))?;
+            Ok(format!(
+                "calibration report written to {} (report.md, report.json, calibrated.toml, plots)",
+                dir.display()
+            ))
         });
     }
 

@@ -51,14 +51,29 @@ pub fn fitted(name: &str, value_si: f64, std_si: f64) -> String {
     }
 }
 
-/// A controller for people: its structure and every gain it reads, in SI, e.g.
-/// `paper (kp_v_per_m = -5, ki_v_s_per_m = -7.5)`.
+/// A controller for people: its structure and every gain it reads, by symbol in display
+/// units, e.g. `paper (Kp = −5 V/m, Ki = −7.5 V·s/m)` (the parameter table's names, not the
+/// preset keys).
 pub fn controller_text(c: &crate::params::ControllerParams) -> String {
     let gains: Vec<String> = c
         .kind
         .keys()
         .iter()
-        .filter_map(|k| c.get(k).map(|v| format!("{k} = {}", compact(v))))
+        .filter_map(|k| {
+            let v = c.get(k)?;
+            Some(match crate::params::spec(&format!("controller.{k}")) {
+                Some(s) if s.display.unit.is_empty() => {
+                    format!("{} = {}", s.symbol, compact(s.to_display(v)))
+                }
+                Some(s) => format!(
+                    "{} = {} {}",
+                    s.symbol,
+                    compact(s.to_display(v)),
+                    s.display.unit
+                ),
+                None => format!("{k} = {}", compact(v)),
+            })
+        })
         .collect();
     format!("{} ({})", c.kind, gains.join(", "))
 }

@@ -12,7 +12,7 @@ mod stability;
 
 pub use curves::{Analytic, Curve, Curves, PlantCache};
 pub use dwell::Dwell;
-pub use stability::stability_ui;
+pub use stability::{margin_text, stability_ui};
 
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};
 use super::units::{db, deg};
@@ -106,6 +106,10 @@ fn log_grid(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     out
 }
 
+/// Room right of 100 Hz on the frequency axes [decades]: the "100" tick label is centred
+/// on the plot's right edge otherwise, and the panel cut off its right half.
+const X_LABEL_ROOM_DECADES: f64 = 0.12;
+
 fn freq_plot<'a>(id: &str, y_label: &str, unit: &'static str, height: f32) -> Plot<'a> {
     Plot::new(id)
         .height(height)
@@ -130,7 +134,10 @@ fn freq_plot<'a>(id: &str, y_label: &str, unit: &'static str, height: f32) -> Pl
                 }
             })
         })
-        .default_x_bounds(F_RANGE_HZ.0.log10(), F_RANGE_HZ.1.log10())
+        .default_x_bounds(
+            F_RANGE_HZ.0.log10(),
+            F_RANGE_HZ.1.log10() + X_LABEL_ROOM_DECADES,
+        )
         .allow_scroll(false)
         .link_axis(egui::Id::unique("freq"), [true, false])
 }
@@ -257,7 +264,8 @@ impl FreqPanel<'_> {
         legend_ui(ui, self.id, &items, hidden);
         let legend_h = 18.0 + ui.spacing().item_spacing.y;
         let n = remaining.max(1) as f32;
-        let height = ((ui.available_height() - 12.0 - (n - 1.0) * legend_h) / n).max(80.0);
+        // Below this the phase keeps only one tick label: the centre scrolls instead.
+        let height = ((ui.available_height() - 12.0 - (n - 1.0) * legend_h) / n).max(120.0);
         let shown = |name: &str| !plotkit::hidden(hidden, self.id, name);
         let segments = |c: &[PlotPoint]| {
             if self.phase {

@@ -19,7 +19,7 @@ use crate::identify::{
 };
 use crate::params::Params;
 use egui::{Color32, RichText};
-use egui_plot::{Corner, Legend, Line, Plot, PlotPoints};
+use egui_plot::{Line, Plot, PlotPoints};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -150,6 +150,8 @@ pub enum MeasuredAction {
     Apply(Box<Params>),
     /// Put them on the live twin and save them as a preset (dialog).
     ApplyAndSave(Box<Params>),
+    /// Write the calibration report into a folder (dialog).
+    ExportReport,
 }
 
 /// State of the measured-data window.
@@ -176,6 +178,8 @@ pub struct MeasuredData {
     calibrated_job: Option<(usize, Job<ReplayView>)>,
     last_error: Option<String>,
     last_info: Option<String>,
+    /// Curves switched off in the plots' legends (`plot/name`).
+    hidden: std::collections::BTreeSet<String>,
 }
 
 impl MeasuredData {
@@ -197,6 +201,7 @@ impl MeasuredData {
             calibrated_job: None,
             last_error: None,
             last_info: None,
+            hidden: Default::default(),
         }
     }
 
@@ -213,6 +218,15 @@ impl MeasuredData {
             move |_| read_measured(&paths, &metric),
         ));
         self.last_error = None;
+    }
+
+    /// Loads what a typed path names: files separated by `;`, folders, `*`/`?` patterns
+    /// (see [`super::files::expand_paths`]); a path that names nothing is the window's error.
+    pub fn load_typed(&mut self, text: &str) {
+        match super::files::expand_paths(text) {
+            Ok(paths) => self.load_files(paths),
+            Err(e) => self.last_error = Some(format!("not loaded: {e}")),
+        }
     }
 
     /// The demo campaign shipped in `assets/demo-campaign/`, if found.
@@ -343,10 +357,11 @@ impl MeasuredData {
                     self.selected = self.selected.min(self.records.len().saturating_sub(n));
                     self.view = None;
                     self.calibrated_view = None;
+                    let loaded = loaded_text(n, self.records.len());
                     self.last_info = Some(if warnings.is_empty() {
-                        format!("{n} record(s) loaded")
+                        loaded
                     } else {
-                        format!("{n} record(s) loaded; {}", warnings.join(" "))
+                        format!("{loaded}; {}", warnings.join(" "))
                     });
                 }
                 Err(e) => self.last_error = Some(e),
@@ -419,12 +434,22 @@ impl MeasuredData {
     }
 
     /// The window; returns what the app should do.
-    pub fn window_ui(&mut self, ctx: &egui::Context, params: &Params) -> MeasuredAction {
+    /// It stays inside `area` (the app passes the space below its menu, toolbar and
+    /// path prompt, so the window never hides them).
+    pub fn window_ui(
+        &mut self,
+        ctx: &egui::Context,
+        params: &Params,
+        area: egui::Rect,
+    ) -> MeasuredAction {
         let mut action = MeasuredAction::None;
         let mut open = self.open;
+        let size = egui::vec2(1300.0, 820.0).min(area.size() - egui::vec2(24.0, 24.0));
         egui::Window::new("Measured data")
             .open(&mut open)
-            .default_size([1300.0, 820.0])
+            .constrain_to(area)
+            .default_pos(area.min + egui::vec2(12.0, 12.0))
+            .default_size(size)
             .vscroll(true)
             .show(ctx, |ui| action = self.contents_ui(ui, params));
         self.open = open;
@@ -444,10 +469,13 @@ impl MeasuredData {
             {
                 self.load_files(Self::demo_campaign());
             }
-            if let Some(p) =
-                super::files::typed_path_ui(ui, &mut self.typed_path, "file.csv", 220.0)
-            {
-                self.load_files(vec![p]);
+            if let Some(text) = super::files::typed_path_ui(
+                ui,
+                &mut self.typed_path,
+                "files; a folder; campaign/*.csv",
+                240.0,
+            ) {
+                self.load_typed(&text);
             }
             if !self.records.is_empty() && ui.button("Clear").clicked() {
                 self.records.clear();
@@ -663,8 +691,28 @@ impl MeasuredData {
             if ui.button("Apply and save as preset…").clicked() {
                 action = MeasuredAction::ApplyAndSave(Box::new(r.params));
             }
+            if ui
+                .button("Export report…")
+                .on_hover_text(
+                    "report.md, report.json, calibrated.toml and the plots into a folder, \
+                     as `seat-twin calibrate --out` writes them",
+                )
+                .clicked()
+            {
+                action = MeasuredAction::ExportReport;
+            }
         });
         action
+    }
+}
+
+/// "3 records loaded (10 in the window)": what was just read and what the list holds.
+fn loaded_text(new: usize, total: usize) -> String {
+    let records = |n: usize| if n == 1 { "record" } else { "records" };
+    if new == total {
+        format!("{new} {} loaded", records(new))
+    } else {
+        format!("{new} {} loaded ({total} in the window)", records(new))
     }
 }
 

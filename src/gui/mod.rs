@@ -22,6 +22,7 @@ pub mod controls;
 pub mod files;
 pub mod format;
 pub mod frequency;
+pub mod gain;
 pub mod job;
 pub mod measured;
 pub mod plotkit;
@@ -39,7 +40,8 @@ pub fn run_native() -> Result<(), eframe::Error> {
         viewport: egui::ViewportBuilder::default()
             .with_title("seat-twin")
             .with_inner_size([1600.0, 1000.0])
-            .with_min_inner_size([1100.0, 700.0]),
+            // Small enough for a 1280×720 screen: the centre scrolls below this.
+            .with_min_inner_size([800.0, 500.0]),
         ..Default::default()
     };
     eframe::run_native(

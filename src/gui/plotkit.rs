@@ -45,12 +45,18 @@ pub fn nice_step(min_step: f64) -> f64 {
 /// mark gets the same step size, so all of them are labelled, however small the amplitude
 /// (a ±0.004 m/s² trace reads −0.004, −0.002, 0, 0.002, 0.004).
 pub fn y_marks(input: GridInput, height_px: f32) -> Vec<GridMark> {
+    marks(input, height_px, MIN_TICK_PX as f32)
+}
+
+/// Grid marks of one step on an axis `length_px` long, at least `min_px` apart and at most
+/// about eight in view (see [`y_marks`]; x axes need wider gaps for their labels).
+pub fn marks(input: GridInput, length_px: f32, min_px: f32) -> Vec<GridMark> {
     let (lo, hi) = input.bounds;
     let span = hi - lo;
     if !(span.is_finite() && span > 0.0) {
         return Vec::new();
     }
-    let by_pixels = span * MIN_TICK_PX / f64::from(height_px.max(1.0));
+    let by_pixels = span * f64::from(min_px) / f64::from(length_px.max(1.0));
     let step = nice_step(by_pixels.max(span / 8.0));
     let first = (lo / step).ceil() as i64;
     let last = (hi / step).floor() as i64;

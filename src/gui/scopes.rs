@@ -1,14 +1,14 @@
-//! Live scrolling scopes (egui_plot): the last [`WINDOW_S`] seconds of accelerations, stroke
+//! Live scrolling scopes (egui_plot): the last 1 … 60 s of accelerations, stroke
 //! (with the end stops and contacts), pressures, flows, command and spool. The lines borrow
 //! the trace buffers; nothing is copied per frame.
 
 use super::frequency::{LINEAR, PASSIVE, PLATFORM, TWIN};
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, y_axis, y_marks};
-use super::traces::{Ch, Traces, WINDOW_S};
+use super::traces::{Ch, MAX_WINDOW_S, Traces};
 use super::units::MM_PER_M;
 use crate::params::Params;
 use egui::Color32;
-use egui_plot::{HLine, Line, LineStyle, Plot, PlotUi, Span};
+use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoint, PlotPoints, PlotUi, Span, VLine};
 use std::collections::BTreeSet;
 
 /// Upper chamber colour.
@@ -23,6 +23,9 @@ const CONTACT: Color32 = Color32::from_rgba_premultiplied(200, 30, 30, 60);
 
 /// Number of scopes stacked in [`scopes_ui`].
 pub const N_SCOPES: usize = 6;
+
+/// Height of the time axis title under the last scope [px].
+const X_TITLE_H: f32 = 18.0;
 
 /// Height of a legend row above a scope [px].
 const LEGEND_H: f32 = 18.0;
@@ -63,19 +66,25 @@ fn scope<'a>(
     unit: &'static str,
     height: f32,
     show_x_label: bool,
+    live: bool,
+    width: f32,
 ) -> Plot<'a> {
+    // Live, the scopes scroll by themselves; frozen (or paused), time can be zoomed and
+    // panned (wheel with Ctrl, drag, box with the right button; double-click: everything).
     let p = Plot::new(id)
         .height(height)
         .custom_y_axes(vec![y_axis(y_label)])
         .y_grid_spacer(move |input| y_marks(input, height))
-        .allow_drag(false)
-        .allow_zoom(false)
-        .allow_scroll(false)
-        .allow_boxed_zoom(false)
-        .allow_double_click_reset(false)
+        .allow_drag([!live, false])
+        .allow_zoom([!live, false])
+        .allow_scroll([!live, false])
+        .allow_boxed_zoom(!live)
+        .allow_double_click_reset(!live)
         .link_cursor(egui::Id::unique("scopes"), [true, false])
         .link_axis(egui::Id::unique("scopes_x"), [true, false])
-        .x_grid_spacer(egui_plot::uniform_grid_spacer(|_| [0.5, 1.0, 5.0]))
+        // Time ticks at least 60 px apart, whatever the window's length.
+        .x_grid_spacer(move |input| plotkit::marks(input, width, 60.0))
+        .x_axis_formatter(plotkit::y_tick)
         .label_formatter(move |pos| Some(hover_text(pos, unit)));
     if show_x_label {
         p.x_axis_label("time [s]")
@@ -107,11 +116,53 @@ fn readout(v: f64) -> String {
     super::format::value_pm(v, f64::NAN)
 }
 
-fn window(pu: &mut PlotUi<'_>, t_now: f64) {
-    let t1 = t_now.max(WINDOW_S);
-    pu.set_plot_bounds_x(t1 - WINDOW_S..=t1);
+fn window(pu: &mut PlotUi<'_>, t_now: f64, span_s: f64) {
+    let t1 = t_now.max(span_s);
+    pu.set_plot_bounds_x(t1 - span_s..=t1);
     pu.set_auto_bounds([false, true]);
 }
+
+/// Most points drawn per curve; a longer window is reduced to the minimum and maximum of
+/// each group of samples, so peaks and spikes stay visible.
+const MAX_LINE_POINTS: usize = 6000;
+
+/// `pts`, or its min/max envelope when it has more than `max` points.
+fn envelope(pts: &[PlotPoint], max: usize) -> PlotPoints<'_> {
+    if pts.len() <= max {
+        return PlotPoints::Borrowed(pts);
+    }
+    let group = pts.len().div_ceil(max / 2);
+    let mut out = Vec::with_capacity(max + 2);
+    for g in pts.chunks(group) {
+        let (mut lo, mut hi) = (g[0], g[0]);
+        for p in g {
+            if p.y < lo.y {
+                lo = *p;
+            }
+            if p.y > hi.y {
+                hi = *p;
+            }
+        }
+        if lo.x <= hi.x {
+            out.extend([lo, hi]);
+        } else {
+            out.extend([hi, lo]);
+        }
+    }
+    PlotPoints::Owned(out)
+}
+
+/// How the scopes show time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScopeView {
+    /// Window length [s], 1 … [`MAX_WINDOW_S`].
+    pub window_s: f64,
+    /// Scrolling with the simulation (not frozen, not paused).
+    pub live: bool,
+}
+
+/// The window lengths offered [s].
+pub const WINDOWS_S: [f64; 7] = [1.0, 2.0, 5.0, 10.0, 20.0, 30.0, MAX_WINDOW_S];
 
 /// Data areas of the six scopes drawn last frame (screen rects), top to bottom.
 pub type ScopeFrames = Vec<egui::Rect>;
@@ -125,7 +176,9 @@ pub fn scopes_ui(
     params: &Params,
     hidden: &mut BTreeSet<String>,
     ab: bool,
+    view: ScopeView,
 ) -> ScopeFrames {
+    let span = view.window_s.clamp(1.0, MAX_WINDOW_S);
     // With A/B on, the reference twin (B) is overlaid on the twin (A) where they differ most.
     let with_b = |mut v: Vec<(&'static str, Ch, Color32, Model)>, b: (&'static str, Ch)| {
         if ab {
@@ -134,9 +187,11 @@ pub fn scopes_ui(
         v
     };
     let spacing = ui.spacing().item_spacing.y;
-    let h = ((ui.available_height() - (spacing * 2.0 + LEGEND_H) * N_SCOPES as f32)
+    // The last scope's "time [s]" title takes a line below all of them.
+    let h = ((ui.available_height() - X_TITLE_H - (spacing * 2.0 + LEGEND_H) * N_SCOPES as f32)
         / N_SCOPES as f32)
-        .max(60.0);
+        // Below this a scope loses its tick labels: the centre scrolls instead.
+        .max(90.0);
     let t = traces.t_now();
     let mut frames = Vec::with_capacity(N_SCOPES);
     // One scope: legend row, then the plot with the visible curves.
@@ -167,16 +222,38 @@ pub fn scopes_ui(
         }
         legend_ui(ui, id, &items, hidden);
         let hidden_now = hidden.clone();
-        let r = scope(id, y_label, unit, h, last).show(ui, |pu| {
-            window(pu, t);
+        let width = ui.available_width();
+        let r = scope(id, y_label, unit, h, last, view.live, width).show(ui, |pu| {
+            if view.live {
+                window(pu, t, span);
+            }
             extra(pu, &hidden_now);
+            // Parameter changes: the metrics restart there.
+            for &tc in traces.changes() {
+                pu.vline(
+                    VLine::new("parameter change (metrics restart)", tc)
+                        .color(Color32::from_gray(140))
+                        .style(LineStyle::dotted_dense()),
+                );
+            }
             for &(name, ch, color, m) in curves {
                 if plotkit::hidden(&hidden_now, id, name) {
                     continue;
                 }
                 let (w, st) = style_of(m);
+                // Live: the window's points; frozen: all that is kept, to pan over.
+                let pts = if view.live {
+                    traces.channel(ch).window(t, span)
+                } else {
+                    traces.channel(ch).points()
+                };
+                let max = if view.live {
+                    MAX_LINE_POINTS
+                } else {
+                    4 * MAX_LINE_POINTS
+                };
                 pu.line(
-                    Line::new(name.to_owned(), traces.channel(ch).points())
+                    Line::new(name.to_owned(), envelope(pts, max))
                         .color(color)
                         .width(w)
                         .style(st),

@@ -8,8 +8,12 @@ use crate::engine::{Batch, STREAM_RATE_HZ};
 use crate::simulation::Sample;
 use egui_plot::PlotPoint;
 
-/// Length of the scrolling window of the scopes [s].
+/// Default length of the scrolling window of the scopes, and the span of the rows kept for
+/// the CSV export [s].
 pub const WINDOW_S: f64 = 10.0;
+
+/// Longest scope window offered, and the span of the scope channels kept [s].
+pub const MAX_WINDOW_S: f64 = 60.0;
 
 /// Samples left out of the running metrics after a reset or a parameter change [s].
 pub const METRICS_SETTLE_S: f64 = 1.0;
@@ -46,6 +50,13 @@ impl Channel {
     /// The points in the window, oldest first.
     pub fn points(&self) -> &[PlotPoint] {
         &self.pts[self.start..]
+    }
+
+    /// The points of the last `span_s` seconds before `t_now`, oldest first.
+    pub fn window(&self, t_now: f64, span_s: f64) -> &[PlotPoint] {
+        let pts = self.points();
+        let from = pts.partition_point(|p| p.x < t_now - span_s);
+        &pts[from..]
     }
 
     /// The newest value, if any.
@@ -230,9 +241,16 @@ pub struct Traces {
     t_now: f64,
     /// Running metrics.
     pub metrics: LiveMetrics,
-    /// Number of end-stop contacts reported by the engine since the last reset.
+    /// Number of end-stop contacts reported by the engine since the last reset or
+    /// parameter change (counted over the same window as the metrics).
     pub contact_count: usize,
+    /// Display times of the parameter changes that restarted the metrics [s] (the last
+    /// [`MAX_CHANGES`], marked in the scopes).
+    changes: Vec<f64>,
 }
+
+/// Change markers kept.
+const MAX_CHANGES: usize = 32;
 
 impl Default for Traces {
     fn default() -> Self {
@@ -254,6 +272,7 @@ impl Traces {
             t_now: 0.0,
             metrics: LiveMetrics::new(),
             contact_count: 0,
+            changes: Vec::new(),
         }
     }
 
@@ -271,6 +290,7 @@ impl Traces {
         self.t_now = 0.0;
         self.metrics.reset();
         self.contact_count = 0;
+        self.changes.clear();
     }
 
     /// The excitation restarted from rest: the next samples continue the display time.
@@ -278,9 +298,25 @@ impl Traces {
         self.restart_pending = true;
     }
 
-    /// Restarts the running metrics (after a parameter change).
+    /// Restarts the running metrics and the contact count (after a parameter change) and
+    /// marks the moment in the scopes: the numbers then describe the new parameters only,
+    /// and the transient of the change shows where it came from. A drag that changes a
+    /// value every frame leaves one marker, at its last change.
     pub fn reset_metrics(&mut self) {
         self.metrics.reset();
+        self.contact_count = 0;
+        match self.changes.last_mut() {
+            Some(t) if self.t_now - *t < 0.5 => *t = self.t_now,
+            _ => self.changes.push(self.t_now),
+        }
+        if self.changes.len() > MAX_CHANGES {
+            self.changes.remove(0);
+        }
+    }
+
+    /// Display times of the last parameter changes [s].
+    pub fn changes(&self) -> &[f64] {
+        &self.changes
     }
 
     /// The channel `ch`.
@@ -399,17 +435,18 @@ impl Traces {
     }
 
     fn trim(&mut self) {
-        let t_min = self.t_now - WINDOW_S;
+        let t_channels = self.t_now - MAX_WINDOW_S;
         for c in &mut self.channels {
-            c.trim(t_min);
+            c.trim(t_channels);
         }
+        let t_min = self.t_now - WINDOW_S;
         let keep_from = self.rows[self.rows_start..].partition_point(|r| r.t < t_min);
         self.rows_start += keep_from;
         if self.rows_start > 4096 && self.rows_start * 2 > self.rows.len() {
             self.rows.drain(..self.rows_start);
             self.rows_start = 0;
         }
-        self.contacts.retain(|&(_, b)| b >= t_min);
+        self.contacts.retain(|&(_, b)| b >= t_channels);
     }
 }
 
@@ -449,17 +486,22 @@ mod tests {
     }
 
     #[test]
-    fn window_keeps_ten_seconds_in_display_units() {
+    fn window_keeps_a_minute_of_channels_and_ten_seconds_of_rows_in_display_units() {
         let mut tr = Traces::new();
-        for k in 0..30 {
+        for k in 0..90 {
             tr.push_batch(&batch(k as f64, 500, |_| false));
         }
         let pts = tr.channel(Ch::TwinU).points();
         let span = pts.last().unwrap().x - pts[0].x;
-        assert!((span - WINDOW_S).abs() < 0.01, "span {span}");
+        assert!((span - MAX_WINDOW_S).abs() < 0.01, "span {span}");
+        let rows = tr.rows();
+        let row_span = rows.last().unwrap().t - rows[0].t;
+        assert!((row_span - WINDOW_S).abs() < 0.01, "rows span {row_span}");
+        // The points of the last `WINDOW_S`, for a scope of that length.
+        let shown = tr.channel(Ch::TwinU).window(tr.t_now(), WINDOW_S);
+        assert!((shown[0].x - (tr.t_now() - WINDOW_S)).abs() < 0.01);
         assert!((pts[0].y - 10.0).abs() < 1e-12, "u in mm");
         assert!((tr.channel(Ch::P1).last().unwrap() - 55.0).abs() < 1e-9);
-        assert_eq!(tr.rows().len(), pts.len());
     }
 
     #[test]
@@ -474,6 +516,33 @@ mod tests {
         tr.push_batch(&batch(0.0, 10, |_| false));
         assert!(tr.t_now() < 0.1);
         assert_eq!(tr.rows().len(), 10);
+    }
+
+    /// Issue 22, item 7: a parameter change restarts the metrics *and* the end-stop
+    /// contact count (they describe the same window), and leaves one marker in the scopes,
+    /// even when a drag changes the value every frame.
+    #[test]
+    fn a_parameter_change_restarts_metrics_and_contacts_with_one_marker() {
+        let mut tr = Traces::new();
+        tr.push_batch(&batch(0.0, 2000, |_| false));
+        tr.contact_count = 3;
+        assert!(tr.metrics.counted_s() > 1.0);
+        tr.reset_metrics();
+        assert_eq!(tr.contact_count, 0);
+        assert_eq!(tr.metrics.counted_s(), 0.0);
+        let t1 = tr.t_now();
+        assert_eq!(tr.changes(), &[t1]);
+        // A drag: more changes within half a second move the marker, not add one.
+        let dt = 1.0 / STREAM_RATE_HZ;
+        tr.push_batch(&batch(t1 + dt, 20, |_| false));
+        tr.reset_metrics();
+        assert_eq!(tr.changes(), &[tr.t_now()]);
+        // A later change is a second marker.
+        tr.push_batch(&batch(tr.t_now() + dt, 500, |_| false));
+        tr.reset_metrics();
+        assert_eq!(tr.changes().len(), 2);
+        tr.clear();
+        assert!(tr.changes().is_empty());
     }
 
     #[test]

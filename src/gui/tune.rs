@@ -4,11 +4,12 @@
 
 use super::format::controller_text;
 use super::job::{Job, Waker};
+use super::plotkit;
 use super::units::MM_PER_M;
 use crate::params::{ControllerParams, Params};
 use crate::tune::{self, Evaluation, TuneOptions, TuneResult};
 use egui::{Color32, RichText};
-use egui_plot::{MarkerShape, Plot, PlotPoint, Points};
+use egui_plot::{AxisHints, MarkerShape, Plot, PlotPoint, Points};
 
 /// Short settings for interactive use (the CLI's default is 3 + 3 rides × 60 s, 120
 /// evaluations): 2 tuning and 2 held-out random rides of 20 s, 40 evaluations.
@@ -169,6 +170,16 @@ impl TunePanel {
         let Some(r) = &self.result else {
             return action;
         };
+        if r.kind != params.controller.kind {
+            // A front of other gains: never offered for Apply (it would switch the
+            // structure back without saying so).
+            ui.weak(format!(
+                "The last result tuned the {} gains; the structure is now {}. Press Tune for \
+                 its gains.",
+                r.kind, params.controller.kind
+            ));
+            return action;
+        }
         ui.label(format!(
             "{} evaluations ({}). Held-out a_w: {:.3} before, {:.3} m/s² after ({:+.1} %).",
             r.evaluations,
@@ -186,7 +197,8 @@ impl TunePanel {
             self.selected = Some(i);
         }
         if let Some(e) = self.selected.and_then(|i| r.pareto.get(i)) {
-            ui.label(RichText::new(point_text(e)).monospace());
+            let decimals = separating_decimals(r.pareto.iter().map(|e| e.objective));
+            ui.label(RichText::new(point_text(e, decimals)).monospace());
             if ui
                 .button("Apply")
                 .on_hover_text("Sets these gains on the live controller.")
@@ -199,10 +211,10 @@ impl TunePanel {
     }
 }
 
-/// One Pareto point for people.
-pub fn point_text(e: &Evaluation) -> String {
+/// One Pareto point for people, a_w with `decimals` decimals (see [`separating_decimals`]).
+pub fn point_text(e: &Evaluation, decimals: usize) -> String {
     format!(
-        "{}\na_w {:.3} m/s², max |u| {:.1} mm, GM {:.1} dB, PM {:.0}°",
+        "{}\na_w {:.decimals$} m/s², max |u| {:.1} mm, GM {:.1} dB, PM {:.0}°",
         controller_text(&e.controller),
         e.objective,
         e.max_abs_u_m * MM_PER_M,
@@ -211,16 +223,55 @@ pub fn point_text(e: &Evaluation) -> String {
     )
 }
 
+/// The fewest decimals (3 … 6) with which all `values` read differently: two points of a
+/// Pareto front never show the same a_w, so neither looks dominated by the other.
+pub fn separating_decimals(values: impl Iterator<Item = f64> + Clone) -> usize {
+    (3..=6)
+        .find(|&d| {
+            let mut shown: Vec<String> = values.clone().map(|v| format!("{v:.d$}")).collect();
+            let n = shown.len();
+            shown.sort();
+            shown.dedup();
+            shown.len() == n
+        })
+        .unwrap_or(6)
+}
+
 /// The front as points (max |u| [mm], objective); returns the index of a clicked point.
 fn pareto_plot(ui: &mut egui::Ui, front: &[Evaluation], selected: Option<usize>) -> Option<usize> {
     let pts: Vec<PlotPoint> = front
         .iter()
         .map(|e| PlotPoint::new(e.max_abs_u_m * MM_PER_M, e.objective))
         .collect();
+    let decimals = separating_decimals(front.iter().map(|e| e.objective));
+    const HEIGHT: f32 = 170.0;
+    let width = ui.available_width();
     let r = Plot::new("pareto")
-        .height(170.0)
-        .x_axis_label("max |u| [mm]")
-        .y_axis_label("a_w [m/s²]")
+        .height(HEIGHT)
+        // Numbered ticks on both axes (egui_plot's default left one x label, "20").
+        .custom_x_axes(vec![
+            AxisHints::new_x()
+                .label("max |u| [mm]")
+                .formatter(plotkit::y_tick)
+                .label_spacing(28.0..=32.0),
+        ])
+        .custom_y_axes(vec![plotkit::y_axis("a_w [m/s²]")])
+        .x_grid_spacer(move |input| plotkit::marks(input, width, 48.0))
+        .y_grid_spacer(move |input| plotkit::y_marks(input, HEIGHT))
+        .label_formatter(move |pos| {
+            let (name, p) = match pos {
+                egui_plot::HoverPosition::NearDataPoint {
+                    plot_name,
+                    position,
+                    ..
+                } => (format!("{plot_name}\n"), position),
+                egui_plot::HoverPosition::Elsewhere { position } => (String::new(), position),
+            };
+            Some(format!(
+                "{name}max |u| {:.2} mm\na_w {:.decimals$} m/s²",
+                p.x, p.y
+            ))
+        })
         .allow_drag(false)
         .allow_zoom(false)
         .allow_scroll(false)

@@ -305,6 +305,37 @@ fn pause_stops_the_stream_and_run_resumes_it() {
     until(&h, |e| matches!(e, Event::Samples(_)));
 }
 
+/// Issue 22, item 3 (idle means idle): paused, the engine sends nothing and never calls the
+/// waker, so the app is not repainted. (Before: a status event and a wake every 100 ms, which
+/// kept the paused app drawing ten frames a second.)
+#[test]
+fn paused_engine_sends_nothing_and_wakes_no_one() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let wakes = Arc::new(AtomicUsize::new(0));
+    let w = wakes.clone();
+    let h = engine::spawn(Params::paper(), move || {
+        w.fetch_add(1, Ordering::Relaxed);
+    });
+    until(&h, |e| matches!(e, Event::Samples(_)));
+    h.send(Command::Pause);
+    until(&h, |e| matches!(e, Event::Status { running: false, .. }));
+    std::thread::sleep(Duration::from_millis(100));
+    while h.events.try_recv().is_ok() {}
+    let before = wakes.load(Ordering::Relaxed);
+    std::thread::sleep(Duration::from_millis(600));
+    let events = h.events.try_iter().count();
+    assert_eq!(events, 0, "events while paused");
+    assert_eq!(
+        wakes.load(Ordering::Relaxed),
+        before,
+        "waker calls while paused"
+    );
+    // A command still answers at once.
+    h.send(Command::Run);
+    until(&h, |e| matches!(e, Event::Status { running: true, .. }));
+}
+
 #[test]
 fn invalid_parameters_are_refused_by_name_and_the_engine_keeps_running() {
     let h = engine::spawn(Params::paper(), || {});

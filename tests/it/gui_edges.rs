@@ -535,14 +535,44 @@ fn exported_frequency_figure_shows_what_the_view_shows() {
         .expect("figure")
         .1;
     assert!(freq.title.contains("preset paper"), "{}", freq.title);
+    assert!(freq.title.contains("τ = 17.5 ms"), "{}", freq.title);
+    // Curves keep the view's styles: the linear model dashed, the twin solid.
+    let styles: Vec<(String, bool)> = freq.panels[0]
+        .series
+        .iter()
+        .filter_map(|s| match s.style {
+            SeriesStyle::Line { dashed, .. } => Some((s.label.clone(), dashed)),
+            _ => None,
+        })
+        .collect();
+    assert!(
+        styles.iter().any(|(l, d)| l.starts_with("linear") && *d)
+            && styles.iter().any(|(l, d)| l.starts_with("twin") && !*d),
+        "{styles:?}"
+    );
     assert_eq!(freq.panels.len(), 4);
     for (i, p) in freq.panels.iter().enumerate() {
         let markers = p
             .series
             .iter()
             .filter(|s| matches!(s.style, SeriesStyle::Markers { .. }))
+            .filter(|s| !s.label.starts_with("|T| = 1"))
             .count();
         assert_eq!(markers, 1, "panel {i}: the dwell points");
+        if i == 0 {
+            // Issue 22, item 9: the |T| = 1 crossings and the margins, as in the view.
+            let crossings = p
+                .series
+                .iter()
+                .filter(|s| s.label.starts_with("|T| = 1 @"))
+                .count();
+            assert_eq!(crossings, 2, "linear and twin crossings");
+            assert!(
+                p.title.contains("GM") && p.title.contains("PM"),
+                "{}",
+                p.title
+            );
+        }
         if i < 2 {
             assert!(
                 p.series.iter().any(|s| s.label == "B: reference"),

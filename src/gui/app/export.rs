@@ -56,7 +56,7 @@ impl SeatTwinApp {
             .filter(|row| row.iter().all(|v| v.is_finite()))
             .collect();
         let c = &self.params.controller;
-        let comments = vec![
+        let mut comments = vec![
             (
                 "source".into(),
                 "seat-twin live traces (twin, linear, passive)".into(),
@@ -70,6 +70,19 @@ impl SeatTwinApp {
                 "SI (s, m, m/s², V, Pa, m³/s); t continues across restarts".into(),
             ),
         ];
+        // Every parameter that made the traces (the preset's keys, SI), so the file says
+        // what ran: lead, τ and the plant as well as the two gains above (other controller
+        // kinds' gains are left out: they were not used).
+        for spec in crate::params::PARAMS
+            .iter()
+            .filter(|s| s.applies_to(c.kind))
+            .filter(|s| !matches!(s.key, "controller.kp_v_per_m" | "controller.ki_v_s_per_m"))
+        {
+            comments.push((
+                spec.key.to_string(),
+                format!("{} {}", spec.get(&self.params), spec.unit),
+            ));
+        }
         CsvTable {
             header,
             comments,
@@ -129,8 +142,11 @@ impl SeatTwinApp {
             p.x_scale = Scale::Log10;
             for (style, pts) in fp.lines.iter().filter(|(s, _)| shown(s.name)) {
                 let (x, y) = points(pts, fp.phase);
-                p.series
-                    .push(Series::line(style.name, x, y, rgb(style.color)));
+                p.series.push(styled(
+                    Series::line(style.name, x, y, rgb(style.color)),
+                    style.width,
+                    style.style,
+                ));
             }
             if let Some((name, color, pts)) = fp.dwell.filter(|(n, ..)| shown(n))
                 && !pts.is_empty()
@@ -140,12 +156,40 @@ impl SeatTwinApp {
             }
             if fp.id == "t_mag" {
                 p.hlines = vec![(0.0, "|T| = 1".into())];
+                // As in the view: where |T| rises through 1 (the end of the isolation band)
+                // for the linear model and the twin, and the margins in the title; neither
+                // for an unstable loop, where they mean nothing.
+                if !unstable {
+                    let who = [("linear", Rgb(255, 127, 14)), ("twin", Rgb(31, 119, 180))];
+                    for ((name, color), cs) in who.into_iter().zip(&c.crossings) {
+                        if let Some(x) = cs.iter().find(|x| x.rising) {
+                            p.series.push(Series::markers(
+                                format!("|T| = 1 @ {:.2} Hz ({name})", x.freq_hz),
+                                vec![x.freq_hz],
+                                vec![0.0],
+                                color,
+                            ));
+                        }
+                    }
+                    let margins: Vec<String> = ["linear", "twin"]
+                        .iter()
+                        .zip(&c.stability)
+                        .filter_map(|(name, s)| {
+                            s.as_ref().map(|s| {
+                                format!("{name} {}", crate::gui::frequency::margin_text(&s.margins))
+                            })
+                        })
+                        .collect();
+                    if !margins.is_empty() {
+                        p.title = format!("{title} — {}", margins.join("; "));
+                    }
+                }
             }
             p
         });
         let mut freq = Figure::new(
             format!(
-                "seat-twin — preset {}{} — {}{}",
+                "seat-twin — preset {}{} — {}, {}{}",
                 self.preset.name,
                 if self.is_modified() {
                     " (modified)"
@@ -153,6 +197,7 @@ impl SeatTwinApp {
                     ""
                 },
                 crate::gui::format::controller_text(&self.params.controller),
+                delay_text(&self.params),
                 if unstable {
                     " — UNSTABLE closed loop (not a steady state)"
                 } else {
@@ -171,9 +216,24 @@ impl SeatTwinApp {
         let freq = self.frequency_figure();
         let (lin_c, twin_c, pas_c) = (Rgb(255, 127, 14), Rgb(31, 119, 180), Rgb(44, 160, 44));
         let tr = &self.traces;
-        let ch = |label: &str, chan: Ch, color: Rgb| {
+        // Each curve in the view's line style (dashed linear model and B, dotted passive),
+        // so the figure still tells them apart where they overlap and in black and white.
+        let ch_as = |label: &str, chan: Ch, color: Rgb, model: scopes::Model| {
             let (x, y) = tr.channel(chan).points().iter().map(|p| (p.x, p.y)).unzip();
-            Series::line(label, x, y, color)
+            let (w, st) = scopes::style_of(model);
+            styled(Series::line(label, x, y, color), w, st)
+        };
+        use scopes::Model;
+        let ch = |label: &str, chan: Ch, color: Rgb| {
+            let model = match label {
+                "linear" => Model::Linear,
+                "passive" => Model::Passive,
+                "platform" => Model::Platform,
+                "p2" | "Q2" => Model::Second,
+                l if l.starts_with("B") => Model::Reference,
+                _ => Model::Twin,
+            };
+            ch_as(label, chan, color, model)
         };
         let mut acc = Panel::new("Live traces", "time [s]", "acceleration [m/s²]");
         acc.series = vec![
@@ -217,17 +277,46 @@ impl SeatTwinApp {
         xv.series = vec![ch("twin", Ch::TwinXv, twin_c)];
         let mut scopes = Figure::new(
             format!(
-                "seat-twin — preset {}{} — live traces",
+                "seat-twin — preset {}{} — {}, {} — live traces",
                 self.preset.name,
                 if self.is_modified() {
                     " (modified)"
                 } else {
                     ""
-                }
+                },
+                crate::gui::format::controller_text(&self.params.controller),
+                delay_text(&self.params),
             ),
             vec![acc, stroke, pr, q, v, xv],
         );
         scopes.height = 1500;
         vec![("frequency", freq), ("scopes", scopes)]
+    }
+}
+
+/// `series` drawn as the view draws its curve: width `width` [px] and dashed unless
+/// `style` is solid (the figure has one dash pattern for the view's dashes and dots).
+fn styled(mut series: Series, width: f32, style: egui_plot::LineStyle) -> Series {
+    if let crate::plot::SeriesStyle::Line {
+        width: w, dashed, ..
+    } = &mut series.style
+    {
+        *w = width.round().max(1.0) as u32;
+        *dashed = !matches!(style, egui_plot::LineStyle::Solid);
+    }
+    series
+}
+
+/// The valve's delay for a figure title, in the display unit of the parameter table
+/// ("τ = 17.5 ms").
+fn delay_text(p: &Params) -> String {
+    match crate::params::spec("valve.tau_s") {
+        Some(s) => format!(
+            "{} = {} {}",
+            s.symbol,
+            crate::gui::format::compact(s.to_display(s.get(p))),
+            s.display.unit
+        ),
+        None => format!("τ = {} s", p.plant.valve.tau_s),
     }
 }

@@ -27,6 +27,9 @@ impl SeatTwinApp {
             p.meta.name.clone()
         };
         self.params = p.params;
+        // Messages about the parameters that were there are about them, not the new preset.
+        self.field_errors.clear();
+        self.param_error = None;
         self.preset = PresetInfo {
             name,
             description: p.meta.description,
@@ -114,7 +117,7 @@ impl SeatTwinApp {
 
     pub(super) fn run_pending(&mut self, action: Pending, ctx: &egui::Context) {
         match action {
-            Pending::OpenDialog => self.dialogs.request(Purpose::OpenPreset, "", ctx),
+            Pending::OpenDialog => self.request_file(Purpose::OpenPreset, "", ctx),
             Pending::LoadFile(p) => self.open_preset_file(&p),
             Pending::Quit => {
                 self.quit_confirmed = true;
@@ -135,20 +138,46 @@ impl SeatTwinApp {
 
     pub(super) fn save_as(&mut self, ctx: &egui::Context) {
         let name = format!("{}.toml", self.preset.name);
-        self.dialogs.request(Purpose::SavePreset, &name, ctx);
+        self.request_file(Purpose::SavePreset, &name, ctx);
+    }
+
+    /// The folder dialogs open in and typed paths default to: the last one used, else the
+    /// documents folder (see [`files::documents_dir`]).
+    pub fn file_dir(&self) -> PathBuf {
+        self.settings
+            .last_dir
+            .clone()
+            .filter(|d| d.is_dir())
+            .unwrap_or_else(files::documents_dir)
+    }
+
+    /// Opens the file dialog for `purpose` in [`Self::file_dir`], suggesting `name`.
+    pub(super) fn request_file(&mut self, purpose: Purpose, name: &str, ctx: &egui::Context) {
+        let dir = self.file_dir();
+        self.dialogs.request(purpose, name, &dir, ctx);
+    }
+
+    /// The full path a typed-path prompt suggests for `purpose` (empty for opening).
+    pub fn suggested_path(&self, purpose: Purpose) -> String {
+        let name = match purpose {
+            Purpose::ExportCsv => "traces.csv",
+            Purpose::ExportPng => "plots.png",
+            Purpose::SavePreset => "preset.toml",
+            Purpose::ExportReport => "calibration",
+            Purpose::OpenPreset | Purpose::LoadRecord | Purpose::LoadMeasured => "",
+        };
+        if name.is_empty() {
+            String::new()
+        } else {
+            self.file_dir().join(name).display().to_string()
+        }
     }
 
     pub(super) fn poll_files(&mut self, ctx: &egui::Context) {
         while let Some((purpose, paths)) = self.dialogs.poll() {
             if paths.is_empty() {
                 // Cancelled, or no dialog on this desktop: offer a typed path instead.
-                let suggested = match purpose {
-                    Purpose::ExportCsv => "traces.csv",
-                    Purpose::ExportPng => "plots.png",
-                    Purpose::SavePreset => "preset.toml",
-                    _ => "",
-                };
-                self.path_prompt = Some((purpose, suggested.to_string()));
+                self.path_prompt = Some((purpose, self.suggested_path(purpose)));
                 self.info("no file chosen (dialog cancelled, or no file dialog on this desktop): type a path below");
                 continue;
             }
@@ -178,7 +207,11 @@ impl SeatTwinApp {
                 egui::TextEdit::singleline(&mut text)
                     .id(egui::Id::unique("path_prompt"))
                     .desired_width(360.0)
-                    .hint_text("path/to/file"),
+                    .hint_text(if purpose == Purpose::LoadMeasured {
+                        "files separated by ;  a folder  or campaign/*.csv"
+                    } else {
+                        "path/to/file"
+                    }),
             );
             let enter = r.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
             if ui.button("OK").clicked() || enter {
@@ -189,6 +222,11 @@ impl SeatTwinApp {
             }
         });
         match done {
+            Some(true) if purpose == Purpose::LoadMeasured => {
+                // Several files, folders and patterns (see files::expand_paths).
+                self.path_prompt = None;
+                self.measured.load_typed(&text);
+            }
             Some(true) if !text.trim().is_empty() => {
                 self.path_prompt = None;
                 let path = PathBuf::from(text.trim());
@@ -200,17 +238,25 @@ impl SeatTwinApp {
         }
     }
 
-    pub(super) fn use_paths(
-        &mut self,
-        purpose: Purpose,
-        mut paths: Vec<PathBuf>,
-        ctx: &egui::Context,
-    ) {
+    /// Uses files chosen in a dialog or typed for `purpose` (the first, or all of them for
+    /// measured records); the folder is remembered for the next dialog and typed path.
+    pub fn use_paths(&mut self, purpose: Purpose, paths: Vec<PathBuf>, ctx: &egui::Context) {
         {
+            // Relative paths are read against the working directory; shown and remembered
+            // in full.
+            let paths: Vec<PathBuf> = paths.iter().map(|p| files::absolute(p)).collect();
+            if let Some(dir) = paths
+                .first()
+                .and_then(|p| p.parent())
+                .filter(|d| d.is_dir())
+            {
+                self.settings.last_dir = Some(dir.to_path_buf());
+            }
             if purpose == Purpose::LoadMeasured {
                 self.measured.load_files(paths);
                 return;
             }
+            let mut paths = paths;
             let path = paths.swap_remove(0);
             match purpose {
                 Purpose::LoadMeasured => {}
@@ -225,6 +271,10 @@ impl SeatTwinApp {
                         self.writer.write_csv(ctx, path, table);
                     }
                 }
+                Purpose::ExportReport => match self.measured.report() {
+                    Some(r) => self.writer.write_report(ctx, path, r.clone()),
+                    None => self.error("no calibration report yet: calibrate first"),
+                },
                 Purpose::ExportPng => {
                     let stem = path.with_extension("");
                     let figs = self.plot_figures();

@@ -17,13 +17,13 @@ impl SeatTwinApp {
             }
             ui.separator();
             if ui.button("Load platform record (CSV)…").clicked() {
-                self.dialogs.request(Purpose::LoadRecord, "", ctx);
+                self.request_file(Purpose::LoadRecord, "", ctx);
             }
             if ui.button("Export traces (CSV)…").clicked() {
-                self.dialogs.request(Purpose::ExportCsv, "traces.csv", ctx);
+                self.request_file(Purpose::ExportCsv, "traces.csv", ctx);
             }
             if ui.button("Export plots (PNG)…").clicked() {
-                self.dialogs.request(Purpose::ExportPng, "plots.png", ctx);
+                self.request_file(Purpose::ExportPng, "plots.png", ctx);
             }
             ui.separator();
             if ui.button("Quit").clicked() {
@@ -36,7 +36,7 @@ impl SeatTwinApp {
             }
             if ui.button("Load measured records (CSV)…").clicked() {
                 self.measured.open = true;
-                self.dialogs.request(Purpose::LoadMeasured, "", ctx);
+                self.request_file(Purpose::LoadMeasured, "", ctx);
             }
             if ui.button("Load the demo campaign").clicked() {
                 self.measured.open = true;
@@ -65,6 +65,19 @@ impl SeatTwinApp {
             if self.settings.theme != before {
                 ctx.set_theme(self.settings.theme.preference());
             }
+            ui.separator();
+            ui.label("UI scale (Ctrl + / Ctrl −)");
+            ui.horizontal(|ui| {
+                for z in UI_SCALES {
+                    let on = (self.settings.ui_scale - z).abs() < 0.01;
+                    if ui
+                        .selectable_label(on, format!("{:.0} %", z * 100.0))
+                        .clicked()
+                    {
+                        self.set_ui_scale(ctx, z);
+                    }
+                }
+            });
             ui.separator();
             ui.checkbox(&mut self.settings.show_schematic, "Schematic");
             ui.checkbox(&mut self.settings.dwell_auto, "Auto-recompute dwell points");
@@ -185,7 +198,7 @@ impl SeatTwinApp {
                     self.apply_excitation();
                 }
             }
-            ExcitationAction::LoadRecord => self.dialogs.request(Purpose::LoadRecord, "", ctx),
+            ExcitationAction::LoadRecord => self.request_file(Purpose::LoadRecord, "", ctx),
             ExcitationAction::LoadRecordPath(p) => self.load_record_file(&p),
         }
         if let Some(p) = self.dialogs.open() {

@@ -2,6 +2,26 @@
 //! residual diagnosis.
 
 use super::*;
+use crate::gui::plotkit::{self, LegendItem, Swatch, legend_ui, y_axis, y_marks};
+use egui_plot::LineStyle;
+
+/// (name, points, colour, width) of one plot's curve.
+type Curve<'a> = (&'static str, &'a [[f64; 2]], Color32, f32);
+
+/// The twin with the live parameters, the calibrated twin (if any) and the measured channel
+/// last, thin: visible where the twin covers it.
+fn three<'a>(
+    live: &'a [[f64; 2]],
+    cal: Option<&'a [[f64; 2]]>,
+    measured: &'a [[f64; 2]],
+) -> Vec<Curve<'a>> {
+    let mut v: Vec<Curve<'a>> = vec![("twin (live parameters)", live, TWIN, 2.0)];
+    if let Some(c) = cal {
+        v.push(("twin (calibrated)", c, CALIBRATED, 2.0));
+    }
+    v.push(("measured", measured, MEASURED, 1.0));
+    v
+}
 
 impl MeasuredData {
     pub(super) fn overlay_ui(&mut self, ui: &mut egui::Ui) {
@@ -24,11 +44,15 @@ impl MeasuredData {
             .calibrated_view
             .as_ref()
             .filter(|c| c.record == v.record);
+        // Numbers on every y axis (plotkit's axis: egui_plot's default left the residual
+        // with only "0"), and the legend in a row above each plot, off the data; a click
+        // on an entry hides its curve.
+        const HEIGHT: f32 = 150.0;
         let plot = |id: &str, label: &str| {
             Plot::new(id.to_owned())
-                .height(150.0)
-                .y_axis_label(label.to_owned())
-                .y_axis_min_width(44.0)
+                .height(HEIGHT)
+                .custom_y_axes(vec![y_axis(label)])
+                .y_grid_spacer(|input| y_marks(input, HEIGHT))
                 .label_formatter(|pos| {
                     let (name, p) = match pos {
                         egui_plot::HoverPosition::NearDataPoint {
@@ -48,57 +72,66 @@ impl MeasuredData {
                 })
                 .link_axis(egui::Id::unique("measured_link"), [true, false])
                 .link_cursor(egui::Id::unique("measured_link"), [true, false])
-                .legend(
-                    Legend::default()
-                        .position(Corner::LeftTop)
-                        .text_style(egui::TextStyle::Small)
-                        .background_alpha(0.6),
-                )
         };
-        let line = |name: &str, pts: &[[f64; 2]], c: Color32, w: f32| {
-            Line::new(name.to_owned(), PlotPoints::from(pts.to_vec()))
-                .color(c)
-                .width(w)
-        };
-        plot("measured_du", "du/dt [mm/s]").show(ui, |pu| {
-            pu.line(line("twin (live parameters)", &v.du[1], TWIN, 2.0));
-            if let Some(c) = cal {
-                pu.line(line("twin (calibrated)", &c.du[1], CALIBRATED, 2.0));
-            }
-            // On top, thin: visible where the twin covers it.
-            pu.line(line("measured", &v.du[0], MEASURED, 1.0));
-        });
-        plot("measured_u", "stroke u [mm]").show(ui, |pu| {
-            pu.line(line("twin (live parameters)", &v.u[1], TWIN, 2.0));
-            if let Some(c) = cal {
-                pu.line(line("twin (calibrated)", &c.u[1], CALIBRATED, 2.0));
-            }
-            // On top, thin: visible where the twin covers it.
-            pu.line(line("measured", &v.u[0], MEASURED, 1.0));
-        });
+        let hidden = &mut self.hidden;
+        let mut show =
+            |ui: &mut egui::Ui, id: &str, label: &str, x_label: bool, curves: &[Curve<'_>]| {
+                let items: Vec<LegendItem<'_>> = curves
+                    .iter()
+                    .map(|&(name, _, color, w)| LegendItem {
+                        name,
+                        color,
+                        swatch: Swatch::Line(w, LineStyle::Solid),
+                    })
+                    .collect();
+                legend_ui(ui, id, &items, hidden);
+                let p = plot(id, label);
+                let p = if x_label {
+                    p.x_axis_label("time [s]")
+                } else {
+                    p
+                };
+                p.show(ui, |pu| {
+                    for &(name, pts, color, w) in curves {
+                        if !plotkit::hidden(hidden, id, name) {
+                            pu.line(
+                                Line::new(name, PlotPoints::from(pts.to_vec()))
+                                    .color(color)
+                                    .width(w),
+                            );
+                        }
+                    }
+                });
+            };
+        show(
+            ui,
+            "measured_du",
+            "du/dt [mm/s]",
+            false,
+            &three(&v.du[1], cal.map(|c| c.du[1].as_slice()), &v.du[0]),
+        );
+        show(
+            ui,
+            "measured_u",
+            "stroke u [mm]",
+            false,
+            &three(&v.u[1], cal.map(|c| c.u[1].as_slice()), &v.u[0]),
+        );
         if !v.ydd[0].is_empty() {
-            plot("measured_ydd", "body accel. [m/s²]").show(ui, |pu| {
-                pu.line(line("twin (live parameters)", &v.ydd[1], TWIN, 2.0));
-                if let Some(c) = cal {
-                    pu.line(line("twin (calibrated)", &c.ydd[1], CALIBRATED, 2.0));
-                }
-                // On top, thin: visible where the twin covers it.
-                pu.line(line("measured", &v.ydd[0], MEASURED, 1.0));
-            });
+            show(
+                ui,
+                "measured_ydd",
+                "body accel. [m/s²]",
+                false,
+                &three(&v.ydd[1], cal.map(|c| c.ydd[1].as_slice()), &v.ydd[0]),
+            );
         }
-        plot("measured_res", "residual du/dt [mm/s]")
-            .x_axis_label("time [s]")
-            .show(ui, |pu| {
-                pu.line(line("twin − measured (live)", &v.residual, RESIDUAL, 1.0));
-                if let Some(c) = cal {
-                    pu.line(line(
-                        "twin − measured (calibrated)",
-                        &c.residual,
-                        CALIBRATED,
-                        1.0,
-                    ));
-                }
-            });
+        let mut residual: Vec<Curve<'_>> =
+            vec![("twin − measured (live)", &v.residual, RESIDUAL, 1.0)];
+        if let Some(c) = cal {
+            residual.push(("twin − measured (calibrated)", &c.residual, CALIBRATED, 1.0));
+        }
+        show(ui, "measured_res", "residual du/dt [mm/s]", true, &residual);
     }
 
     pub(super) fn diagnosis_ui(&self, ui: &mut egui::Ui) {
