@@ -198,7 +198,11 @@ impl LoopPlant {
         ab.view_mut((0, 0), (np, np)).copy_from(&at);
         ab.set_column(np, &bt);
         let svd = ab.svd(true, false);
-        let (Some(u), sv) = (svd.u, svd.singular_values) else {
+        let sv = svd.singular_values;
+        let tol = 1e-9 * sv.max();
+        let keep: Vec<usize> = (0..np).filter(|&k| sv[k] > tol).collect();
+        let (Some(u), false) = (svd.u, keep.len() == np) else {
+            // Nothing to take out (or no basis to take it out with).
             return Self {
                 a: at,
                 b: bt,
@@ -208,18 +212,6 @@ impl LoopPlant {
                 neutral_modes: 0,
             };
         };
-        let tol = 1e-9 * sv.max();
-        let keep: Vec<usize> = (0..np).filter(|&k| sv[k] > tol).collect();
-        if keep.len() == np {
-            return Self {
-                a: at,
-                b: bt,
-                u_row,
-                ydd_row,
-                ydd_b,
-                neutral_modes: 0,
-            };
-        }
         let q = u.select_columns(&keep);
         Self {
             a: q.tr_mul(&at) * &q,

@@ -188,6 +188,24 @@ impl TunePanel {
             r.tuned_heldout.objective,
             100.0 * (r.tuned_heldout.objective / r.baseline_heldout.objective - 1.0)
         ));
+        if let Some(first) = r.failures.first() {
+            ui.colored_label(
+                Color32::from_rgb(200, 60, 40),
+                format!(
+                    "The claim fails where instability shows: {first}{}",
+                    if r.failures.len() > 1 {
+                        format!(" (and {} more)", r.failures.len() - 1)
+                    } else {
+                        String::new()
+                    }
+                ),
+            );
+        } else {
+            ui.weak(
+                "Checked at all 27 points of the spread: stable at rest and settled after a \
+                 bump on the twin (the Pareto points are stable there by the eigenvalues).",
+            );
+        }
         if r.pareto.is_empty() {
             ui.weak("no feasible point: the start was kept");
             return action;
@@ -214,12 +232,17 @@ impl TunePanel {
 /// One Pareto point for people, a_w with `decimals` decimals (see [`separating_decimals`]).
 pub fn point_text(e: &Evaluation, decimals: usize) -> String {
     format!(
-        "{}\na_w {:.decimals$} m/s², max |u| {:.1} mm, GM {:.1} dB, PM {:.0}°",
+        "{}\na_w {:.decimals$} m/s², max |u| {:.1} mm, GM {:.1} dB, PM {:.0}°, delay margin {}",
         controller_text(&e.controller),
         e.objective,
         e.max_abs_u_m * MM_PER_M,
         e.gain_margin_db,
-        e.phase_margin_deg
+        e.phase_margin_deg,
+        if e.delay_margin_s.is_finite() {
+            format!("{:.1} ms", e.delay_margin_s * 1e3)
+        } else {
+            "∞ (no destabilising crossover)".into()
+        }
     )
 }
 

@@ -215,8 +215,9 @@ fn saved_preset_reads_back_and_clears_the_modified_marker() {
     );
 }
 
+/// The banner says which mode grows and how fast (the eigenvalue verdict), and the remedy.
 #[test]
-fn positive_kp_shows_the_unstable_banner_with_margins() {
+fn positive_kp_shows_the_unstable_banner_with_the_growing_mode() {
     let mut h = harness();
     h.step();
     assert!(h.query_by_label_contains("UNSTABLE").is_none());
@@ -227,7 +228,10 @@ fn positive_kp_shows_the_unstable_banner_with_margins() {
     h.step();
     let banner = h.get_by_label_contains("UNSTABLE");
     let text = format!("{banner:?}");
-    assert!(text.contains("GM") && text.contains("PM"), "{text}");
+    assert!(
+        text.contains("grows at") && text.contains("use a negative Kp"),
+        "{text}"
+    );
 }
 
 #[test]

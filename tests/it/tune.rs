@@ -101,54 +101,52 @@ fn tune_improves_the_paper_gains_within_every_constraint() {
     );
 }
 
+/// A very short tune of `kind` from the paper's plant, its outputs written into a temporary
+/// folder, and their report.json.
+fn short_tune_written(
+    kind: ControllerKind,
+) -> (tune::TuneResult, tempfile::TempDir, serde_json::Value) {
+    let p = Params::paper();
+    let mut o = short(kind);
+    o.max_evaluations = 12;
+    o.duration_s = 8.0;
+    let r = tune::tune(&p, &o, None).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut start = p;
+    start.controller.kind = kind;
+    tune::report::write_outputs(&r, &start, dir.path(), 1.0).unwrap();
+    let json =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
+    (r, dir, json)
+}
+
 /// A skyhook tuned from its default gains cannot keep the oil column stable at rest over the
 /// spread (issue 19): the run says why and writes its report, but no tuned.toml.
 #[test]
 fn a_claim_that_fails_writes_no_tuned_preset() {
-    let p = Params::paper();
-    let mut o = short(ControllerKind::Skyhook);
-    o.max_evaluations = 12;
-    o.duration_s = 8.0;
-    let r = tune::tune(&p, &o, None).unwrap();
+    let (r, dir, json) = short_tune_written(ControllerKind::Skyhook);
     assert!(!r.failures.is_empty());
     assert!(
         r.failures.iter().any(|f| f.contains("unstable")),
         "{:?}",
         r.failures
     );
-    let dir = tempfile::tempdir().unwrap();
-    let mut start = p;
-    start.controller.kind = ControllerKind::Skyhook;
-    tune::report::write_outputs(&r, &start, dir.path(), 1.0).unwrap();
     assert!(!dir.path().join("tuned.toml").exists());
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
-            .unwrap();
     assert_eq!(json["claim_holds"], false);
     assert!(!json["failures"].as_array().unwrap().is_empty());
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(md.contains("The claim fails"), "{md}");
-    assert!(!md.contains("NaN") && !md.contains("inf"), "{md}");
+    assert!(!md.contains("NaN") && !md.contains(" inf"), "{md}");
 }
 
 #[test]
 fn tune_outputs_load_and_carry_the_interface_keys() {
-    let p = Params::paper();
-    let mut o = short(ControllerKind::Predictive);
-    o.max_evaluations = 12;
-    o.duration_s = 8.0;
-    let r = tune::tune(&p, &o, None).unwrap();
+    let (r, dir, json) = short_tune_written(ControllerKind::Predictive);
     assert!(r.failures.is_empty(), "{:?}", r.failures);
-    let dir = tempfile::tempdir().unwrap();
-    let mut start = p;
-    start.controller.kind = ControllerKind::Predictive;
-    tune::report::write_outputs(&r, &start, dir.path(), 1.0).unwrap();
     let preset = Preset::load(&dir.path().join("tuned.toml")).unwrap();
     assert_eq!(preset.params.controller, r.tuned.controller);
     assert_eq!(preset.params.controller.kind, ControllerKind::Predictive);
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
-            .unwrap();
     assert_eq!(json["controller"]["kind"], "predictive");
     assert!(json["controller"]["gains"]["lead_s"].is_number());
     assert_eq!(json["claim_holds"], true);
