@@ -34,6 +34,7 @@ fn main() {
 #[cfg(unix)]
 fn clean_up_on_signals() {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    use std::io::Write;
     let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
         return;
     };
@@ -45,7 +46,10 @@ fn clean_up_on_signals() {
                 SIGTERM => "SIGTERM",
                 _ => "SIGHUP",
             };
-            eprintln!(
+            // Not eprintln!: with stderr closed (`| head`) it would panic, and this thread
+            // would never reach the exit.
+            let _ = writeln!(
+                std::io::stderr(),
                 "\ninterrupted ({name}): stopped{}",
                 if removed > 0 {
                     "; the unfinished output was removed"

@@ -624,3 +624,53 @@ fn a_million_row_record_under_a_memory_limit_replays_or_is_refused_up_front() {
     );
     assert_eq!(entry_count(dir.path()), 3, "something was left: {err}");
 }
+
+/// Before: with stderr closed (`seat-twin tune … 2>&1 | head -1`), a SIGTERM removed the
+/// staged output but the handler's message panicked on the broken pipe before the exit, so
+/// the run went on (a `timeout` could not stop it). Now the signal ends the run.
+#[cfg(unix)]
+#[test]
+fn sigterm_ends_a_run_whose_stderr_is_closed() {
+    let dir = tmp();
+    let out = dir.path().join("tuned");
+    let mut child = bin()
+        .args(["tune", "--out", s(&out)])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary starts");
+    let mut err = child.stderr.take().unwrap();
+    let mut text = String::new();
+    let mut buf = [0u8; 256];
+    let started = Instant::now();
+    while !text.contains('\n') && started.elapsed() < Duration::from_secs(60) {
+        let n = err.read(&mut buf).unwrap_or(0);
+        if n == 0 {
+            break;
+        }
+        text.push_str(&String::from_utf8_lossy(&buf[..n]));
+    }
+    assert!(text.starts_with("tuning "), "{text}");
+    drop(err);
+    std::thread::sleep(Duration::from_millis(300));
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let started = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if started.elapsed() > Duration::from_secs(10) {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let status = status.expect("the run still went on 10 s after SIGTERM");
+    assert_eq!(status.code(), Some(128 + 15));
+    assert_eq!(entry_count(dir.path()), 0, "something was left");
+}
