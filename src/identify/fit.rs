@@ -34,6 +34,11 @@ pub enum Knob {
     FrictionViscous,
     /// `effects.valve_overlap.overlap_m` [m] = 2e-5·|θ|.
     Overlap,
+    /// `effects.valve_overlap.edge_width_m` [m] = 2e-5·|θ|.
+    OverlapEdge,
+    /// `effects.friction.stribeck_n` [N] = 10·|θ| (at the preset's Stribeck velocity).
+    FrictionStribeck,
+
     /// `effects.valve_offset.bias_v` [V] = 0.02·θ.
     Offset,
     /// `effects.leakage.coefficient_m3_per_s_pa` [m³/(s·Pa)] = 1e-12·|θ|.
@@ -62,6 +67,9 @@ impl Knob {
             Knob::FrictionCoulomb if e.friction.enabled => e.friction.coulomb_n / 10.0,
             Knob::FrictionViscous if e.friction.enabled => e.friction.viscous_n_s_per_m / 100.0,
             Knob::Overlap if e.valve_overlap.enabled => e.valve_overlap.overlap_m / 2e-5,
+            Knob::OverlapEdge if e.valve_overlap.enabled => e.valve_overlap.edge_width_m / 2e-5,
+            Knob::FrictionStribeck if e.friction.enabled => e.friction.stribeck_n / 10.0,
+
             Knob::Offset if e.valve_offset.enabled => e.valve_offset.bias_v / 0.02,
             Knob::Leakage if e.leakage.enabled => e.leakage.coefficient_m3_per_s_pa / 1e-12,
             Knob::Compliance if e.compliance.enabled => {
@@ -82,6 +90,9 @@ impl Knob {
             Knob::FrictionCoulomb => "effects.friction.coulomb_n",
             Knob::FrictionViscous => "effects.friction.viscous_n_s_per_m",
             Knob::Overlap => "effects.valve_overlap.overlap_m",
+            Knob::OverlapEdge => "effects.valve_overlap.edge_width_m",
+            Knob::FrictionStribeck => "effects.friction.stribeck_n",
+
             Knob::Offset => "effects.valve_offset.bias_v",
             Knob::Leakage => "effects.leakage.coefficient_m3_per_s_pa",
             Knob::Compliance => "effects.compliance.effective_bulk_modulus_pa",
@@ -102,6 +113,9 @@ impl Knob {
             Knob::FrictionCoulomb => 10.0 * a,
             Knob::FrictionViscous => 100.0 * a,
             Knob::Overlap => (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m),
+            Knob::OverlapEdge => (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m),
+            Knob::FrictionStribeck => 10.0 * a,
+
             Knob::Offset => 0.02 * theta,
             Knob::Leakage => 1e-12 * a,
             Knob::Compliance => p.plant.fluid.bulk_modulus_pa / (1.0 + a),
@@ -111,8 +125,10 @@ impl Knob {
         let e = &mut p.plant.effects;
         match self {
             Knob::Cd | Knob::Tau | Knob::Mass => {}
-            Knob::FrictionCoulomb | Knob::FrictionViscous => e.friction.enabled = true,
-            Knob::Overlap => e.valve_overlap.enabled = true,
+            Knob::FrictionCoulomb | Knob::FrictionViscous | Knob::FrictionStribeck => {
+                e.friction.enabled = true
+            }
+            Knob::Overlap | Knob::OverlapEdge => e.valve_overlap.enabled = true,
             Knob::Offset => e.valve_offset.enabled = true,
             Knob::Leakage => e.leakage.enabled = true,
             Knob::Compliance => e.compliance.enabled = true,

@@ -4,6 +4,7 @@
 use super::EffectId;
 use super::diagnose;
 use super::fit::FittedValue;
+use super::raw_error::RawErrorReport;
 use super::replay::{ChannelErrors, PreparedRecord, Replay};
 use crate::params::Params;
 use serde::{Deserialize, Serialize};
@@ -170,6 +171,11 @@ pub struct CalibrationReport {
     pub raw_nrmse: RawNrmse,
     /// What the twin still misses after the effects (when not at the noise level).
     pub residual_left: Option<diagnose::ResidualLeft>,
+    /// The raw error measure ([`super::raw_error`]) of every record and raw channel with the
+    /// declared parameters re-fitted, no effect (nominal when nothing was fitted).
+    pub raw_error_before: RawErrorReport,
+    /// The same with the calibrated parameters: the verdict's measure.
+    pub raw_error_after: RawErrorReport,
 }
 
 /// How the records were split into the part that is fitted and the part held out.

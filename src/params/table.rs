@@ -120,7 +120,7 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
-pub static PARAMS: [ParamSpec; 46] = [
+pub static PARAMS: [ParamSpec; 47] = [
     entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
     entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
@@ -207,6 +207,9 @@ pub static PARAMS: [ParamSpec; 46] = [
         "smoothing velocity of the friction's sign function"),
     entry!("effects.valve_overlap.overlap_m", plant.effects.valve_overlap.overlap_m, "overlap", "m",
         [0.0, 0.01], None, (1e6, "µm"), "spool overlap on each side of null"),
+    entry!("effects.valve_overlap.edge_width_m", plant.effects.valve_overlap.edge_width_m, "w_edge",
+        "m", [0.0, 0.01], None, (1e6, "µm"),
+        "width over which the overlap's rounded edges open (0: sharp)"),
     entry!("effects.valve_offset.bias_v", plant.effects.valve_offset.bias_v, "V_bias", "V", [-5.0, 5.0],
         None, (1e3, "mV"), "valve null offset as a command bias"),
     entry!("effects.leakage.coefficient_m3_per_s_pa", plant.effects.leakage.coefficient_m3_per_s_pa,

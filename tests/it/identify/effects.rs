@@ -27,7 +27,8 @@ fn friction_is_found() {
         friction: Some((40.0, 20.0, 0.01, 80.0)),
         ..Default::default()
     };
-    let r = check_single(fx, EffectId::Friction, 2);
+    let r = check_friction(fx, 2, false);
+    assert_eq!(first_ranked(&r), EffectId::Friction);
     // Coulomb friction acts at reversals, which sag cannot mimic: no ambiguity note.
     assert!(
         !r.notes.iter().any(|n| n.contains("about equally")),
@@ -140,7 +141,8 @@ fn friction_is_found_with_pressures() {
         friction: Some((40.0, 5.0, 0.01, 80.0)),
         ..Default::default()
     };
-    check_single_with(fx, EffectId::Friction, 2, true);
+    let r = check_friction(fx, 2, true);
+    assert_eq!(first_ranked(&r), EffectId::Friction);
 }
 
 #[test]
@@ -239,7 +241,14 @@ fn friction_and_valve_overlap_are_both_found() {
         overlap: Some(40e-6),
         ..Default::default()
     };
-    check_pair(fx, [EffectId::Friction, EffectId::ValveOverlap], 21, false);
+    // Both are found; the friction law's form leaves the verdict `unexplained` (see
+    // `check_friction`).
+    let r = check_friction(fx, 21, false);
+    assert!(
+        r.effects.iter().any(|e| e.effect == EffectId::ValveOverlap),
+        "{}",
+        summary(&r)
+    );
 }
 
 #[test]
@@ -298,4 +307,34 @@ fn effect_outside_the_library_is_unexplained() {
     );
     let md = identify::report::report_markdown(&r, None);
     assert!(md.contains("## What is left"), "{md}");
+}
+
+/// Issue 20: an effect outside the library that makes the stroke drift slowly (the valve's
+/// null drifting during each test) is `unexplained`, however well a valve offset follows
+/// the drift's mean; the report names the record, `u`, the band and the window where the raw
+/// residual stays above the noise floor. The old verdict, which judged a low-passed velocity
+/// weighted by 1 % of its own RMS, could not see this drift.
+#[test]
+fn a_slow_stroke_drift_outside_the_library_is_unexplained() {
+    let fx = RigEffects {
+        null_drift_v_per_s: Some(2e-3),
+        ..Default::default()
+    };
+    let r = run(fx, 25);
+    let s = summary(&r);
+    eprintln!("null drift: {s}; raw: {}", r.raw_error_after.summary());
+    assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
+    let worst = r
+        .raw_error_after
+        .above
+        .first()
+        .expect("a band above the floor");
+    assert_eq!(worst.channel, "u", "{s}");
+    assert!(worst.ratio > 2.0 * r.raw_error_after.limit, "{worst:?}");
+    let json = identify::report::report_json(&r);
+    assert_eq!(json["raw_error"]["after"]["at_floor"], false);
+    let left = json["residual_left"]["summary"]
+        .as_str()
+        .unwrap_or_default();
+    assert!(left.contains(&format!("{} u ", worst.file)), "{left}");
 }

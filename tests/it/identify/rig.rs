@@ -27,6 +27,11 @@ pub(super) struct RigEffects {
     /// with the opening (asymmetric metering edges). No library effect has this form: an
     /// offset shifts null but keeps the gain, overlap and sag are symmetric.
     pub(super) cd_spool: Option<f64>,
+    /// Outside the library: the valve's null drifts during each test (its torque motor
+    /// warming up), as a command-referred bias growing at this rate [V/s] from the test's
+    /// start. The stroke drifts slowly, faster and faster; a constant offset can follow its
+    /// mean only.
+    pub(super) null_drift_v_per_s: Option<f64>,
 }
 
 pub(super) struct Rig {
@@ -214,7 +219,10 @@ impl Rig {
                 break;
             }
             for _ in 0..per_sample {
-                let f = |tt: f64, yy: &[f64; 10]| self.rhs(yy, delayed(&hist, tt), plat(tt).2);
+                let drift = |tt: f64| self.fx.null_drift_v_per_s.map_or(0.0, |r| r * tt);
+                let f = |tt: f64, yy: &[f64; 10]| {
+                    self.rhs(yy, delayed(&hist, tt) + drift(tt), plat(tt).2)
+                };
                 let k1 = f(t, &y);
                 let mut tmp = [0.0; 10];
                 for i in 0..10 {
@@ -354,8 +362,9 @@ pub(super) fn summary(r: &CalibrationReport) -> String {
         })
         .max_by(|a, b| a.1.total_cmp(&b.1));
     format!(
-        "verdict {:?}, worst record channel after {worst:?}, effects {:?}, errors nominal {:.3} before {:.3} after {:.3}, cd {:.5} tau {:.5}; {}",
+        "verdict {:?} (raw: {}), worst record channel after {worst:?}, effects {:?}, errors nominal {:.3} before {:.3} after {:.3}, cd {:.5} tau {:.5}; {}",
         r.verdict,
+        r.raw_error_after.summary(),
         r.effects
             .iter()
             .map(|e| e.effect.name())
@@ -385,6 +394,33 @@ pub(super) fn assert_reduced_to_noise(r: &CalibrationReport, s: &str) {
 
 pub(super) fn check_single(fx: RigEffects, expected: EffectId, seed: u64) -> CalibrationReport {
     check_single_with(fx, expected, seed, false)
+}
+
+/// A friction rig: friction is ranked first and added, Cd and τ are found, and the verdict is
+/// `unexplained` with what is left small and named. Known limitation (issue 20): the rig's
+/// friction law (sign smoothed over 2 mm/s, Stribeck velocity 10 mm/s) differs from the
+/// library's (1 mm/s, and the preset's 5 mm/s, neither fitted), and the raw error measure sees
+/// that difference on u and ÿ below 25 Hz at 3–7× the noise floor, where the old weighted
+/// velocity measure called it `explained`.
+pub(super) fn check_friction(fx: RigEffects, seed: u64, pressures: bool) -> CalibrationReport {
+    let r = run_with(fx, seed, pressures);
+    let s = summary(&r);
+    eprintln!("friction: {s}");
+    assert!(
+        r.effects.iter().any(|e| e.effect == EffectId::Friction),
+        "{s}"
+    );
+    assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
+    for e in &r.raw_error_after.above {
+        assert!(e.ratio < 10.0 && e.band_hz[1] <= 25.0, "{e:?}: {s}");
+        assert!(e.channel == "u" || e.channel == "ydd", "{e:?}");
+    }
+    assert!(
+        (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
+        "{s}"
+    );
+    assert!((r.params.plant.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
+    r
 }
 
 pub(super) fn check_single_with(
