@@ -220,6 +220,7 @@ pub(super) fn insufficient_report(
         effects: Vec::new(),
         candidates: Vec::new(),
         calibrated: Vec::new(),
+        sensors: Vec::new(),
         mass_fitted: false,
         correlation: (Vec::new(), Vec::new()),
         baseline: None,

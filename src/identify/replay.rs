@@ -407,7 +407,8 @@ impl PreparedRecord {
             file: self.name.clone(),
             source: e,
         })?;
-        // Pad (rounding of the last step) so channels align with the record exactly.
+        // Pad (rounding of the last step) so channels align with the record exactly, then read
+        // u and ÿ through the calibrated sensors.
         while out.t.len() < n {
             let i = out.t.len();
             for v in [
@@ -425,6 +426,8 @@ impl PreparedRecord {
             }
             out.t.push(i as f64 * self.dt);
         }
+        params.sensors.read_u(&mut out.u, self.dt);
+        params.sensors.read_ydd(&mut out.ydd);
         Ok(out)
     }
 

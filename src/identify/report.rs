@@ -71,6 +71,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             "relative_gain": c.relative_gain, "params": c.params})).collect::<Vec<_>>(),
         "score": "ΔBIC = n_eff·ln(RSS_candidate/RSS_current) + Δk·ln(n_eff) against the model of that round, on the fit records; negative is better",
         "calibrated_parameters": calibrated,
+        "sensors": r.sensors,
         "calibrated_uncertainties": unc,
         "mass_fitted": r.mass_fitted,
         "paper_baseline": r.baseline,
@@ -392,6 +393,37 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
             format_value(&v.name, nominal),
             paper,
             format_parameter(&v.name, v.value, v.std)
+        );
+    }
+    let _ = writeln!(s, "\n## Sensors\n");
+    if r.sensors.is_empty() {
+        let _ = writeln!(
+            s,
+            "No sensor property estimated more than 3σ from exact (or no ÿ to tell them from the plant).\n"
+        );
+    }
+    for e in &r.sensors {
+        let text = match e.kind.as_str() {
+            "lag" => format!(
+                "the {} sensor lags by {:.2} ± {:.2} ms",
+                e.channel,
+                1e3 * e.value,
+                1e3 * e.uncertainty
+            ),
+            "scale" => format!(
+                "the {} sensor reads {:+.2} ± {:.2} % of the true value",
+                e.channel,
+                100.0 * (e.value - 1.0),
+                100.0 * e.uncertainty
+            ),
+            _ => format!(
+                "the {} sensor has an offset of {:.4} ± {:.4} (SI)",
+                e.channel, e.value, e.uncertainty
+            ),
+        };
+        let _ = writeln!(
+            s,
+            "- {text} (a property of the measurement, not of the plant; calibrated.toml carries it and replay applies it)"
         );
     }
     let _ = writeln!(s, "\n## Effects added\n");

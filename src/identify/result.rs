@@ -59,6 +59,19 @@ pub struct AddedEffect {
     pub evidence: String,
 }
 
+/// A property of a record's sensor, estimated by the calibration (not a plant effect).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SensorEstimate {
+    /// The channel: `u` or `ydd`.
+    pub channel: String,
+    /// `offset` (SI unit of the channel), `scale` (a ratio, 1 = exact) or `lag` [s].
+    pub kind: String,
+    /// The estimate.
+    pub value: f64,
+    /// Its 1-σ uncertainty.
+    pub uncertainty: f64,
+}
+
 /// Verdict of a calibration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -123,6 +136,9 @@ pub struct CalibrationReport {
     pub candidates: Vec<CandidateScore>,
     /// Final declared parameters (Cd, τ, mass if identifiable) with uncertainties.
     pub calibrated: Vec<FittedValue>,
+    /// Sensor properties found: those estimated more than 3σ from exact (the others are
+    /// set back to exact and not applied).
+    pub sensors: Vec<SensorEstimate>,
     /// Whether the mass was identifiable and fitted.
     pub mass_fitted: bool,
     /// Correlation matrix of the final fit, with its knob names.

@@ -15,7 +15,8 @@ use super::progress::{Monitor, Stage};
 use super::raw_error::{RawErrorReport, raw_error_report};
 use super::replay::Replay;
 use super::result::{
-    AddedEffect, CalibrationReport, ErrorSummary, PaperBaseline, RAW_NRMSE, RawNrmse, Verdict,
+    AddedEffect, CalibrationReport, ErrorSummary, PaperBaseline, RAW_NRMSE, RawNrmse,
+    SensorEstimate, Verdict,
 };
 use super::{CalibrationOptions, IdentifyError};
 use crate::params::Params;
@@ -136,7 +137,7 @@ pub fn declared_fit(
     let n_eff0 = fit::effective_count(&probe_r);
     let mass_rel_std = probe.values[2].std / probe.values[2].value * (n as f64 / n_eff0).sqrt();
     let mass_fitted = mass_rel_std.is_finite() && mass_rel_std < options.mass_max_rel_std;
-    let knobs: Vec<Knob> = if mass_fitted {
+    let mut knobs: Vec<Knob> = if mass_fitted {
         vec![Knob::Cd, Knob::Tau, Knob::Mass]
     } else {
         notes.push(if mass_rel_std.is_finite() {
@@ -150,6 +151,7 @@ pub fn declared_fit(
         });
         vec![Knob::Cd, Knob::Tau]
     };
+
     let base_start = if mass_fitted { probe.params } else { *start };
     let fit = fit::fit(
         ev,
@@ -162,7 +164,7 @@ pub fn declared_fit(
         "declared-parameter fit stopped: {} after {} replays",
         fit.termination, fit.evaluations
     ));
-    let undetermined = fit
+    let undetermined: Vec<String> = fit
         .values
         .iter()
         .filter_map(|v| {
@@ -185,6 +187,37 @@ pub fn declared_fit(
             })
         })
         .collect();
+    // The sensors: with ÿ on every record, the stroke sensor's lag parts from the valve's
+    // delay (ÿ is not lagged) and the accelerometer's scale and offset from the plant. They
+    // are fitted from the declared fit and kept only when the fit earns their three
+    // parameters by ΔBIC < −10 (strong evidence), every one with a finite uncertainty.
+    let mut fit = fit;
+    if undetermined.is_empty() && ev.records.iter().all(|r| r.ydd.is_some()) {
+        let mut with = knobs.clone();
+        with.extend(Knob::SENSORS);
+        let s = fit::fit(
+            ev,
+            &fit.params,
+            &with,
+            options.max_iterations,
+            n_eff0 / n as f64,
+        )?;
+        let bic = fit::Bic { n, n_eff: n_eff0 };
+        let gain = bic.value(s.rss, with.len()) - bic.value(fit.rss, knobs.len());
+        let finite = s.values.iter().all(|v| v.std.is_finite());
+        notes.push(format!(
+            "sensor properties (ÿ scale and offset, u lag) {}: ΔBIC {gain:.1}",
+            if gain < -10.0 && finite {
+                "estimated"
+            } else {
+                "not supported by the data, kept exact"
+            }
+        ));
+        if gain < -10.0 && finite {
+            fit = s;
+            knobs = with;
+        }
+    }
     Ok(Declared {
         fit,
         knobs,
@@ -251,6 +284,22 @@ pub fn report(
     let before_params = with_numerics_of(found.declared.fit.params, params);
     let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
+    // Sensor properties within 3σ of exact are exact: set back, not applied, not listed.
+    let mut sensors = Vec::new();
+    for v in &current.values {
+        if let Some((channel, kind, exact)) = v.knob.sensor() {
+            if (v.value - exact).abs() > 3.0 * v.std && v.std.is_finite() {
+                sensors.push(SensorEstimate {
+                    channel: channel.into(),
+                    kind: kind.into(),
+                    value: v.value,
+                    uncertainty: v.std,
+                });
+            } else {
+                v.knob.spec().set_unchecked(&mut current.params, exact);
+            }
+        }
+    }
     let replay = |p: &Params, recs| -> Result<Vec<Replay>, IdentifyError> {
         let r = replay_all(p, recs)?;
         monitor.advance();
@@ -362,6 +411,7 @@ pub fn report(
         effects,
         candidates: found.search.candidates,
         calibrated,
+        sensors,
         mass_fitted: found.declared.mass_fitted,
         correlation: (
             found

@@ -32,6 +32,11 @@ pub(super) struct RigEffects {
     /// start. The stroke drifts slowly, faster and faster; a constant offset can follow its
     /// mean only.
     pub(super) null_drift_v_per_s: Option<f64>,
+    /// Sensor, not plant: the body accelerometer reads this fraction of the truth.
+    pub(super) ydd_scale: Option<f64>,
+    /// Sensor, not plant: the stroke sensor's first-order lag [s], integrated at the rig's
+    /// step.
+    pub(super) u_lag_s: Option<f64>,
 }
 
 pub(super) struct Rig {
@@ -200,16 +205,25 @@ impl Rig {
             (vec![], vec![], vec![], vec![], vec![], vec![]);
         let (mut p1_col, mut p2_col) = (vec![], vec![]);
         let mut t = 0.0;
+        let mut u_sensed = 0.0;
         hist.push(cmd(0.0, &y));
         for s in 0..n {
             let (x, _, xdd) = plat(t);
             t_col.push(s as f64 * 1e-3);
             v_col.push(hist[hist.len() - 1]);
-            let un = y[0] + pos_noise.sample(&mut rng);
+            let u_true = if self.fx.u_lag_s.is_some() {
+                u_sensed
+            } else {
+                y[0]
+            };
+            let un = u_true + pos_noise.sample(&mut rng);
             u_col.push(lsb * ((un + 0.0375) / lsb).round() - 0.0375);
             x_col.push(x + pos_noise.sample(&mut rng));
             xdd_col.push(xdd + acc_noise.sample(&mut rng));
-            ydd_col.push(self.body_acc(&y, xdd) + acc_noise.sample(&mut rng));
+            ydd_col.push(
+                self.fx.ydd_scale.unwrap_or(1.0) * self.body_acc(&y, xdd)
+                    + acc_noise.sample(&mut rng),
+            );
             if pressures {
                 for (col, p) in [(&mut p1_col, y[2]), (&mut p2_col, y[3])] {
                     col.push(p_lsb * ((p + p_noise.sample(&mut rng)) / p_lsb).round());
@@ -241,6 +255,9 @@ impl Rig {
                     y[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
                 }
                 y[8] = y[8].clamp(-0.8e-3, 0.8e-3);
+                if let Some(lag) = self.fx.u_lag_s {
+                    u_sensed += h / lag * (y[0] - u_sensed);
+                }
                 t += h;
                 hist.push(cmd(t, &y));
             }
