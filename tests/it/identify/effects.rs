@@ -373,3 +373,37 @@ fn sensor_scale_and_lag_are_found_as_sensors_not_effects() {
         Some(r.sensors.len())
     );
 }
+
+/// Issue 20, items 3 and 6: a valve whose overlap edges are rounded over 20 µm (a smooth dead
+/// band, as real lands are). The overlap is found with its edge width, the verdict is
+/// `explained`, and the calibrated replay does not ring: on every record the replayed ÿ's
+/// standard deviation is within 3 times the measured one.
+#[test]
+fn rounded_overlap_is_found_with_its_edge_and_the_replay_does_not_ring() {
+    let fx = RigEffects {
+        overlap: Some(40e-6),
+        overlap_edge: Some(20e-6),
+        ..Default::default()
+    };
+    let r = run(fx, 27);
+    let s = summary(&r);
+    eprintln!("rounded overlap: {s}");
+    let e = r
+        .effects
+        .iter()
+        .find(|e| e.effect == EffectId::ValveOverlap)
+        .unwrap_or_else(|| panic!("{s}"));
+    let (o, w) = (e.params["overlap_m"], e.params["edge_width_m"]);
+    assert!((o - 40e-6).abs() < 4e-6, "overlap {o}: {s}");
+    assert!((w - 20e-6).abs() < 8e-6, "edge {w}: {s}");
+    assert_eq!(r.verdict, Verdict::Explained, "{s}");
+    for (rec, rep) in r.records.iter().zip(&r.replays_after) {
+        let std = |v: &[f64]| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+        };
+        let measured = std(rec.ydd.as_ref().expect("the rig records ydd"));
+        let replayed = std(&rep.sim.ydd);
+        assert!(replayed < 3.0 * measured, "{}: {replayed} vs {measured}", rec.name);
+    }
+}

@@ -14,6 +14,8 @@ pub(super) struct RigEffects {
     pub(super) friction: Option<(f64, f64, f64, f64)>,
     /// overlap m (smooth edge)
     pub(super) overlap: Option<f64>,
+    /// width of the overlap's rounded edges [m] (default 1 µm: nearly sharp)
+    pub(super) overlap_edge: Option<f64>,
     /// spool null offset m
     pub(super) offset: Option<f64>,
     /// leakage coefficient m³/(s·Pa), grows with |Δp|
@@ -105,7 +107,7 @@ impl Rig {
         let mut x = xv.clamp(-0.8e-3, 0.8e-3) - self.fx.offset.unwrap_or(0.0);
         if let Some(ov) = self.fx.overlap {
             let d = x.abs() - ov;
-            let e = 1e-6;
+            let e = self.fx.overlap_edge.unwrap_or(1e-6);
             let open =
                 0.5 * (d + (d * d + e * e).sqrt()) - 0.5 * (ov * ov + e * e).sqrt() + 0.5 * ov;
             x = x.signum() * open.max(0.0);
