@@ -404,6 +404,10 @@ fn rounded_overlap_is_found_with_its_edge_and_the_replay_does_not_ring() {
         };
         let measured = std(rec.ydd.as_ref().expect("the rig records ydd"));
         let replayed = std(&rep.sim.ydd);
-        assert!(replayed < 3.0 * measured, "{}: {replayed} vs {measured}", rec.name);
+        assert!(
+            replayed < 3.0 * measured,
+            "{}: {replayed} vs {measured}",
+            rec.name
+        );
     }
 }
