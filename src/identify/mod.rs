@@ -238,14 +238,13 @@ pub struct CalibrationOptions {
     pub ambiguity_margin: f64,
     /// Fit the mass when its relative uncertainty would be below this [-].
     pub mass_max_rel_std: f64,
-    /// Weighted RMS error at or below which the twin explains the data "to the noise level",
-    /// pooled over all records.
+    /// Weighted RMS error (the fit's metric) at or below which the pooled error reads as "at
+    /// the noise level" in the fit metric's tables. Not the verdict's measure: the verdict uses
+    /// [`Self::raw_error_limit`] on the raw channels ([`raw_error`]).
     pub noise_level: f64,
-    /// The same, for each record and channel on its own: `explained` needs every record's
-    /// every channel at or below it. (2.5: an effect law of the library that matches the rig's
-    /// to within its form — a smooth rather than sharp overlap edge, say — leaves up to about
-    /// 2.4 on the smallest-command test of the test rig; an effect outside the library leaves
-    /// 5–25.)
+    /// The same for each record and channel on its own: the records and channels listed in
+    /// "what is left" ([`diagnose::residual_left`]) are those of the fit metric above it. Not
+    /// the verdict's measure ([`Self::raw_error_limit`] is).
     pub noise_level_record: f64,
     /// Largest ratio of a raw channel's residual to its noise floor, in any band of any
     /// record, at which the twin counts as explaining the data ([`raw_error`]; the verdict's
