@@ -271,6 +271,179 @@ pub fn noise_rms(x: &[f64], dt: f64) -> f64 {
     (power / fraction).sqrt()
 }
 
+/// A channel's sensor noise as the raw error measure holds a residual against it
+/// ([`noise_floor`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct NoiseFloor {
+    /// Estimated RMS of the channel's white noise, quantisation included [unit of the channel].
+    pub rms: f64,
+    /// Quantisation step when the samples lie on a grid (a 12-bit stroke sensor: its LSB),
+    /// else 0 [unit of the channel].
+    pub lsb: f64,
+}
+
+/// Estimates the white-noise RMS of a measured channel from the channel itself, three ways,
+/// and keeps the smallest that the quantisation allows:
+///
+/// * the top 40 % of the spectrum of the linearly detrended, Hann-windowed signal (a seat
+///   rig's motion lies far below it; the window and the detrend keep the record's ends and
+///   its drift from leaking up there);
+/// * the fourth difference `x[i] − 4x[i−1] + 6x[i−2] − 4x[i−3] + x[i−4]`, which multiplies
+///   white noise power by 70 and a signal at `f` by `(2 sin(π f dt))⁸`, through its median
+///   absolute deviation (robust to a start transient): `σ = 1.4826·MAD/√70`;
+/// * the quantisation step `q` (the smallest change between samples, when every change is a
+///   multiple of it): `σ ≥ q/√12`.
+///
+/// Each of the first two can only be raised by the signal, never lowered, so the smaller is
+/// the better bound. Returns zeros for fewer than 32 samples.
+pub fn noise_floor(x: &[f64]) -> NoiseFloor {
+    let n = x.len();
+    if n < 32 {
+        return NoiseFloor::default();
+    }
+    // Spectral estimate on the detrended, windowed signal.
+    let (a, b) = (x[0], x[n - 1]);
+    let mut buf: Vec<f64> = x
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let trend = a + (b - a) * i as f64 / (n - 1) as f64;
+            let w = 0.5 - 0.5 * (2.0 * PI * i as f64 / (n - 1) as f64).cos();
+            (v - trend) * w
+        })
+        .collect();
+    let mean_w2 = 3.0 / 8.0;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    let mut spec = fft.make_output_vec();
+    let spectral = if fft.process(&mut buf, &mut spec).is_ok() {
+        let m = spec.len();
+        let lo = (0.6 * m as f64) as usize;
+        let band: f64 = spec[lo..m].iter().map(|c| c.norm_sqr()).sum();
+        let power = 2.0 * band / (n as f64 * n as f64) / mean_w2;
+        (power / ((m - lo) as f64 / m as f64)).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    // Fourth-difference estimate.
+    let mut d4: Vec<f64> = x
+        .windows(5)
+        .map(|w| w[4] - 4.0 * w[3] + 6.0 * w[2] - 4.0 * w[1] + w[0])
+        .collect();
+    let med = median(&mut d4);
+    let mut dev: Vec<f64> = d4.iter().map(|d| (d - med).abs()).collect();
+    let differenced = 1.4826 * median(&mut dev) / 70f64.sqrt();
+    let lsb = quantisation_step(x);
+    NoiseFloor {
+        rms: spectral.min(differenced).max(lsb / 12f64.sqrt()),
+        lsb,
+    }
+}
+
+/// Median of `v` (reordered in place; 0 when empty).
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let k = v.len() / 2;
+    *v.select_nth_unstable_by(k, f64::total_cmp).1
+}
+
+/// The step of the grid the samples lie on: the smallest non-zero change between successive
+/// samples, if every change is a whole multiple of it (to 2 % of the step) and it is not
+/// below 1e-12 of the signal's range; else 0.
+pub fn quantisation_step(x: &[f64]) -> f64 {
+    let range = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let changes: Vec<f64> = x
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 1e-12 * range.max(1e-300))
+        .collect();
+    let Some(q) = changes.iter().copied().reduce(f64::min) else {
+        return 0.0;
+    };
+    let on_grid = changes.iter().all(|d| {
+        let k = d / q;
+        (k - k.round()).abs() < 0.02
+    });
+    if on_grid && changes.len() >= 16 {
+        q
+    } else {
+        0.0
+    }
+}
+
+/// Splits `x` into frequency bands: for each `[lo, hi)` of `bands_hz` the part of `x` whose
+/// Fourier components lie in it (brick-wall masks on the record's DFT, so the parts add up to
+/// `x` exactly when the bands tile 0 … Nyquist). The straight line through the means of the
+/// first and the last 5 % of the record is taken out first and given whole to the band that holds 0 Hz, with the mean:
+/// the DFT sees the record as periodic, and the jump between a drifting record's ends would
+/// otherwise leak into every band.
+pub fn band_parts(x: &[f64], dt: f64, bands_hz: &[[f64; 2]]) -> Vec<Vec<f64>> {
+    let n = x.len();
+    if n < 2 {
+        return bands_hz
+            .iter()
+            .map(|b| {
+                if b[0] <= 0.0 {
+                    x.to_vec()
+                } else {
+                    vec![0.0; n]
+                }
+            })
+            .collect();
+    }
+    // The line through the means of the first and last 5 % (so that the noise of two single
+    // samples does not tilt it).
+    let m = (n / 20).max(1);
+    let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
+    let (a, b) = (mean(&x[..m]), mean(&x[n - m..]));
+    let (ia, ib) = ((m - 1) as f64 / 2.0, (n - 1) as f64 - (m - 1) as f64 / 2.0);
+    let slope = if ib > ia { (b - a) / (ib - ia) } else { 0.0 };
+    let ramp = |i: usize| a + slope * (i as f64 - ia);
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(n);
+    let inv = planner.plan_fft_inverse(n);
+    let mut buf: Vec<f64> = x.iter().enumerate().map(|(i, v)| v - ramp(i)).collect();
+    let mut spec = fwd.make_output_vec();
+    if fwd.process(&mut buf, &mut spec).is_err() {
+        return bands_hz.iter().map(|_| vec![0.0; n]).collect();
+    }
+    let df = 1.0 / (n as f64 * dt);
+    bands_hz
+        .iter()
+        .map(|b| {
+            let mut s: Vec<Complex64> = spec
+                .iter()
+                .enumerate()
+                .map(|(k, c)| {
+                    let f = k as f64 * df;
+                    if f >= b[0] && f < b[1] {
+                        *c
+                    } else {
+                        Complex64::new(0.0, 0.0)
+                    }
+                })
+                .collect();
+            // The inverse of a real signal's spectrum needs real DC and Nyquist bins.
+            s[0].im = 0.0;
+            if n.is_multiple_of(2) {
+                let last = s.len() - 1;
+                s[last].im = 0.0;
+            }
+            let mut out = inv.make_output_vec();
+            if inv.process(&mut s, &mut out).is_err() {
+                return vec![0.0; n];
+            }
+            let with_dc = b[0] <= 0.0 && b[1] > 0.0;
+            out.iter()
+                .enumerate()
+                .map(|(i, v)| v / n as f64 + if with_dc { ramp(i) } else { 0.0 })
+                .collect()
+        })
+        .collect()
+}
+
 /// Amplitude spectrum of a signal: `(frequency [Hz], RMS amplitude density)` on a Hann window.
 pub fn spectrum(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
     let n = x.len();

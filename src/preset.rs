@@ -8,8 +8,8 @@
 
 use crate::params::{
     BodyParams, ControllerParams, CylinderParams, EffectsParams, FluidParams, HoseParams,
-    LinearParams, NumericsParams, ParamError, Params, PassiveParams, PlantParams, SupplyParams,
-    ValveParams,
+    LinearParams, NumericsParams, ParamError, Params, PassiveParams, PlantParams, SensorParams,
+    SupplyParams, ValveParams,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -64,6 +64,8 @@ struct PresetFile {
     linear: LinearParams,
     numerics: NumericsParams,
     effects: EffectsParams,
+    /// The records' sensors (exact unless a calibration found a property).
+    sensors: SensorParams,
 }
 
 impl From<&Preset> for PresetFile {
@@ -82,6 +84,7 @@ impl From<&Preset> for PresetFile {
             linear: q.linear,
             numerics: q.numerics,
             effects: q.plant.effects,
+            sensors: q.sensors,
         }
     }
 }
@@ -104,6 +107,7 @@ impl From<PresetFile> for Preset {
                 passive: f.passive,
                 linear: f.linear,
                 numerics: f.numerics,
+                sensors: f.sensors,
             },
         }
     }

@@ -160,12 +160,16 @@ pub fn active_effects(p: &Params) -> Vec<String> {
             &[
                 ("coulomb_n", e.friction.coulomb_n),
                 ("viscous_n_s_per_m", e.friction.viscous_n_s_per_m),
+                ("stribeck_n", e.friction.stribeck_n),
             ],
         ),
         (
             e.valve_overlap.enabled,
             "valve overlap",
-            &[("overlap_m", e.valve_overlap.overlap_m)],
+            &[
+                ("overlap_m", e.valve_overlap.overlap_m),
+                ("edge_width_m", e.valve_overlap.edge_width_m),
+            ],
         ),
         (
             e.valve_offset.enabled,

@@ -3,7 +3,7 @@
 
 use super::IdentifyError;
 use super::diagnose;
-use super::replay::{ChannelErrors, PreparedRecord, RawChannel, Replay, replay_prepared, rms};
+use super::replay::{PreparedRecord, RawChannel, Replay, replay_prepared, rms};
 use super::result::{
     CalibrationReport, Diagnostics, ErrorSummary, METRIC, RAW_NRMSE, RawNrmse, Split, StageErrors,
     Verdict,
@@ -210,6 +210,9 @@ pub(super) fn insufficient_report(
         error_nominal.value = f64::NAN;
     }
     let raw = raw_pooled(&nominal_replays);
+    let sims: Vec<_> = nominal_replays.iter().map(|r| &r.sim).collect();
+    let raw_error =
+        super::raw_error::raw_error_report(&all, &sims, super::raw_error::DEFAULT_LIMIT);
     CalibrationReport {
         nominal: *params,
         params: *params,
@@ -217,6 +220,7 @@ pub(super) fn insufficient_report(
         effects: Vec::new(),
         candidates: Vec::new(),
         calibrated: Vec::new(),
+        sensors: Vec::new(),
         mass_fitted: false,
         correlation: (Vec::new(), Vec::new()),
         baseline: None,
@@ -247,20 +251,9 @@ pub(super) fn insufficient_report(
             validation: BTreeMap::new(),
         },
         residual_left: None,
+        raw_error_before: raw_error.clone(),
+        raw_error_after: raw_error,
     }
-}
-
-/// Largest weighted RMS of any channel of a record.
-pub(super) fn worst_channel(c: &ChannelErrors) -> f64 {
-    [
-        Some(c.weighted_du),
-        c.weighted_ydd,
-        c.weighted_p1,
-        c.weighted_p2,
-    ]
-    .into_iter()
-    .flatten()
-    .fold(0.0, f64::max)
 }
 
 /// `+0.123`, or `—` when not defined.

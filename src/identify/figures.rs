@@ -26,7 +26,86 @@ fn shown(r: &CalibrationReport) -> Vec<usize> {
     idx
 }
 
-/// Writes the four figures into `dir` (PNG + SVG each).
+/// One raw channel's panel: name, axis label, display scale, measured channel (if recorded),
+/// twin before and after, and the estimated noise RMS [SI].
+type RawPanel<'a> = (
+    &'a str,
+    &'a str,
+    f64,
+    Option<&'a Vec<f64>>,
+    [&'a Vec<f64>; 2],
+    f64,
+);
+
+/// The raw residual of every channel of the shown records (u in mm, ÿ in m/s², p in bar),
+/// before and after, with the band ±3σ of the channel's estimated sensor noise.
+fn raw_residual_panels(r: &CalibrationReport) -> Vec<Panel> {
+    let (c_before, c_after) = (palette(1), palette(2));
+    let mut panels = Vec::new();
+    for i in shown(r) {
+        let rec = &r.records[i];
+        let (ix, _) = thin(&rec.t, 3000);
+        let t: Vec<f64> = ix.iter().map(|&j| rec.t[j]).collect();
+        let (b, a) = (&r.replays_before[i].sim, &r.replays_after[i].sim);
+        let channels: [RawPanel<'_>; 4] = [
+            (
+                "u",
+                "Δu [mm]",
+                1e3,
+                Some(&rec.u),
+                [&b.u, &a.u],
+                rec.floor_u.rms,
+            ),
+            (
+                "ÿ",
+                "Δÿ [m/s²]",
+                1.0,
+                rec.ydd.as_ref(),
+                [&b.ydd, &a.ydd],
+                rec.floor_ydd.rms,
+            ),
+            (
+                "p1",
+                "Δp1 [bar]",
+                1e-5,
+                rec.p_raw[0].as_ref(),
+                [&b.p1, &a.p1],
+                rec.floor_p[0].rms,
+            ),
+            (
+                "p2",
+                "Δp2 [bar]",
+                1e-5,
+                rec.p_raw[1].as_ref(),
+                [&b.p2, &a.p2],
+                rec.floor_p[1].rms,
+            ),
+        ];
+        for (name, axis, k, meas, [tb, ta], sigma) in channels {
+            let Some(meas) = meas else { continue };
+            let res = |twin: &[f64]| -> Vec<f64> {
+                ix.iter().map(|&j| k * (twin[j] - meas[j])).collect()
+            };
+            let mut p = Panel::new(
+                format!("{}: raw {name} residual", rec.name),
+                "time [s]",
+                axis,
+            )
+            .with_series(vec![
+                Series::line("before", t.clone(), res(tb), c_before),
+                Series::line("after", t.clone(), res(ta), c_after),
+            ]);
+            p.hlines = vec![
+                (3.0 * k * sigma, "+3σ noise".into()),
+                (-3.0 * k * sigma, "−3σ noise".into()),
+            ];
+            panels.push(p);
+        }
+    }
+    panels
+}
+
+/// Writes the five figures into `dir` (PNG + SVG each).
 pub fn write_plots(r: &CalibrationReport, dir: &Path) -> Result<(), OutputError> {
     let (c_meas, c_before, c_after) = (palette(0), palette(1), palette(2));
     let mut fit_panels = Vec::new();
@@ -89,6 +168,12 @@ pub fn write_plots(r: &CalibrationReport, dir: &Path) -> Result<(), OutputError>
         }
     }
     let h = |n: usize| (260 * n as u32).clamp(400, 2400);
+    let mut fig = Figure::new(
+        "Raw residual (twin − measured, unfiltered) of every channel, before and after",
+        raw_residual_panels(r),
+    );
+    fig.height = h(fig.panels.len());
+    save_figure(&fig, &dir.join("raw_residual"))?;
     let mut fig = Figure::new("Measured vs twin, before and after", fit_panels);
     fig.height = h(fig.panels.len());
     save_figure(&fig, &dir.join("measured_vs_twin"))?;

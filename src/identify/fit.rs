@@ -34,8 +34,19 @@ pub enum Knob {
     FrictionViscous,
     /// `effects.valve_overlap.overlap_m` [m] = 2e-5·|θ|.
     Overlap,
+    /// `effects.valve_overlap.edge_width_m` [m] = 2e-5·|θ|.
+    OverlapEdge,
+    /// `effects.friction.stribeck_n` [N] = 10·|θ| (at the preset's Stribeck velocity).
+    FrictionStribeck,
+
     /// `effects.valve_offset.bias_v` [V] = 0.02·θ.
     Offset,
+    /// `sensors.ydd_scale` [-] = 1 + 0.01·θ.
+    SensorYddScale,
+    /// `sensors.ydd_offset_m_s2` [m/s²] = 0.01·θ.
+    SensorYddOffset,
+    /// `sensors.u_lag_s` [s] = 1e-3·θ (clamped at 0).
+    SensorULag,
     /// `effects.leakage.coefficient_m3_per_s_pa` [m³/(s·Pa)] = 1e-12·|θ|.
     Leakage,
     /// `effects.compliance.effective_bulk_modulus_pa` [Pa] = β_fluid/(1 + |θ|).
@@ -45,6 +56,24 @@ pub enum Knob {
 }
 
 impl Knob {
+    /// The sensor properties the calibration estimates beside the declared parameters.
+    pub const SENSORS: [Knob; 3] = [
+        Knob::SensorYddScale,
+        Knob::SensorYddOffset,
+        Knob::SensorULag,
+    ];
+
+    /// For a sensor property: its channel (`ydd`, `u`), its kind (`scale`, `offset`, `lag`)
+    /// and its exact value (1 for a scale, else 0).
+    pub fn sensor(self) -> Option<(&'static str, &'static str, f64)> {
+        match self {
+            Knob::SensorYddScale => Some(("ydd", "scale", 1.0)),
+            Knob::SensorYddOffset => Some(("ydd", "offset", 0.0)),
+            Knob::SensorULag => Some(("u", "lag", 0.0)),
+            _ => None,
+        }
+    }
+
     /// Name with unit, as in reports (`cd`, `tau_s`, `coulomb_n`, …): the last part of its
     /// preset key.
     pub fn name(self) -> &'static str {
@@ -59,9 +88,15 @@ impl Knob {
             Knob::Cd => p.plant.valve.cd / 0.1,
             Knob::Tau => p.plant.valve.tau_s / 0.01,
             Knob::Mass => p.plant.body.mass_kg / 10.0,
+            Knob::SensorYddScale => (p.sensors.ydd_scale - 1.0) / 0.01,
+            Knob::SensorYddOffset => p.sensors.ydd_offset_m_s2 / 0.01,
+            Knob::SensorULag => p.sensors.u_lag_s / 1e-3,
             Knob::FrictionCoulomb if e.friction.enabled => e.friction.coulomb_n / 10.0,
             Knob::FrictionViscous if e.friction.enabled => e.friction.viscous_n_s_per_m / 100.0,
             Knob::Overlap if e.valve_overlap.enabled => e.valve_overlap.overlap_m / 2e-5,
+            Knob::OverlapEdge if e.valve_overlap.enabled => e.valve_overlap.edge_width_m / 2e-5,
+            Knob::FrictionStribeck if e.friction.enabled => e.friction.stribeck_n / 10.0,
+
             Knob::Offset if e.valve_offset.enabled => e.valve_offset.bias_v / 0.02,
             Knob::Leakage if e.leakage.enabled => e.leakage.coefficient_m3_per_s_pa / 1e-12,
             Knob::Compliance if e.compliance.enabled => {
@@ -79,9 +114,15 @@ impl Knob {
             Knob::Cd => "valve.cd",
             Knob::Tau => "valve.tau_s",
             Knob::Mass => "body.mass_kg",
+            Knob::SensorYddScale => "sensors.ydd_scale",
+            Knob::SensorYddOffset => "sensors.ydd_offset_m_s2",
+            Knob::SensorULag => "sensors.u_lag_s",
             Knob::FrictionCoulomb => "effects.friction.coulomb_n",
             Knob::FrictionViscous => "effects.friction.viscous_n_s_per_m",
             Knob::Overlap => "effects.valve_overlap.overlap_m",
+            Knob::OverlapEdge => "effects.valve_overlap.edge_width_m",
+            Knob::FrictionStribeck => "effects.friction.stribeck_n",
+
             Knob::Offset => "effects.valve_offset.bias_v",
             Knob::Leakage => "effects.leakage.coefficient_m3_per_s_pa",
             Knob::Compliance => "effects.compliance.effective_bulk_modulus_pa",
@@ -99,9 +140,15 @@ impl Knob {
             Knob::Cd => 0.1 * theta,
             Knob::Tau => 0.01 * theta,
             Knob::Mass => 10.0 * theta,
+            Knob::SensorYddScale => 1.0 + 0.01 * theta,
+            Knob::SensorYddOffset => 0.01 * theta,
+            Knob::SensorULag => 1e-3 * theta,
             Knob::FrictionCoulomb => 10.0 * a,
             Knob::FrictionViscous => 100.0 * a,
             Knob::Overlap => (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m),
+            Knob::OverlapEdge => (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m),
+            Knob::FrictionStribeck => 10.0 * a,
+
             Knob::Offset => 0.02 * theta,
             Knob::Leakage => 1e-12 * a,
             Knob::Compliance => p.plant.fluid.bulk_modulus_pa / (1.0 + a),
@@ -111,8 +158,11 @@ impl Knob {
         let e = &mut p.plant.effects;
         match self {
             Knob::Cd | Knob::Tau | Knob::Mass => {}
-            Knob::FrictionCoulomb | Knob::FrictionViscous => e.friction.enabled = true,
-            Knob::Overlap => e.valve_overlap.enabled = true,
+            Knob::SensorYddScale | Knob::SensorYddOffset | Knob::SensorULag => {}
+            Knob::FrictionCoulomb | Knob::FrictionViscous | Knob::FrictionStribeck => {
+                e.friction.enabled = true
+            }
+            Knob::Overlap | Knob::OverlapEdge => e.valve_overlap.enabled = true,
             Knob::Offset => e.valve_offset.enabled = true,
             Knob::Leakage => e.leakage.enabled = true,
             Knob::Compliance => e.compliance.enabled = true,

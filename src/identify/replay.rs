@@ -44,8 +44,8 @@ use crate::simulation::{Drive, Run, Sample, Simulation, step_for_rate};
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::dsp::{NoiseFloor, noise_floor, noise_gain, noise_rms};
 pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
-use crate::dsp::{noise_gain, noise_rms};
 
 /// Cut-off of the zero-phase low-pass applied to the recorded platform motion before it drives
 /// the twin [Hz] (see the [module docs](self)); at most 0.3 × the sample rate.
@@ -66,6 +66,14 @@ pub fn condition_excitation(xdd: &[f64], dt: f64) -> Vec<f64> {
     let fc = EXCITATION_LOWPASS_HZ.min(0.3 / dt);
     butterworth_zero_phase(xdd, dt, fc, 6)
 }
+
+/// Cut-off of the stroke-drift channel of the metric [Hz]: the raw error measure's band with
+/// DC ([`super::raw_error::BANDS_HZ`]).
+pub const DRIFT_LOWPASS_HZ: f64 = 0.5;
+
+/// Rate at which the stroke-drift channel is kept [Hz]: ten samples per period of its
+/// cut-off, so that its slow residual does not outweigh the other channels by its count.
+pub const DRIFT_EVAL_RATE_HZ: f64 = 5.0;
 
 /// Signal-processing settings of the error metric.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -262,6 +270,20 @@ pub struct PreparedRecord {
     pub scale_p: [f64; 2],
     /// Estimated noise RMS of the raw pressures [Pa] (0 without the channel).
     pub noise_p: [f64; 2],
+    /// Noise floor of the raw `u` (the raw error measure, [`super::raw_error`]).
+    pub floor_u: NoiseFloor,
+    /// Noise floor of the raw `ÿ` (zero without the channel).
+    pub floor_ydd: NoiseFloor,
+    /// Noise floors of the raw `p1`, `p2` (zero without the channel).
+    pub floor_p: [NoiseFloor; 2],
+    /// Measured `u` through the zero-phase drift low-pass ([`DRIFT_LOWPASS_HZ`]) [m].
+    pub u_drift_meas: Vec<f64>,
+    /// Weight scale of the stroke-drift channel [m]: the raw error measure's floor of `u` in
+    /// its band with DC (noise `σ_u` with 0.1 % of the stroke's swing,
+    /// [`super::raw_error::RESOLUTION`]).
+    pub scale_u_drift: f64,
+    /// Decimation of the stroke-drift channel (to about [`DRIFT_EVAL_RATE_HZ`]).
+    pub drift_decimate: usize,
     /// Low-pass cut-off used [Hz].
     pub lowpass_hz: f64,
     /// Raw measured chamber pressures `p1`, `p2` [Pa gauge], each if recorded.
@@ -293,6 +315,15 @@ impl PreparedRecord {
         let du_meas_f = filtered_derivative(&u, dt, lowpass_hz);
         let ydd_meas_f = record.ydd.as_ref().map(|y| lowpass(y, dt, lowpass_hz));
         let noise_u = noise_rms(&u, dt);
+        let floor_u = noise_floor(&u);
+        let u_drift_meas = butterworth_zero_phase(&u, dt, DRIFT_LOWPASS_HZ.min(0.3 / dt), 2);
+        let u_mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
+        let u_swing = rms(&u.iter().map(|v| v - u_mean).collect::<Vec<_>>());
+        let scale_u_drift = floor_u
+            .rms
+            .hypot(super::raw_error::RESOLUTION * u_swing)
+            .max(1e-9);
+        let drift_decimate = ((fs / DRIFT_EVAL_RATE_HZ).round() as usize).max(1);
         let noise_ydd = record.ydd.as_ref().map(|y| noise_rms(y, dt)).unwrap_or(0.0);
         let gain_du = noise_gain(record.len(), |x| filtered_derivative(x, dt, lowpass_hz));
         let gain_y = noise_gain(record.len(), |x| lowpass(x, dt, lowpass_hz));
@@ -344,6 +375,15 @@ impl PreparedRecord {
             p_meas_f,
             scale_p,
             noise_p,
+            floor_u,
+            u_drift_meas,
+            scale_u_drift,
+            drift_decimate,
+            floor_ydd: record.ydd.as_deref().map(noise_floor).unwrap_or_default(),
+            floor_p: [
+                record.p1.as_deref().map(noise_floor).unwrap_or_default(),
+                record.p2.as_deref().map(noise_floor).unwrap_or_default(),
+            ],
             lowpass_hz,
             p_raw,
             window: 0..record.len(),
@@ -373,7 +413,7 @@ impl PreparedRecord {
         let channels = 1
             + usize::from(self.ydd_meas_f.is_some())
             + self.p_meas_f.iter().filter(|p| p.is_some()).count();
-        channels * k
+        channels * k + self.window.len().div_ceil(self.drift_decimate.max(1))
     }
 
     /// Replays the record through the twin with `params`.
@@ -402,12 +442,18 @@ impl PreparedRecord {
             out.q1.push(s.q1);
             out.q2.push(s.q2);
         })?;
+        // Read u and ÿ through the calibrated sensors.
+        params.sensors.read_u(&mut out.u, self.dt);
+        params.sensors.read_ydd(&mut out.ydd);
         Ok(out)
     }
 
     /// Weighted residuals (twin − measured) of a replay, appended to `out`:
     /// decimated velocity channel, then decimated acceleration channel, then the pressure
-    /// channels the record has.
+    /// channels the record has, then the stroke-drift channel (`u` through the zero-phase
+    /// [`DRIFT_LOWPASS_HZ`] low-pass, kept at [`DRIFT_EVAL_RATE_HZ`], divided by
+    /// [`Self::scale_u_drift`]): the velocity channel is blind to a drift of the stroke that
+    /// the raw error measure, and a user, sees.
     pub fn weighted_residuals(&self, sim: &SimChannels, out: &mut Vec<f64>) {
         let du_sim_f = filtered_derivative(&sim.u, self.dt, self.lowpass_hz);
         for i in self.eval_indices() {
@@ -426,6 +472,11 @@ impl PreparedRecord {
                     out.push((ps[i] - pm[i]) / self.scale_p[k]);
                 }
             }
+        }
+        let fc = DRIFT_LOWPASS_HZ.min(0.3 / self.dt);
+        let us = butterworth_zero_phase(&sim.u, self.dt, fc, 2);
+        for i in self.window.clone().step_by(self.drift_decimate.max(1)) {
+            out.push((us[i] - self.u_drift_meas[i]) / self.scale_u_drift);
         }
     }
 
@@ -689,11 +740,16 @@ pub fn replay_streamed(
     let mut u_sim = Vec::with_capacity(len);
     let mut ydd_sim = Vec::with_capacity(if keep_ydd { len } else { 0 });
     let mut i = 0;
+    // The twin's u and ÿ as the calibrated sensors read them, as in `PreparedRecord::simulate`.
+    let mut stroke = params.sensors.u_reader(dt);
     replay_samples(params, dt, Arc::new(v_in), platform, len, &name, |s| {
-        sample(record.t[i], &s);
-        u_sim.push(s.u);
+        let mut read = s;
+        read.u = stroke.read(s.u);
+        read.ydd = params.sensors.read_ydd_sample(s.ydd);
+        sample(record.t[i], &read);
+        u_sim.push(read.u);
         if keep_ydd {
-            ydd_sim.push(s.ydd);
+            ydd_sim.push(read.ydd);
         }
         i += 1;
     })?;
@@ -824,10 +880,15 @@ mod tests {
         };
         let opt = MetricOptions::default();
         let k = n.div_ceil(4);
-        assert_eq!(PreparedRecord::new(&rec, &opt).unwrap().residual_len(), k);
+        // The stroke-drift channel: 5 Hz over 2 s.
+        let drift = n.div_ceil(200);
+        assert_eq!(
+            PreparedRecord::new(&rec, &opt).unwrap().residual_len(),
+            k + drift
+        );
         rec.p1 = Some(p.clone());
         let prep = PreparedRecord::new(&rec, &opt).unwrap();
-        assert_eq!(prep.residual_len(), 2 * k);
+        assert_eq!(prep.residual_len(), 2 * k + drift);
         // Floor: 1 % of the swing (2 bar sine → 0.014 bar), not of the 55 bar mean.
         assert!((prep.scale_p[0] - 0.01 * 2e5 / 2f64.sqrt()).abs() < 100.0);
         // A twin 1 bar too low on p1 gives a weighted pressure residual of −1 bar / scale.
@@ -840,7 +901,7 @@ mod tests {
         };
         let mut w = Vec::new();
         prep.weighted_residuals(&sim, &mut w);
-        assert_eq!(w.len(), 2 * k);
+        assert_eq!(w.len(), 2 * k + drift);
         let mid = w[k + k / 2];
         assert!(
             (mid + 1e5 / prep.scale_p[0]).abs() < 1e-3 * mid.abs(),

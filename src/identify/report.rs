@@ -25,6 +25,18 @@ fn error_json(e: &ErrorSummary) -> Value {
     })
 }
 
+/// One stage of the raw error measure: per record and channel, the noise floor and every
+/// band; the bands above the limit; the worst.
+fn raw_error_json(e: &super::raw_error::RawErrorReport) -> Value {
+    json!({
+        "at_floor": e.at_floor(),
+        "summary": e.summary(),
+        "worst": e.worst,
+        "above": e.above,
+        "records": e.records,
+    })
+}
+
 /// The `report.json` document (SI). Non-finite numbers become `null` (serde_json's rule), so
 /// the document never holds NaN.
 pub fn report_json(r: &CalibrationReport) -> Value {
@@ -59,6 +71,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             "relative_gain": c.relative_gain, "params": c.params})).collect::<Vec<_>>(),
         "score": "ΔBIC = n_eff·ln(RSS_candidate/RSS_current) + Δk·ln(n_eff) against the model of that round, on the fit records; negative is better",
         "calibrated_parameters": calibrated,
+        "sensors": r.sensors,
         "calibrated_uncertainties": unc,
         "mass_fitted": r.mass_fitted,
         "paper_baseline": r.baseline,
@@ -79,6 +92,13 @@ pub fn report_json(r: &CalibrationReport) -> Value {
         })),
         "split": r.split,
         "raw_nrmse": r.raw_nrmse,
+        "raw_error": {
+            "definition": r.raw_error_after.definition,
+            "limit": r.raw_error_after.limit,
+            "verdict_uses": "after",
+            "before": raw_error_json(&r.raw_error_before),
+            "after": raw_error_json(&r.raw_error_after),
+        },
         "residual_left": r.residual_left,
         "diagnostics_before": r.diagnostics_before,
         "diagnostics_after": r.diagnostics_after,
@@ -192,6 +212,46 @@ fn channel_list(m: &std::collections::BTreeMap<String, f64>) -> String {
     parts.join(", ")
 }
 
+/// The verdict's measure in words and as a table: per record and raw channel, the worst band's
+/// ratio to the noise floor before and after, with its band and time window.
+fn raw_error_markdown(s: &mut String, r: &CalibrationReport) {
+    use super::raw_error::band_text;
+    let (b, a) = (&r.raw_error_before, &r.raw_error_after);
+    let _ = writeln!(
+        s,
+        "## Raw error against the noise floor (the verdict's measure)\n\n{}.\n\nDefinition: \
+         {}. At the floor: every ratio ≤ {:.1}.\n",
+        a.summary(),
+        a.definition,
+        a.limit
+    );
+    let _ = writeln!(
+        s,
+        "| record | channel | noise σ | worst ratio before | worst ratio after | its band | its window [s] |\n|---|---|---|---|---|---|---|"
+    );
+    for (rb, ra) in b.records.iter().zip(&a.records) {
+        for (cb, ca) in rb.channels.iter().zip(&ra.channels) {
+            let (Some(wb), Some(wa)) = (cb.worst(), ca.worst()) else {
+                continue;
+            };
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.3e} {} | {} | {} | {} | {}–{} |",
+                ra.file,
+                ca.channel,
+                ca.noise.rms,
+                ca.unit,
+                num(wb.ratio, 2),
+                num(wa.ratio, 2),
+                band_text(wa.band_hz),
+                num(wa.window_s[0], 1),
+                num(wa.window_s[1], 1)
+            );
+        }
+    }
+    let _ = writeln!(s);
+}
+
 /// The Markdown report.
 pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String {
     let mut s = String::new();
@@ -202,15 +262,16 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
         r.verdict.name(),
         match r.verdict {
             Verdict::Explained =>
-                "the added effect(s) below bring the residual down to the sensor-noise level on every record.",
+                "with the added effect(s) below, every raw channel of every record is at its noise floor in every band (see the table below).",
             Verdict::NoMissingEffect =>
-                "the twin with re-fitted declared parameters explains the data to the noise level; nothing was added.",
+                "the twin with re-fitted declared parameters has every raw channel of every record at its noise floor in every band; nothing was added.",
             Verdict::Unexplained =>
                 "a residual above the sensor noise remains; the effects below (if any) helped, but what is left is not in the library (see \"What is left\").",
             Verdict::InsufficientData =>
                 "the records cannot determine the twin's parameters; nothing was calibrated and no calibrated.toml was written.",
         }
     );
+    raw_error_markdown(&mut s, r);
     if !r.missing.is_empty() {
         let _ = writeln!(s, "## What is missing\n");
         for m in &r.missing {
@@ -332,6 +393,37 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
             format_value(&v.name, nominal),
             paper,
             format_parameter(&v.name, v.value, v.std)
+        );
+    }
+    let _ = writeln!(s, "\n## Sensors\n");
+    if r.sensors.is_empty() {
+        let _ = writeln!(
+            s,
+            "No sensor property estimated more than 3σ from exact (or no ÿ to tell them from the plant).\n"
+        );
+    }
+    for e in &r.sensors {
+        let text = match e.kind.as_str() {
+            "lag" => format!(
+                "the {} sensor lags by {:.2} ± {:.2} ms",
+                e.channel,
+                1e3 * e.value,
+                1e3 * e.uncertainty
+            ),
+            "scale" => format!(
+                "the {} sensor reads {:+.2} ± {:.2} % of the true value",
+                e.channel,
+                100.0 * (e.value - 1.0),
+                100.0 * e.uncertainty
+            ),
+            _ => format!(
+                "the {} sensor has an offset of {:.4} ± {:.4} (SI)",
+                e.channel, e.value, e.uncertainty
+            ),
+        };
+        let _ = writeln!(
+            s,
+            "- {text} (a property of the measurement, not of the plant; calibrated.toml carries it and replay applies it)"
         );
     }
     let _ = writeln!(s, "\n## Effects added\n");
@@ -470,7 +562,7 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
     }
     let _ = writeln!(
         s,
-        "\nPlots: `measured_vs_twin`, `residual`, `residual_spectrum`, `signature_correlation` (PNG and SVG)."
+        "\nPlots: `measured_vs_twin`, `residual` (filtered), `raw_residual` (every raw channel, unfiltered), `residual_spectrum`, `signature_correlation` (PNG and SVG)."
     );
     s
 }

@@ -4,6 +4,7 @@
 use super::EffectId;
 use super::diagnose;
 use super::fit::FittedValue;
+use super::raw_error::RawErrorReport;
 use super::replay::{ChannelErrors, PreparedRecord, Replay};
 use crate::params::Params;
 use serde::{Deserialize, Serialize};
@@ -56,6 +57,19 @@ pub struct AddedEffect {
     pub uncertainties: BTreeMap<String, f64>,
     /// Why it was added.
     pub evidence: String,
+}
+
+/// A property of a record's sensor, estimated by the calibration (not a plant effect).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SensorEstimate {
+    /// The channel: `u` or `ydd`.
+    pub channel: String,
+    /// `offset` (SI unit of the channel), `scale` (a ratio, 1 = exact) or `lag` [s].
+    pub kind: String,
+    /// The estimate.
+    pub value: f64,
+    /// Its 1-σ uncertainty.
+    pub uncertainty: f64,
 }
 
 /// Verdict of a calibration.
@@ -122,6 +136,9 @@ pub struct CalibrationReport {
     pub candidates: Vec<CandidateScore>,
     /// Final declared parameters (Cd, τ, mass if identifiable) with uncertainties.
     pub calibrated: Vec<FittedValue>,
+    /// Sensor properties found: those estimated more than 3σ from exact (the others are
+    /// set back to exact and not applied).
+    pub sensors: Vec<SensorEstimate>,
     /// Whether the mass was identifiable and fitted.
     pub mass_fitted: bool,
     /// Correlation matrix of the final fit, with its knob names.
@@ -170,6 +187,11 @@ pub struct CalibrationReport {
     pub raw_nrmse: RawNrmse,
     /// What the twin still misses after the effects (when not at the noise level).
     pub residual_left: Option<diagnose::ResidualLeft>,
+    /// The raw error measure ([`super::raw_error`]) of every record and raw channel with the
+    /// declared parameters re-fitted, no effect (nominal when nothing was fitted).
+    pub raw_error_before: RawErrorReport,
+    /// The same with the calibrated parameters: the verdict's measure.
+    pub raw_error_after: RawErrorReport,
 }
 
 /// How the records were split into the part that is fitted and the part held out.

@@ -8,14 +8,15 @@ use super::diagnose;
 use super::effects::EffectSearch;
 use super::evaluate::{
     diagnostics, fmt_signed, raw_pooled, replay_all, stage_errors, summary, weighted_of,
-    worst_channel,
 };
 use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
 use super::paper::paper_baseline;
 use super::progress::{Monitor, Stage};
+use super::raw_error::{RawErrorReport, raw_error_report};
 use super::replay::Replay;
 use super::result::{
-    AddedEffect, CalibrationReport, ErrorSummary, PaperBaseline, RAW_NRMSE, RawNrmse, Verdict,
+    AddedEffect, CalibrationReport, ErrorSummary, PaperBaseline, RAW_NRMSE, RawNrmse,
+    SensorEstimate, Verdict,
 };
 use super::{CalibrationOptions, IdentifyError};
 use crate::params::Params;
@@ -146,7 +147,7 @@ pub fn declared_fit(
     let n_eff0 = fit::effective_count(&probe_r);
     let mass_rel_std = probe.values[2].std / probe.values[2].value * (n as f64 / n_eff0).sqrt();
     let mass_fitted = mass_rel_std.is_finite() && mass_rel_std < options.mass_max_rel_std;
-    let knobs: Vec<Knob> = if mass_fitted {
+    let mut knobs: Vec<Knob> = if mass_fitted {
         vec![Knob::Cd, Knob::Tau, Knob::Mass]
     } else {
         notes.push(if mass_rel_std.is_finite() {
@@ -160,6 +161,7 @@ pub fn declared_fit(
         });
         vec![Knob::Cd, Knob::Tau]
     };
+
     let base_start = if mass_fitted { probe.params } else { *start };
     let fit = fit::fit(
         ev,
@@ -172,7 +174,7 @@ pub fn declared_fit(
         "declared-parameter fit stopped: {} after {} replays",
         fit.termination, fit.evaluations
     ));
-    let undetermined = fit
+    let undetermined: Vec<String> = fit
         .values
         .iter()
         .filter(|v| undetermined(v))
@@ -189,6 +191,37 @@ pub fn declared_fit(
             )
         })
         .collect();
+    // The sensors: with ÿ on every record, the stroke sensor's lag parts from the valve's
+    // delay (ÿ is not lagged) and the accelerometer's scale and offset from the plant. They
+    // are fitted from the declared fit and kept only when the fit earns their three
+    // parameters by ΔBIC < −10 (strong evidence), every one with a finite uncertainty.
+    let mut fit = fit;
+    if undetermined.is_empty() && ev.records.iter().all(|r| r.ydd.is_some()) {
+        let mut with = knobs.clone();
+        with.extend(Knob::SENSORS);
+        let s = fit::fit(
+            ev,
+            &fit.params,
+            &with,
+            options.max_iterations,
+            n_eff0 / n as f64,
+        )?;
+        let bic = fit::Bic { n, n_eff: n_eff0 };
+        let gain = bic.value(s.rss, with.len()) - bic.value(fit.rss, knobs.len());
+        let finite = s.values.iter().all(|v| v.std.is_finite());
+        notes.push(format!(
+            "sensor properties (ÿ scale and offset, u lag) {}: ΔBIC {gain:.1}",
+            if gain < -10.0 && finite {
+                "estimated"
+            } else {
+                "not supported by the data, kept exact"
+            }
+        ));
+        if gain < -10.0 && finite {
+            fit = s;
+            knobs = with;
+        }
+    }
     Ok(Declared {
         fit,
         knobs,
@@ -198,23 +231,14 @@ pub fn declared_fit(
     })
 }
 
-/// The verdict from the errors before and after the effects: `explained` when effects were
-/// added and the error after is at the noise level, `no_missing_effect` when none was added
-/// and the error before is, else `unexplained`. At the noise level means a pooled weighted RMS
-/// ≤ [`CalibrationOptions::noise_level`] and every record's every channel ≤
-/// [`CalibrationOptions::noise_level_record`].
-pub fn verdict(
-    effects_added: bool,
-    before: &ErrorSummary,
-    after: &ErrorSummary,
-    options: &CalibrationOptions,
-) -> Verdict {
-    let at_noise = |e: &ErrorSummary| {
-        e.value <= options.noise_level
-            && e.files
-                .iter()
-                .all(|(_, c)| worst_channel(c) <= options.noise_level_record)
-    };
+/// The verdict from the raw error measure ([`super::raw_error`]) before and after the
+/// effects: `explained` when effects were added and after them every record's every raw
+/// channel is at its noise floor in every band, `no_missing_effect` when none was added and
+/// the twin with re-fitted declared parameters is, else `unexplained`. The same measure is
+/// the report's ([`CalibrationReport::raw_error_after`]), so the verdict can never disagree
+/// with the raw residual the report shows.
+pub fn verdict(effects_added: bool, before: &RawErrorReport, after: &RawErrorReport) -> Verdict {
+    let at_noise = |e: &RawErrorReport| e.at_floor();
     if effects_added {
         if at_noise(after) {
             Verdict::Explained
@@ -264,6 +288,22 @@ pub fn report(
     let before_params = with_numerics_of(found.declared.fit.params, params);
     let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
+    // Sensor properties within 3σ of exact are exact: set back, not applied, not listed.
+    let mut sensors = Vec::new();
+    for v in &current.values {
+        if let Some((channel, kind, exact)) = v.knob.sensor() {
+            if (v.value - exact).abs() > 3.0 * v.std && v.std.is_finite() {
+                sensors.push(SensorEstimate {
+                    channel: channel.into(),
+                    kind: kind.into(),
+                    value: v.value,
+                    uncertainty: v.std,
+                });
+            } else {
+                v.knob.spec().set_unchecked(&mut current.params, exact);
+            }
+        }
+    }
     let replay = |p: &Params, recs| -> Result<Vec<Replay>, IdentifyError> {
         let r = replay_all(p, recs)?;
         monitor.advance();
@@ -298,14 +338,24 @@ pub fn report(
         .map(|(k, r)| (k.to_string(), raw_pooled(r)))
         .collect(),
     };
+    let sims_before: Vec<_> = replays_before.iter().map(|r| &r.sim).collect();
+    let sims_after: Vec<_> = replays_after.iter().map(|r| &r.sim).collect();
+    let raw_error_before = raw_error_report(all, &sims_before, options.raw_error_limit);
+    let raw_error_after = raw_error_report(all, &sims_after, options.raw_error_limit);
     let verdict = verdict(
         !found.search.added.is_empty(),
-        &error_before,
-        &error_after,
-        options,
+        &raw_error_before,
+        &raw_error_after,
     );
-    let residual_left = (verdict == Verdict::Unexplained)
-        .then(|| diagnose::residual_left(all, &replays_after, options.noise_level_record));
+    let residual_left = (verdict == Verdict::Unexplained).then(|| {
+        let mut left = diagnose::residual_left(all, &replays_after, options.noise_level_record);
+        left.summary = format!(
+            "Raw channels: {}. {}",
+            raw_error_after.summary(),
+            left.summary
+        );
+        left
+    });
     let effects = found.search
         .added
         .iter()
@@ -365,6 +415,7 @@ pub fn report(
         effects,
         candidates: found.search.candidates,
         calibrated,
+        sensors,
         mass_fitted: found.declared.mass_fitted,
         correlation: (
             found
@@ -397,15 +448,18 @@ pub fn report(
         error_validation: Some(error_validation),
         raw_nrmse,
         residual_left,
+        raw_error_before,
+        raw_error_after,
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::identify::Progress;
     use crate::identify::data;
+    use crate::identify::replay::{PreparedRecord, SimChannels};
     use crate::identify::testdata::{true_params, twin_record};
-    use crate::identify::{Progress, result::ErrorSummary};
     use std::sync::atomic::AtomicBool;
 
     /// The declared fit, on records the twin made with Cd 10 % low and τ 2 ms long, starts
@@ -460,47 +514,84 @@ mod tests {
         assert!(monitor.evaluations() > 0);
     }
 
-    fn summary_with(value: f64, worst_record: f64) -> ErrorSummary {
-        let mut e = crate::identify::replay::ChannelErrors {
-            du: 0.0,
-            du_nrmse: 0.0,
+    /// A 12-bit stroke record (10 µm noise) of a 2 Hz motion, and the twin's replay of it:
+    /// the same motion, its own noise, plus `drift` [m] at time `t` [s].
+    fn stroke_case(drift: impl Fn(f64) -> f64) -> (PreparedRecord, SimChannels) {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let (dt, n) = (1e-3, 8001);
+        let lsb = 0.075 / 4096.0;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let nd = Normal::new(0.0, 1e-5).unwrap();
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+        let motion = |t: f64| 0.01 * (2.0 * std::f64::consts::PI * 2.0 * t).sin();
+        let u: Vec<f64> = t
+            .iter()
+            .map(|&t| lsb * ((motion(t) + nd.sample(&mut rng)) / lsb).round())
+            .collect();
+        let rec = crate::dataset::Record {
+            path: "drift.csv".into(),
+            metadata: vec![],
+            dt,
+            t: t.clone(),
+            v_in: Some(
+                t.iter()
+                    .map(|t| (2.0 * std::f64::consts::PI * 2.0 * t).cos())
+                    .collect(),
+            ),
+            u: Some(u),
+            x: None,
+            xdd: None,
             ydd: None,
-            ydd_nrmse: None,
             p1: None,
             p2: None,
-            u: 0.0,
-            samples: 10,
-            weighted: worst_record,
-            weighted_du: worst_record,
-            weighted_ydd: None,
-            weighted_p1: None,
-            weighted_p2: None,
-            raw: Default::default(),
+            warnings: vec![],
         };
-        e.weighted_ydd = Some(0.5 * worst_record);
-        ErrorSummary {
-            metric: String::new(),
-            value,
-            channels: Default::default(),
-            files: vec![("r.csv".into(), e)],
-        }
+        let prep = PreparedRecord::new(&rec, &Default::default()).unwrap();
+        let sim = SimChannels {
+            t: t.clone(),
+            u: t.iter()
+                .map(|&t| motion(t) + drift(t) + nd.sample(&mut rng))
+                .collect(),
+            ydd: vec![0.0; n],
+            p1: vec![0.0; n],
+            p2: vec![0.0; n],
+            ..Default::default()
+        };
+        (prep, sim)
     }
 
-    /// The verdict rule, case by case: pooled and per-record noise levels both count.
+    /// Issue 20: a twin whose stroke drifts away from the record's, slowly (0.4 mm over 8 s,
+    /// growing with t², as a valve null drifting with the oil temperature makes it), is not
+    /// at the noise level. The old verdict judged the low-passed velocity weighted by its
+    /// floor (1 % of its RMS), where this drift sits far below the limit 2.5 and read
+    /// `explained`; the raw measure sees it in u's 0–0.5 Hz band, in the last seconds.
     #[test]
-    fn verdict_needs_every_record_at_the_noise_level() {
-        let o = CalibrationOptions::default();
-        let low = summary_with(1.0, 2.0);
-        let pooled_high = summary_with(1.6, 2.0);
-        let record_high = summary_with(1.0, 2.6);
-        assert_eq!(verdict(true, &record_high, &low, &o), Verdict::Explained);
-        assert_eq!(verdict(true, &low, &pooled_high, &o), Verdict::Unexplained);
-        assert_eq!(verdict(true, &low, &record_high, &o), Verdict::Unexplained);
-        assert_eq!(verdict(false, &low, &low, &o), Verdict::NoMissingEffect);
-        assert_eq!(verdict(false, &record_high, &low, &o), Verdict::Unexplained);
-        // A NaN error is never at the noise level.
-        let nan = summary_with(f64::NAN, 0.0);
-        assert_eq!(verdict(true, &low, &nan, &o), Verdict::Unexplained);
+    fn verdict_sees_a_slow_stroke_drift_the_weighted_velocity_missed() {
+        let (prep, sim) = stroke_case(|t| -4e-4 * (t / 8.0).powi(2));
+        let old = prep.channel_errors(&sim);
+        assert!(
+            old.weighted_du < CalibrationOptions::default().noise_level_record,
+            "the old measure called this at the noise level: {old:?}"
+        );
+        let raw = raw_error_report(std::slice::from_ref(&prep), &[&sim], 3.0);
+        let (_, clean) = stroke_case(|_| 0.0);
+        let at_floor = raw_error_report(std::slice::from_ref(&prep), &[&clean], 3.0);
+        assert!(at_floor.at_floor(), "{}", at_floor.summary());
+        assert_eq!(verdict(true, &at_floor, &at_floor), Verdict::Explained);
+        assert_eq!(
+            verdict(false, &at_floor, &at_floor),
+            Verdict::NoMissingEffect
+        );
+        assert!(!raw.at_floor());
+        assert_eq!(verdict(true, &at_floor, &raw), Verdict::Unexplained);
+        assert_eq!(verdict(false, &raw, &raw), Verdict::Unexplained);
+        let w = &raw.above[0];
+        assert_eq!((w.file.as_str(), w.channel.as_str()), ("drift.csv", "u"));
+        assert_eq!(w.band_hz, [0.0, 0.5]);
+        assert!(w.ratio > 10.0 && w.window_s[0] >= 6.0, "{w:?}");
+        let s = raw.summary();
+        assert!(s.contains("drift.csv u 0–0.5 Hz"), "{s}");
     }
 
     /// The BIC prefers the smaller model unless the larger one lowers the RSS by enough.

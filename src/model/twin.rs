@@ -182,11 +182,7 @@ impl Twin {
         let xmax = self.params.plant.valve.xv_max_m;
         let x = xv.clamp(-xmax, xmax);
         let ov = &self.params.plant.effects.valve_overlap;
-        if ov.enabled {
-            x.signum() * (x.abs() - ov.overlap_m).max(0.0)
-        } else {
-            x
-        }
+        if ov.enabled { ov.opening(x) } else { x }
     }
 
     /// Supply pressure seen by the metering edge [Pa] when a flow is drawn through an

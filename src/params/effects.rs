@@ -53,7 +53,10 @@ impl Default for FrictionEffect {
     }
 }
 
-/// Symmetric spool overlap: the orifices open only once `|xv|` exceeds the overlap.
+/// Symmetric spool overlap: the orifices open only once `|xv|` exceeds the overlap. Real
+/// lands are rounded: with an edge width `w > 0` the opening leaves zero smoothly, as the
+/// hyperbola `½(d + √(d² + w²)) − ½(√(o² + w²) − o)` of `d = |x| − o` (0 at null, `d` well
+/// past the edge, never negative); `w = 0` is the sharp edge `max(d, 0)`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OverlapEffect {
@@ -61,6 +64,8 @@ pub struct OverlapEffect {
     pub enabled: bool,
     /// Overlap on each side of null [m], 0 ..= 0.01.
     pub overlap_m: f64,
+    /// Width over which the rounded edges open [m], 0 ..= 0.01 (0: sharp edges).
+    pub edge_width_m: f64,
 }
 
 impl Default for OverlapEffect {
@@ -68,7 +73,24 @@ impl Default for OverlapEffect {
         Self {
             enabled: false,
             overlap_m: 0.0,
+            edge_width_m: 0.0,
         }
+    }
+}
+
+impl OverlapEffect {
+    /// The opening [m] the orifices see at a (clamped) spool position `x` [m].
+    #[inline(always)]
+    pub fn opening(&self, x: f64) -> f64 {
+        let d = x.abs() - self.overlap_m;
+        let w = self.edge_width_m;
+        let open = if w > 0.0 {
+            let o = self.overlap_m;
+            0.5 * (d + d.hypot(w)) - 0.5 * (o.hypot(w) - o)
+        } else {
+            d
+        };
+        x.signum() * open.max(0.0)
     }
 }
 
@@ -144,6 +166,45 @@ impl Default for SupplySagEffect {
         Self {
             enabled: false,
             droop_pa_per_m3_s: 0.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rounded edge: zero at null, the sharp law far past the edge, never negative,
+    /// monotonic, odd; with zero width, exactly the sharp law.
+    #[test]
+    fn rounded_overlap_opens_smoothly_and_tends_to_the_sharp_edge() {
+        let sharp = OverlapEffect {
+            enabled: true,
+            overlap_m: 40e-6,
+            edge_width_m: 0.0,
+        };
+        let round = OverlapEffect {
+            edge_width_m: 20e-6,
+            ..sharp
+        };
+        for x in [0.0, 10e-6, 40e-6, 60e-6, 300e-6] {
+            assert_eq!(sharp.opening(x), (x - 40e-6f64).max(0.0));
+            assert_eq!(sharp.opening(-x), -sharp.opening(x));
+            assert_eq!(round.opening(-x), -round.opening(x));
+        }
+        assert_eq!(round.opening(0.0), 0.0);
+        // Far past the edge: the sharp opening less the constant ½(√(o² + w²) − o) that keeps
+        // the rounded opening at zero at null (2.36 µm here), to within w²/(4d).
+        let far = round.opening(800e-6) - sharp.opening(800e-6);
+        let shift = 0.5 * (40e-6f64.hypot(20e-6) - 40e-6);
+        assert!((far + shift).abs() < 0.2e-6, "{far} {shift}");
+        // Open already at the edge (the sharp one is still shut): a rounded land.
+        assert!(round.opening(40e-6) > 5e-6);
+        let mut last = 0.0;
+        for k in 0..=200 {
+            let o = round.opening(k as f64 * 1e-6);
+            assert!(o >= last && o >= 0.0, "{k}");
+            last = o;
         }
     }
 }

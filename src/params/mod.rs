@@ -12,6 +12,7 @@ mod effects;
 mod models;
 mod numerics;
 mod plant;
+mod sensors;
 mod table;
 
 pub use controller::{ControllerKind, ControllerParams};
@@ -24,6 +25,7 @@ pub use numerics::{Integrator, NumericsParams};
 pub use plant::{
     BodyParams, CylinderParams, FluidParams, HoseParams, PlantParams, SupplyParams, ValveParams,
 };
+pub use sensors::{SensorParams, StrokeReader};
 pub use table::{Display, PARAMS, ParamSpec, describe, spec};
 
 /// A parameter outside its allowed range, or an inconsistent combination.
@@ -108,6 +110,8 @@ pub struct Params {
     pub linear: LinearParams,
     /// Integrator options.
     pub numerics: NumericsParams,
+    /// How the records' sensors read the twin (calibrated; applied by the replay).
+    pub sensors: SensorParams,
 }
 
 impl Params {

@@ -120,7 +120,7 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
-pub static PARAMS: [ParamSpec; 46] = [
+pub static PARAMS: [ParamSpec; 50] = [
     entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
     entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
@@ -194,6 +194,12 @@ pub static PARAMS: [ParamSpec; 46] = [
         (1e3, "ms"), "pure delay of G(s)"),
     entry!("numerics.max_step_s", numerics.max_step_s, "h_max", "s", [1e-6, 1e-3], None,
         (1e3, "ms"), "largest internal step of the twin's integrator"),
+    entry!("sensors.ydd_scale", sensors.ydd_scale, "k_ÿ", "-", [0.5, 2.0], None, (1.0, ""),
+        "scale of the body accelerometer (1: exact)"),
+    entry!("sensors.ydd_offset_m_s2", sensors.ydd_offset_m_s2, "ÿ_0", "m/s^2", [-50.0, 50.0], None,
+        (1.0, "m/s²"), "offset of the body accelerometer"),
+    entry!("sensors.u_lag_s", sensors.u_lag_s, "τ_u", "s", [0.0, 0.05], None, (1e3, "ms"),
+        "lag of the stroke sensor"),
     entry!("effects.friction.coulomb_n", plant.effects.friction.coulomb_n, "F_c", "N", [0.0, 5000.0],
         None, (1.0, "N"), "Coulomb friction force"),
     entry!("effects.friction.viscous_n_s_per_m", plant.effects.friction.viscous_n_s_per_m, "b", "N·s/m",
@@ -207,6 +213,9 @@ pub static PARAMS: [ParamSpec; 46] = [
         "smoothing velocity of the friction's sign function"),
     entry!("effects.valve_overlap.overlap_m", plant.effects.valve_overlap.overlap_m, "overlap", "m",
         [0.0, 0.01], None, (1e6, "µm"), "spool overlap on each side of null"),
+    entry!("effects.valve_overlap.edge_width_m", plant.effects.valve_overlap.edge_width_m, "w_edge",
+        "m", [0.0, 0.01], None, (1e6, "µm"),
+        "width over which the overlap's rounded edges open (0: sharp)"),
     entry!("effects.valve_offset.bias_v", plant.effects.valve_offset.bias_v, "V_bias", "V", [-5.0, 5.0],
         None, (1e3, "mV"), "valve null offset as a command bias"),
     entry!("effects.leakage.coefficient_m3_per_s_pa", plant.effects.leakage.coefficient_m3_per_s_pa,
@@ -366,6 +375,7 @@ mod tests {
             include_str!("models.rs"),
             include_str!("numerics.rs"),
             include_str!("effects.rs"),
+            include_str!("sensors.rs"),
         ];
         let section = |ty: &str| -> Option<&str> {
             Some(match ty {
@@ -379,6 +389,7 @@ mod tests {
                 "PassiveParams" => "passive",
                 "LinearParams" => "linear",
                 "NumericsParams" => "numerics",
+                "SensorParams" => "sensors",
                 "FrictionEffect" => "effects.friction",
                 "OverlapEffect" => "effects.valve_overlap",
                 "OffsetEffect" => "effects.valve_offset",

@@ -27,7 +27,8 @@ fn friction_is_found() {
         friction: Some((40.0, 20.0, 0.01, 80.0)),
         ..Default::default()
     };
-    let r = check_single(fx, EffectId::Friction, 2);
+    let r = check_friction(fx, 2, false);
+    assert_eq!(first_ranked(&r), EffectId::Friction);
     // Coulomb friction acts at reversals, which sag cannot mimic: no ambiguity note.
     assert!(
         !r.notes.iter().any(|n| n.contains("about equally")),
@@ -140,7 +141,8 @@ fn friction_is_found_with_pressures() {
         friction: Some((40.0, 5.0, 0.01, 80.0)),
         ..Default::default()
     };
-    check_single_with(fx, EffectId::Friction, 2, true);
+    let r = check_friction(fx, 2, true);
+    assert_eq!(first_ranked(&r), EffectId::Friction);
 }
 
 #[test]
@@ -239,7 +241,14 @@ fn friction_and_valve_overlap_are_both_found() {
         overlap: Some(40e-6),
         ..Default::default()
     };
-    check_pair(fx, [EffectId::Friction, EffectId::ValveOverlap], 21, false);
+    // Both are found; the friction law's form leaves the verdict `unexplained` (see
+    // `check_friction`).
+    let r = check_friction(fx, 21, false);
+    assert!(
+        r.effects.iter().any(|e| e.effect == EffectId::ValveOverlap),
+        "{}",
+        summary(&r)
+    );
 }
 
 #[test]
@@ -298,4 +307,107 @@ fn effect_outside_the_library_is_unexplained() {
     );
     let md = identify::report::report_markdown(&r, None);
     assert!(md.contains("## What is left"), "{md}");
+}
+
+/// Issue 20: an effect outside the library that makes the stroke drift slowly (the valve's
+/// null drifting during each test) is `unexplained`, however well a valve offset follows
+/// the drift's mean; the report names the record, `u`, the band and the window where the raw
+/// residual stays above the noise floor. The old verdict, which judged a low-passed velocity
+/// weighted by 1 % of its own RMS, could not see this drift.
+#[test]
+fn a_slow_stroke_drift_outside_the_library_is_unexplained() {
+    let fx = RigEffects {
+        null_drift_v_per_s: Some(2e-3),
+        ..Default::default()
+    };
+    let r = run(fx, 25);
+    let s = summary(&r);
+    eprintln!("null drift: {s}; raw: {}", r.raw_error_after.summary());
+    assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
+    let worst = r
+        .raw_error_after
+        .above
+        .first()
+        .expect("a band above the floor");
+    assert_eq!(worst.channel, "u", "{s}");
+    assert!(worst.ratio > 2.0 * r.raw_error_after.limit, "{worst:?}");
+    let json = identify::report::report_json(&r);
+    assert_eq!(json["raw_error"]["after"]["at_floor"], false);
+    let left = json["residual_left"]["summary"]
+        .as_str()
+        .unwrap_or_default();
+    assert!(left.contains(&format!("{} u ", worst.file)), "{left}");
+}
+
+/// Issue 20, item 5: two imperfect sensors on a rig without any hidden effect — the
+/// accelerometer reads 4 % low, the stroke sensor lags 2 ms (first order). They are reported
+/// as sensor properties with their values, not as plant effects; τ is the valve's, not
+/// the valve's plus the sensor's; calibrated.toml carries them and the replay applies them.
+#[test]
+fn sensor_scale_and_lag_are_found_as_sensors_not_effects() {
+    let fx = RigEffects {
+        ydd_scale: Some(0.96),
+        u_lag_s: Some(2e-3),
+        ..Default::default()
+    };
+    let r = run(fx, 26);
+    let s = summary(&r);
+    eprintln!("sensors: {s}; {:?}", r.sensors);
+    let find = |c: &str, k: &str| {
+        r.sensors
+            .iter()
+            .find(|e| e.channel == c && e.kind == k)
+            .unwrap_or_else(|| panic!("{c} {k} not reported: {:?}; {s}", r.sensors))
+    };
+    let scale = find("ydd", "scale");
+    assert!((scale.value - 0.96).abs() < 0.005, "{scale:?}");
+    let lag = find("u", "lag");
+    assert!((lag.value - 2e-3).abs() < 0.3e-3, "{lag:?}");
+    assert!(r.effects.is_empty(), "{s}");
+    assert_eq!(r.verdict, Verdict::NoMissingEffect, "{s}");
+    assert!((r.params.plant.valve.tau_s - 0.019).abs() < 0.3e-3, "{s}");
+    assert!((r.params.sensors.ydd_scale - scale.value).abs() < 1e-12);
+    let json = identify::report::report_json(&r);
+    assert_eq!(
+        json["sensors"].as_array().map(Vec::len),
+        Some(r.sensors.len())
+    );
+}
+
+/// Issue 20, items 3 and 6: a valve whose overlap edges are rounded over 20 µm (a smooth dead
+/// band, as real lands are). The overlap is found with its edge width, the verdict is
+/// `explained`, and the calibrated replay does not ring: on every record the replayed ÿ's
+/// standard deviation is within 3 times the measured one.
+#[test]
+fn rounded_overlap_is_found_with_its_edge_and_the_replay_does_not_ring() {
+    let fx = RigEffects {
+        overlap: Some(40e-6),
+        overlap_edge: Some(20e-6),
+        ..Default::default()
+    };
+    let r = run(fx, 27);
+    let s = summary(&r);
+    eprintln!("rounded overlap: {s}");
+    let e = r
+        .effects
+        .iter()
+        .find(|e| e.effect == EffectId::ValveOverlap)
+        .unwrap_or_else(|| panic!("{s}"));
+    let (o, w) = (e.params["overlap_m"], e.params["edge_width_m"]);
+    assert!((o - 40e-6).abs() < 4e-6, "overlap {o}: {s}");
+    assert!((w - 20e-6).abs() < 8e-6, "edge {w}: {s}");
+    assert_eq!(r.verdict, Verdict::Explained, "{s}");
+    for (rec, rep) in r.records.iter().zip(&r.replays_after) {
+        let std = |v: &[f64]| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+        };
+        let measured = std(rec.ydd.as_ref().expect("the rig records ydd"));
+        let replayed = std(&rep.sim.ydd);
+        assert!(
+            replayed < 3.0 * measured,
+            "{}: {replayed} vs {measured}",
+            rec.name
+        );
+    }
 }

@@ -14,6 +14,8 @@ pub(super) struct RigEffects {
     pub(super) friction: Option<(f64, f64, f64, f64)>,
     /// overlap m (smooth edge)
     pub(super) overlap: Option<f64>,
+    /// width of the overlap's rounded edges [m] (default 1 µm: nearly sharp)
+    pub(super) overlap_edge: Option<f64>,
     /// spool null offset m
     pub(super) offset: Option<f64>,
     /// leakage coefficient m³/(s·Pa), grows with |Δp|
@@ -27,6 +29,16 @@ pub(super) struct RigEffects {
     /// with the opening (asymmetric metering edges). No library effect has this form: an
     /// offset shifts null but keeps the gain, overlap and sag are symmetric.
     pub(super) cd_spool: Option<f64>,
+    /// Outside the library: the valve's null drifts during each test (its torque motor
+    /// warming up), as a command-referred bias growing at this rate [V/s] from the test's
+    /// start. The stroke drifts slowly, faster and faster; a constant offset can follow its
+    /// mean only.
+    pub(super) null_drift_v_per_s: Option<f64>,
+    /// Sensor, not plant: the body accelerometer reads this fraction of the truth.
+    pub(super) ydd_scale: Option<f64>,
+    /// Sensor, not plant: the stroke sensor's first-order lag [s], integrated at the rig's
+    /// step.
+    pub(super) u_lag_s: Option<f64>,
 }
 
 pub(super) struct Rig {
@@ -95,7 +107,7 @@ impl Rig {
         let mut x = xv.clamp(-0.8e-3, 0.8e-3) - self.fx.offset.unwrap_or(0.0);
         if let Some(ov) = self.fx.overlap {
             let d = x.abs() - ov;
-            let e = 1e-6;
+            let e = self.fx.overlap_edge.unwrap_or(1e-6);
             let open =
                 0.5 * (d + (d * d + e * e).sqrt()) - 0.5 * (ov * ov + e * e).sqrt() + 0.5 * ov;
             x = x.signum() * open.max(0.0);
@@ -195,16 +207,25 @@ impl Rig {
             (vec![], vec![], vec![], vec![], vec![], vec![]);
         let (mut p1_col, mut p2_col) = (vec![], vec![]);
         let mut t = 0.0;
+        let mut u_sensed = 0.0;
         hist.push(cmd(0.0, &y));
         for s in 0..n {
             let (x, _, xdd) = plat(t);
             t_col.push(s as f64 * 1e-3);
             v_col.push(hist[hist.len() - 1]);
-            let un = y[0] + pos_noise.sample(&mut rng);
+            let u_true = if self.fx.u_lag_s.is_some() {
+                u_sensed
+            } else {
+                y[0]
+            };
+            let un = u_true + pos_noise.sample(&mut rng);
             u_col.push(lsb * ((un + 0.0375) / lsb).round() - 0.0375);
             x_col.push(x + pos_noise.sample(&mut rng));
             xdd_col.push(xdd + acc_noise.sample(&mut rng));
-            ydd_col.push(self.body_acc(&y, xdd) + acc_noise.sample(&mut rng));
+            ydd_col.push(
+                self.fx.ydd_scale.unwrap_or(1.0) * self.body_acc(&y, xdd)
+                    + acc_noise.sample(&mut rng),
+            );
             if pressures {
                 for (col, p) in [(&mut p1_col, y[2]), (&mut p2_col, y[3])] {
                     col.push(p_lsb * ((p + p_noise.sample(&mut rng)) / p_lsb).round());
@@ -214,7 +235,10 @@ impl Rig {
                 break;
             }
             for _ in 0..per_sample {
-                let f = |tt: f64, yy: &[f64; 10]| self.rhs(yy, delayed(&hist, tt), plat(tt).2);
+                let drift = |tt: f64| self.fx.null_drift_v_per_s.map_or(0.0, |r| r * tt);
+                let f = |tt: f64, yy: &[f64; 10]| {
+                    self.rhs(yy, delayed(&hist, tt) + drift(tt), plat(tt).2)
+                };
                 let k1 = f(t, &y);
                 let mut tmp = [0.0; 10];
                 for i in 0..10 {
@@ -233,6 +257,9 @@ impl Rig {
                     y[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
                 }
                 y[8] = y[8].clamp(-0.8e-3, 0.8e-3);
+                if let Some(lag) = self.fx.u_lag_s {
+                    u_sensed += h / lag * (y[0] - u_sensed);
+                }
                 t += h;
                 hist.push(cmd(t, &y));
             }
@@ -354,8 +381,9 @@ pub(super) fn summary(r: &CalibrationReport) -> String {
         })
         .max_by(|a, b| a.1.total_cmp(&b.1));
     format!(
-        "verdict {:?}, worst record channel after {worst:?}, effects {:?}, errors nominal {:.3} before {:.3} after {:.3}, cd {:.5} tau {:.5}; {}",
+        "verdict {:?} (raw: {}), worst record channel after {worst:?}, effects {:?}, errors nominal {:.3} before {:.3} after {:.3}, cd {:.5} tau {:.5}; {}",
         r.verdict,
+        r.raw_error_after.summary(),
         r.effects
             .iter()
             .map(|e| e.effect.name())
@@ -385,6 +413,33 @@ pub(super) fn assert_reduced_to_noise(r: &CalibrationReport, s: &str) {
 
 pub(super) fn check_single(fx: RigEffects, expected: EffectId, seed: u64) -> CalibrationReport {
     check_single_with(fx, expected, seed, false)
+}
+
+/// A friction rig: friction is ranked first and added, Cd and τ are found, and the verdict is
+/// `unexplained` with what is left small and named. Known limitation (issue 20): the rig's
+/// friction law (sign smoothed over 2 mm/s, Stribeck velocity 10 mm/s) differs from the
+/// library's (1 mm/s, and the preset's 5 mm/s, neither fitted), and the raw error measure sees
+/// that difference on u and ÿ below 25 Hz at 3–7× the noise floor, where the old weighted
+/// velocity measure called it `explained`.
+pub(super) fn check_friction(fx: RigEffects, seed: u64, pressures: bool) -> CalibrationReport {
+    let r = run_with(fx, seed, pressures);
+    let s = summary(&r);
+    eprintln!("friction: {s}");
+    assert!(
+        r.effects.iter().any(|e| e.effect == EffectId::Friction),
+        "{s}"
+    );
+    assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
+    for e in &r.raw_error_after.above {
+        assert!(e.ratio < 10.0 && e.band_hz[1] <= 25.0, "{e:?}: {s}");
+        assert!(e.channel == "u" || e.channel == "ydd", "{e:?}");
+    }
+    assert!(
+        (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
+        "{s}"
+    );
+    assert!((r.params.plant.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
+    r
 }
 
 pub(super) fn check_single_with(

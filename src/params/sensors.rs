@@ -1,0 +1,139 @@
+//! How the records' sensors read the twin's channels: properties of the measurement, not of
+//! the plant. `seat-twin calibrate` estimates them beside the declared parameters and writes
+//! them into `calibrated.toml`; the replay applies them to the twin's channels before they
+//! are compared with (or written beside) a record.
+
+use serde::{Deserialize, Serialize};
+
+/// Sensor properties: `ÿ_read = scale·ÿ + offset`; `u_read` is `u` through a first-order lag
+/// of time constant `lag` (at low frequency, `u(t − lag)`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorParams {
+    /// Scale of the body accelerometer [-], 0.5 ..= 2 (1: exact).
+    pub ydd_scale: f64,
+    /// Offset of the body accelerometer [m/s^2], -50 ..= 50.
+    pub ydd_offset_m_s2: f64,
+    /// Lag of the stroke sensor [s], 0 ..= 0.05.
+    pub u_lag_s: f64,
+}
+
+impl Default for SensorParams {
+    fn default() -> Self {
+        Self {
+            ydd_scale: 1.0,
+            ydd_offset_m_s2: 0.0,
+            u_lag_s: 0.0,
+        }
+    }
+}
+
+impl SensorParams {
+    /// Whether every property is exact (nothing to apply).
+    pub fn is_exact(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// The accelerometer's reading of `ydd` [m/s²], in place.
+    pub fn read_ydd(&self, ydd: &mut [f64]) {
+        for v in ydd {
+            *v = self.read_ydd_sample(*v);
+        }
+    }
+
+    /// The accelerometer's reading of one sample of `ydd` [m/s²].
+    pub fn read_ydd_sample(&self, ydd: f64) -> f64 {
+        self.ydd_scale * ydd + self.ydd_offset_m_s2
+    }
+
+    /// The stroke sensor as a running filter, for samples `dt` [s] apart that arrive one at a
+    /// time (a streamed replay); [`Self::read_u`] is it over a whole channel.
+    pub fn u_reader(&self, dt: f64) -> StrokeReader {
+        StrokeReader {
+            lag_s: self.u_lag_s,
+            dt,
+            a: if self.u_lag_s > 0.0 && dt > 0.0 {
+                (-dt / self.u_lag_s).exp()
+            } else {
+                0.0
+            },
+            state: None,
+        }
+    }
+
+    /// The stroke sensor's reading of `u` sampled every `dt` [s], in place: `u` through a
+    /// first-order lag of time constant `u_lag_s` (a sensor's or its amplifier's filter),
+    /// exact for `u` linear between samples and started at rest at the first sample. At low
+    /// frequency it is a delay of `u_lag_s`.
+    pub fn read_u(&self, u: &mut [f64], dt: f64) {
+        let mut reader = self.u_reader(dt);
+        for v in u {
+            *v = reader.read(*v);
+        }
+    }
+}
+
+/// The stroke sensor's first-order lag, sample by sample ([`SensorParams::u_reader`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrokeReader {
+    lag_s: f64,
+    dt: f64,
+    a: f64,
+    /// Last output and last input; `None` before the first sample (started at rest there).
+    state: Option<(f64, f64)>,
+}
+
+impl StrokeReader {
+    /// The reading of the next sample of `u` [m].
+    pub fn read(&mut self, u: f64) -> f64 {
+        if self.lag_s <= 0.0 || self.dt <= 0.0 {
+            return u;
+        }
+        let (t, a, dt) = (self.lag_s, self.a, self.dt);
+        let y = match self.state {
+            None => u,
+            Some((y, prev)) => {
+                let slope = (u - prev) / dt;
+                a * y + (1.0 - a) * prev + slope * (dt - t * (1.0 - a))
+            }
+        };
+        self.state = Some((y, u));
+        y
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A first-order lag of 2.5 ms: a ramp comes out 2.5 ms late once settled (exactly, as
+    /// the discretisation is exact for a ramp), and a step rises to 1 − e⁻¹ in one time
+    /// constant; scale and offset are affine.
+    #[test]
+    fn sensors_read_as_documented() {
+        let s = SensorParams {
+            ydd_scale: 0.96,
+            ydd_offset_m_s2: 0.1,
+            u_lag_s: 2.5e-3,
+        };
+        let mut u: Vec<f64> = (0..200).map(|i| i as f64).collect();
+        s.read_u(&mut u, 1e-3);
+        for (i, v) in u.iter().enumerate().skip(60) {
+            assert!((v - (i as f64 - 2.5)).abs() < 1e-9, "{i} {v}");
+        }
+        let mut step = vec![0.0, 1.0, 1.0, 1.0, 1.0, 1.0];
+        let lag = SensorParams {
+            u_lag_s: 2e-3,
+            ..Default::default()
+        };
+        lag.read_u(&mut step, 1e-3);
+        // Linear between the samples 0 and 1 (the only form a sampled record gives), then
+        // held: at t = 1 ms + 2 ms the response is near 1 − e⁻¹ of the way past the ramp.
+        assert!(step[3] > 0.5 && step[3] < 0.8, "{step:?}");
+        assert!(step.windows(2).all(|w| w[1] >= w[0]));
+        let mut y = vec![10.0, -5.0];
+        s.read_ydd(&mut y);
+        assert!((y[0] - 9.7).abs() < 1e-12 && (y[1] + 4.7).abs() < 1e-12);
+        assert!(SensorParams::default().is_exact() && !s.is_exact());
+    }
+}
