@@ -11,12 +11,15 @@
 //! drive it). [`SUSTAINED_WINDOWS`] self-excited windows in a row are a limit cycle;
 //! a high-passed RMS that rises window on window over as many windows, by [`GROWTH_FACTOR`]
 //! overall, is growth. Either is reported once, with the frequency counted from the zero
-//! crossings of the high-passed `ÿ`, until [`Watch::reset`].
+//! crossings of `ÿ` high-passed at [`FREQ_HIGHPASS_HZ`] (so that a slower, saturated
+//! oscillation is not read at a harmonic), until [`Watch::reset`].
 
 use crate::dsp::{Biquad, BiquadState};
 
 /// High-pass corner [Hz].
 pub const HIGHPASS_HZ: f64 = 30.0;
+/// High-pass corner of the signal whose zero crossings give the frequency [Hz].
+pub const FREQ_HIGHPASS_HZ: f64 = 8.0;
 /// Window length [s].
 pub const WINDOW_S: f64 = 0.5;
 /// Smallest high-passed ÿ RMS that counts [m/s²].
@@ -104,12 +107,15 @@ pub struct Watch {
     dt: f64,
     hp_y: BiquadState,
     hp_x: BiquadState,
+    /// ÿ high-passed at [`FREQ_HIGHPASS_HZ`], whose zero crossings give the frequency (the
+    /// detection high-pass would count a slower oscillation's harmonics instead).
+    hp_f: BiquadState,
+    last_f: f64,
     per_window: usize,
     n: usize,
     sum_y: f64,
     sum_x: f64,
     crossings: usize,
-    last_y: f64,
     /// High-passed ÿ RMS and self-excited flag of the recent windows.
     history: Vec<(f64, bool, f64)>,
     pressure_reported: bool,
@@ -137,12 +143,13 @@ impl Watch {
             dt,
             hp_y: BiquadState::new(hp),
             hp_x: BiquadState::new(hp),
+            hp_f: BiquadState::new(highpass(dt, FREQ_HIGHPASS_HZ)),
+            last_f: 0.0,
             per_window: ((WINDOW_S / dt).round() as usize).max(8),
             n: 0,
             sum_y: 0.0,
             sum_x: 0.0,
             crossings: 0,
-            last_y: 0.0,
             history: Vec::new(),
             pressure_reported: false,
             oscillation_reported: false,
@@ -170,15 +177,16 @@ impl Watch {
         }
         let y = self.hp_y.step(ydd);
         let x = self.hp_x.step(xdd);
-        if !(y.is_finite() && x.is_finite()) {
+        let yf = self.hp_f.step(ydd);
+        if !(y.is_finite() && x.is_finite() && yf.is_finite()) {
             return None;
         }
         self.sum_y += y * y;
         self.sum_x += x * x;
-        if (y > 0.0) != (self.last_y > 0.0) && self.n > 0 {
+        if (yf > 0.0) != (self.last_f > 0.0) && self.n > 0 {
             self.crossings += 1;
         }
-        self.last_y = y;
+        self.last_f = yf;
         self.n += 1;
         if self.n < self.per_window {
             return None;
@@ -259,6 +267,14 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert_eq!(run(osc(5.0, -1.0), 6.0), None);
+        // A large saturated (square) oscillation at 15 Hz is read at 15 Hz, not at a harmonic.
+        let square = |t: f64| (0.0, 80.0 * (2.0 * PI * 15.0 * t).sin().signum());
+        match run(square, 4.0) {
+            Some(Finding::LimitCycle { freq_hz, .. }) => {
+                assert!((freq_hz - 15.0).abs() < 1.0, "{freq_hz}")
+            }
+            other => panic!("{other:?}"),
+        }
         // The platform shakes at 60 Hz and the seat follows it: not self-excited.
         let driven = |t: f64| {
             let s = (2.0 * PI * 60.0 * t).sin();

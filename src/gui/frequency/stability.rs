@@ -20,14 +20,25 @@ pub fn margin_text(m: &LoopMargins) -> String {
     };
     let pm = match m.worst_phase() {
         Some(c) => format!(
-            "PM {:.0}° at {:.2} Hz, delay margin {:.2} ms",
+            "PM {:.0}° at {:.2} Hz, delay margin {}",
             c.phase_margin_deg,
             c.freq_hz,
-            m.delay_margin_s() * 1e3
+            delay_text(m.delay_margin_s())
         ),
         None => "PM ∞ (|L| never reaches 1)".into(),
     };
     format!("{gm}, {pm}")
+}
+
+/// A delay margin for people: ms below a second, s above, in words when there is none.
+fn delay_text(dm_s: f64) -> String {
+    if !dm_s.is_finite() {
+        "∞ (no destabilising crossover)".into()
+    } else if dm_s < 1.0 {
+        format!("{:.2} ms", dm_s * 1e3)
+    } else {
+        format!("{dm_s:.2} s")
+    }
 }
 
 /// Every crossing of a loop, one per line (the Stable line's tooltip).
@@ -36,10 +47,10 @@ pub fn crossings_text(m: &LoopMargins) -> String {
     for c in &m.gain_crossovers {
         out.push(if c.destabilising {
             format!(
-                "|L| = 1 at {:.3} Hz (falling): PM {:.1}°, delay margin {:.2} ms",
+                "|L| = 1 at {:.3} Hz (falling): PM {:.1}°, delay margin {}",
                 c.freq_hz,
                 c.phase_margin_deg,
-                c.delay_margin_s * 1e3
+                delay_text(c.delay_margin_s)
             )
         } else {
             format!(
