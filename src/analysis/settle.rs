@@ -22,7 +22,7 @@ const RATE_HZ: f64 = 1000.0;
 const AT_REST_M_S2: f64 = 1e-6;
 
 /// The outcome of one settle test.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Settle {
     /// RMS of ÿ over the last 2 s [m/s²].
     pub rms_last_2s_m_s2: f64,

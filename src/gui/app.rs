@@ -9,7 +9,7 @@ mod export;
 mod file_ops;
 mod panels;
 
-use super::ab::{AbAction, AbView};
+use super::ab::{self, AbAction, AbView};
 use super::controls::{self, ExcitationAction, ExcitationEditor, ExcitationKind, LoadedRecord};
 use super::files::{self, CsvTable, Dialogs, Purpose, Writer};
 use super::frequency::{self, Analytic, Curves, Dwell, FreqAction, FreqView};
@@ -17,6 +17,7 @@ use super::job::Waker;
 use super::measured::{MeasuredAction, MeasuredData};
 use super::schematic;
 use super::scopes;
+use super::session::{self, Session, SessionAb, SessionTune, SessionView};
 use super::traces::{Ch, Traces};
 use super::units::{BAR_PER_PA, MM_PER_M};
 use crate::analysis::watch::Finding;
@@ -136,6 +137,7 @@ pub struct EngineView {
 enum Pending {
     OpenDialog,
     LoadFile(PathBuf),
+    OpenSessionDialog,
     Quit,
 }
 

@@ -9,6 +9,7 @@ use crate::scenario::{Cycloid, RandomRide, SampledMotion};
 use egui::{Response, Slider, SliderClamping};
 use serde::{Deserialize, Serialize};
 use std::ops::RangeInclusive;
+use std::path::PathBuf;
 
 /// One parameter slider. What it shows (display unit and scale), what it accepts (valid range)
 /// and its description come from the parameter table [`crate::params::PARAMS`]; the app adds
@@ -383,6 +384,8 @@ impl ExcitationKind {
 pub struct LoadedRecord {
     /// File name shown in the UI.
     pub name: String,
+    /// The file (a session file keeps the record by it).
+    pub path: PathBuf,
     /// The motion.
     pub motion: SampledMotion,
 }

@@ -18,6 +18,10 @@ pub enum Purpose {
     SavePreset,
     /// Load a platform record (CSV).
     LoadRecord,
+    /// Open a session (TOML).
+    OpenSession,
+    /// Save the session (TOML).
+    SaveSession,
     /// Load measured records (CSV, several at once).
     LoadMeasured,
     /// Export the traces (CSV).
@@ -36,6 +40,8 @@ impl Purpose {
             Purpose::OpenPreset => "Open preset",
             Purpose::SavePreset => "Save preset",
             Purpose::LoadRecord => "Load a platform record (CSV)",
+            Purpose::OpenSession => "Open session",
+            Purpose::SaveSession => "Save session",
             Purpose::LoadMeasured => "Load measured records (CSV)",
             Purpose::ExportCsv => "Export traces (CSV)",
             Purpose::ExportPng => "Export plots (PNG)",
@@ -46,13 +52,18 @@ impl Purpose {
     fn saves(self) -> bool {
         matches!(
             self,
-            Purpose::SavePreset | Purpose::ExportCsv | Purpose::ExportPng | Purpose::ExportReport
+            Purpose::SavePreset
+                | Purpose::SaveSession
+                | Purpose::ExportCsv
+                | Purpose::ExportPng
+                | Purpose::ExportReport
         )
     }
 
     fn filter(self) -> (&'static str, &'static [&'static str]) {
         match self {
             Purpose::OpenPreset | Purpose::SavePreset => ("preset", &["toml"]),
+            Purpose::OpenSession | Purpose::SaveSession => ("session", &["toml"]),
             Purpose::LoadRecord | Purpose::LoadMeasured | Purpose::ExportCsv => ("CSV", &["csv"]),
             Purpose::ExportPng => ("PNG", &["png"]),
             Purpose::ExportReport => ("folder", &[]),

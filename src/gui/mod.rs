@@ -28,6 +28,7 @@ pub mod measured;
 pub mod plotkit;
 pub mod schematic;
 pub mod scopes;
+pub mod session;
 pub mod traces;
 pub mod tune;
 pub mod units;

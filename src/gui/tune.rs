@@ -105,6 +105,15 @@ impl TunePanel {
         }
     }
 
+    /// Puts a result back (from a session file), stopping a running job.
+    pub fn restore(&mut self, result: Option<TuneResult>, selected: Option<usize>) {
+        self.cancel();
+        self.job = None;
+        self.message = None;
+        self.selected = selected.filter(|&i| result.as_ref().is_some_and(|r| i < r.pareto.len()));
+        self.result = result;
+    }
+
     /// The last message (text, is error): cancelled, failed.
     pub fn message(&self) -> Option<&(String, bool)> {
         self.message.as_ref()

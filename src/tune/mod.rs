@@ -66,7 +66,7 @@ pub const SETTLE_S: f64 = 2.0;
 const RATE_HZ: f64 = 500.0;
 
 /// What the tuner minimises (of the body's acceleration, ISO 2631-1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Objective {
     /// Wk-weighted RMS `a_w` [m/s²].
@@ -211,9 +211,10 @@ pub enum TuneError {
 }
 
 /// One evaluation of a set of gains.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Evaluation {
-    /// The controller evaluated.
+    /// The controller evaluated (not in report.json; the app's session file keeps it beside
+    /// the evaluation).
     #[serde(skip)]
     pub controller: ControllerParams,
     /// The tuned keys and their values.
@@ -242,7 +243,7 @@ pub struct Evaluation {
 }
 
 /// One row of the robustness table.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RobustnessRow {
     /// Discharge coefficient [-].
     pub cd: f64,
@@ -284,7 +285,7 @@ pub fn tau_max_s(table: &[RobustnessRow]) -> f64 {
 }
 
 /// What tuning found.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct TuneResult {
     /// Structure tuned.
     pub kind: ControllerKind,

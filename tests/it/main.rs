@@ -14,6 +14,7 @@ mod gui;
 mod gui_edges;
 mod gui_lab;
 mod gui_measured;
+mod gui_session;
 mod gui_use;
 mod identify;
 mod integrator;

@@ -78,7 +78,11 @@ impl SeatTwinApp {
                     .file_name()
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_default();
-                self.settings.excitation.record = Some(LoadedRecord { name, motion });
+                self.settings.excitation.record = Some(LoadedRecord {
+                    name,
+                    path: path.to_path_buf(),
+                    motion,
+                });
                 self.settings.excitation.kind = ExcitationKind::Record;
                 self.apply_excitation();
                 self.info(format!("record loaded from {}", path.display()));
@@ -119,6 +123,7 @@ impl SeatTwinApp {
         match action {
             Pending::OpenDialog => self.request_file(Purpose::OpenPreset, "", ctx),
             Pending::LoadFile(p) => self.open_preset_file(&p),
+            Pending::OpenSessionDialog => self.request_file(Purpose::OpenSession, "", ctx),
             Pending::Quit => {
                 self.quit_confirmed = true;
                 ctx.send_viewport_cmd(egui::ViewportCommand::Close);
@@ -163,8 +168,12 @@ impl SeatTwinApp {
             Purpose::ExportCsv => "traces.csv",
             Purpose::ExportPng => "plots.png",
             Purpose::SavePreset => "preset.toml",
+            Purpose::SaveSession => "session.toml",
             Purpose::ExportReport => "calibration",
-            Purpose::OpenPreset | Purpose::LoadRecord | Purpose::LoadMeasured => "",
+            Purpose::OpenPreset
+            | Purpose::OpenSession
+            | Purpose::LoadRecord
+            | Purpose::LoadMeasured => "",
         };
         if name.is_empty() {
             String::new()
@@ -263,6 +272,8 @@ impl SeatTwinApp {
                 Purpose::OpenPreset => self.open_preset_file(&path),
                 Purpose::SavePreset => self.save_preset_file(&path),
                 Purpose::LoadRecord => self.load_record_file(&path),
+                Purpose::OpenSession => self.open_session_file(&path, ctx),
+                Purpose::SaveSession => self.save_session_file(&path),
                 Purpose::ExportCsv => {
                     let table = self.traces_table();
                     if table.rows.is_empty() {
@@ -282,5 +293,100 @@ impl SeatTwinApp {
                 }
             }
         }
+    }
+
+    /// Saves the session (parameters, excitation, A/B, view, the last tune result).
+    pub fn save_session_file(&mut self, path: &Path) {
+        let s = Session {
+            format_version: session::FORMAT_VERSION,
+            preset: Session::preset_of(&self.preset.name, &self.preset.description, &self.params),
+            excitation: self.settings.excitation.clone(),
+            record_path: self
+                .settings
+                .excitation
+                .record
+                .as_ref()
+                .map(|r| r.path.clone()),
+            ab: SessionAb {
+                on: self.ab.is_on(),
+                reference: self.ab.reference(),
+            },
+            view: SessionView {
+                hidden_curves: self.hidden_curves.clone(),
+                phase_unwrapped: self.settings.phase_unwrapped,
+                scope_window_s: self.settings.scope_window_s,
+                show_schematic: self.settings.show_schematic,
+                ui_scale: self.settings.ui_scale,
+            },
+            tune: self
+                .tune
+                .result()
+                .map(|r| SessionTune::new(r, self.tune.selected())),
+        };
+        match s.save(path) {
+            Ok(()) => self.info(format!("session saved to {}", path.display())),
+            Err(e) => self.error(format!("session not saved: {e}")),
+        }
+    }
+
+    /// Opens a session file: everything in it is checked first (a bad file changes nothing
+    /// and says why), then restored, and the engine restarts from rest with it.
+    pub fn open_session_file(&mut self, path: &Path, ctx: &egui::Context) {
+        let refuse = |app: &mut Self, e: &dyn std::fmt::Display| {
+            app.error(format!("session not opened: {e}"));
+        };
+        let (s, preset) = match Session::load(path) {
+            Ok(x) => x,
+            Err(e) => return refuse(self, &e),
+        };
+        let mut excitation = s.excitation.clone();
+        excitation.typed_path.clear();
+        excitation.record = None;
+        if let Some(rp) = &s.record_path {
+            match files::read_platform_record(rp) {
+                Ok(motion) => {
+                    let name = rp
+                        .file_name()
+                        .map(|n| n.to_string_lossy().into_owned())
+                        .unwrap_or_default();
+                    excitation.record = Some(LoadedRecord {
+                        name,
+                        path: rp.clone(),
+                        motion,
+                    });
+                }
+                Err(e) => {
+                    let e = format!("{}: field `record_path`: {e:#}", path.display());
+                    return refuse(self, &e);
+                }
+            }
+        }
+        if let Some(p) = excitation.problem() {
+            let e = format!("{}: field `excitation`: {p}", path.display());
+            return refuse(self, &e);
+        }
+        if let Err(e) = ab::reference_params(&preset.params, s.ab.reference).validate() {
+            let e = format!("{}: field `ab.reference`: {e}", path.display());
+            return refuse(self, &e);
+        }
+        // Checked: restore it all.
+        self.set_preset(preset, None, false);
+        self.settings.excitation = excitation;
+        self.ab.set_reference(s.ab.reference);
+        self.ab.set_on(s.ab.on);
+        let v = s.view;
+        self.hidden_curves = v.hidden_curves;
+        self.settings.phase_unwrapped = v.phase_unwrapped;
+        self.settings.scope_window_s = v.scope_window_s;
+        self.settings.show_schematic = v.show_schematic;
+        self.set_ui_scale(ctx, v.ui_scale);
+        match &s.tune {
+            Some(t) => self.tune.restore(Some(t.restored()), t.selected),
+            None => self.tune.restore(None, None),
+        }
+        self.send(Command::SetReference(self.ab.command()));
+        self.apply_excitation();
+        self.reset();
+        self.info(format!("session opened from {}", path.display()));
     }
 }

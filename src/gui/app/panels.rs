@@ -16,6 +16,13 @@ impl SeatTwinApp {
                 self.save_as(ctx);
             }
             ui.separator();
+            if ui.button("Open session…").clicked() {
+                self.guarded(Pending::OpenSessionDialog, ctx);
+            }
+            if ui.button("Save session…").clicked() {
+                self.request_file(Purpose::SaveSession, "session.toml", ctx);
+            }
+            ui.separator();
             if ui.button("Load platform record (CSV)…").clicked() {
                 self.request_file(Purpose::LoadRecord, "", ctx);
             }
