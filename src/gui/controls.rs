@@ -390,6 +390,22 @@ pub struct LoadedRecord {
     pub motion: SampledMotion,
 }
 
+impl LoadedRecord {
+    /// Reads a CSV platform record ([`super::files::read_platform_record`]).
+    pub fn read(path: &std::path::Path) -> anyhow::Result<Self> {
+        let motion = super::files::read_platform_record(path)?;
+        let name = path
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        Ok(Self {
+            name,
+            path: path.to_path_buf(),
+            motion,
+        })
+    }
+}
+
 /// The excitation editor's state (persisted, except the loaded record).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default)]

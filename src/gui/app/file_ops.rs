@@ -72,17 +72,9 @@ impl SeatTwinApp {
 
     /// Loads a CSV platform record and switches the excitation to it.
     pub fn load_record_file(&mut self, path: &Path) {
-        match files::read_platform_record(path) {
-            Ok(motion) => {
-                let name = path
-                    .file_name()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default();
-                self.settings.excitation.record = Some(LoadedRecord {
-                    name,
-                    path: path.to_path_buf(),
-                    motion,
-                });
+        match LoadedRecord::read(path) {
+            Ok(record) => {
+                self.settings.excitation.record = Some(record);
                 self.settings.excitation.kind = ExcitationKind::Record;
                 self.apply_excitation();
                 self.info(format!("record loaded from {}", path.display()));
@@ -343,18 +335,8 @@ impl SeatTwinApp {
         excitation.typed_path.clear();
         excitation.record = None;
         if let Some(rp) = &s.record_path {
-            match files::read_platform_record(rp) {
-                Ok(motion) => {
-                    let name = rp
-                        .file_name()
-                        .map(|n| n.to_string_lossy().into_owned())
-                        .unwrap_or_default();
-                    excitation.record = Some(LoadedRecord {
-                        name,
-                        path: rp.clone(),
-                        motion,
-                    });
-                }
+            match LoadedRecord::read(rp) {
+                Ok(record) => excitation.record = Some(record),
                 Err(e) => {
                     let e = format!("{}: field `record_path`: {e:#}", path.display());
                     return refuse(self, &e);
