@@ -137,7 +137,7 @@ fn refused_values_reach_no_view() {
 }
 
 /// A platform record of `secs` seconds (gentle 5 Hz sine) as a CSV file.
-fn short_record(dir: &std::path::Path, secs: f64) -> std::path::PathBuf {
+pub(crate) fn short_record(dir: &std::path::Path, secs: f64) -> std::path::PathBuf {
     let path = dir.join("short.csv");
     let mut text = String::from("t,x\n");
     let n = (secs * 1000.0) as usize;

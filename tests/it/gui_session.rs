@@ -196,3 +196,37 @@ fn open_session_asks_before_discarding_unsaved_work() {
     h.run_steps(2);
     assert!(h.state().is_confirm_open());
 }
+
+/// A loaded platform record is kept by its path and read again on opening; a session whose
+/// record has gone is refused naming `record_path`, and the excitation stays as it was.
+#[test]
+fn a_session_keeps_the_record_by_its_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("rec-session.toml");
+    let rec = super::gui_edges::short_record(dir.path(), 2.0);
+    let mut h = harness();
+    h.run_steps(2);
+    let ctx = h.ctx.clone();
+    h.state_mut().load_record_file(&rec);
+    assert_eq!(h.state().settings.excitation.kind, ExcitationKind::Record);
+    h.state_mut().save_session_file(&file);
+
+    let mut h = harness();
+    h.run_steps(2);
+    h.state_mut().open_session_file(&file, &ctx);
+    let n = h.state().notice().unwrap();
+    assert!(!n.error, "{}", n.text);
+    let ex = &h.state().settings.excitation;
+    assert_eq!(ex.kind, ExcitationKind::Record);
+    let loaded = ex.record.as_ref().expect("the record read again");
+    assert_eq!(loaded.path, rec);
+    assert_eq!(loaded.name, "short.csv");
+
+    std::fs::remove_file(&rec).unwrap();
+    let mut h = harness();
+    h.run_steps(2);
+    h.state_mut().open_session_file(&file, &ctx);
+    let n = h.state().notice().unwrap();
+    assert!(n.error && n.text.contains("record_path"), "{}", n.text);
+    assert_eq!(h.state().settings.excitation.kind, ExcitationKind::Random);
+}
