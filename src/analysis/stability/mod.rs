@@ -21,10 +21,16 @@
 //! 77 Hz, far narrower than any fixed log grid. Each crossing is then located by bisection on
 //! `L` itself. The margins describe; the eigenvalues decide.
 
-use crate::analysis::frequency_response::{LinearisedModel, OpenLoop, log_space};
+mod delay;
+mod margins;
+
+pub use delay::{DelayBlock, clenshaw_curtis, eigenvalues};
+pub use margins::{GainCrossover, LoopMargins, PhaseCrossover, margin_grid};
+
+use crate::analysis::frequency_response::{LinearisedModel, OpenLoop};
 use crate::control::ControlLaw;
 use crate::params::ControllerKind;
-use nalgebra::{DMatrix, DVector, Schur};
+use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
@@ -33,133 +39,6 @@ pub const ORDERS: [usize; 2] = [28, 40];
 
 /// Highest frequency of the margin grid [Hz] (above the valve's and the oil column's modes).
 pub const MARGIN_F_MAX_HZ: f64 = 1000.0;
-
-/// A pure delay `T` of one scalar signal, as the Chebyshev collocation of the transport
-/// equation: states `φ(θ_j)` at `θ_j = T·(cos(jπ/n) − 1)/2`, `j = 1..=n` (the input sits at
-/// `j = 0`, `θ = 0`; the output is the last state, `θ = −T`). `φ̇ = a·φ + b·input`.
-#[derive(Debug, Clone)]
-pub struct DelayBlock {
-    /// State matrix (n × n) [1/s].
-    pub a: DMatrix<f64>,
-    /// Input column (n) [1/s].
-    pub b: DVector<f64>,
-}
-
-impl DelayBlock {
-    /// The block for a delay `delay_s` > 0 [s] with `n` ≥ 2 collocation states.
-    pub fn new(delay_s: f64, n: usize) -> Self {
-        let x: Vec<f64> = (0..=n).map(|j| (PI * j as f64 / n as f64).cos()).collect();
-        let c = |j: usize| if j == 0 || j == n { 2.0 } else { 1.0 };
-        let mut d = DMatrix::<f64>::zeros(n + 1, n + 1);
-        for i in 0..=n {
-            for j in 0..=n {
-                if i != j {
-                    let sign = if (i + j) % 2 == 0 { 1.0 } else { -1.0 };
-                    d[(i, j)] = c(i) / c(j) * sign / (x[i] - x[j]);
-                }
-            }
-        }
-        for i in 0..=n {
-            let off: f64 = (0..=n).filter(|&j| j != i).map(|j| d[(i, j)]).sum();
-            d[(i, i)] = -off;
-        }
-        // d/dθ = (2/T)·d/dx.
-        let scale = 2.0 / delay_s;
-        Self {
-            a: d.view((1, 1), (n, n)) * scale,
-            b: d.view((1, 0), (n, 1)).column(0) * scale,
-        }
-    }
-
-    /// The block's transfer function at `omega` [rad/s] (≈ `e^(−jωT)`), for checking.
-    pub fn response(&self, omega: f64) -> Complex64 {
-        let n = self.a.nrows();
-        let m = DMatrix::from_fn(n, n, |i, j| {
-            Complex64::new(-self.a[(i, j)], if i == j { omega } else { 0.0 })
-        });
-        let rhs = self.b.map(|v| Complex64::new(v, 0.0));
-        m.lu()
-            .solve(&rhs)
-            .map_or(Complex64::new(f64::NAN, f64::NAN), |z| z[n - 1])
-    }
-}
-
-/// Clenshaw–Curtis weights on `[−1, 1]` at the Chebyshev points `cos(jπ/n)`, `j = 0..=n`
-/// (they sum to 2 and integrate polynomials of degree ≤ n exactly).
-pub fn clenshaw_curtis(n: usize) -> Vec<f64> {
-    let nf = n as f64;
-    let mut w = vec![0.0; n + 1];
-    if n == 0 {
-        w[0] = 2.0;
-        return w;
-    }
-    let ends = if n.is_multiple_of(2) {
-        1.0 / (nf * nf - 1.0)
-    } else {
-        1.0 / (nf * nf)
-    };
-    w[0] = ends;
-    w[n] = ends;
-    for (j, wj) in w.iter_mut().enumerate().take(n).skip(1) {
-        let theta = PI * j as f64 / nf;
-        let mut v = 1.0;
-        for k in 1..=(n - 1) / 2 {
-            let kf = k as f64;
-            v -= 2.0 * (2.0 * kf * theta).cos() / (4.0 * kf * kf - 1.0);
-        }
-        if n.is_multiple_of(2) {
-            v -= (nf * theta).cos() / (nf * nf - 1.0);
-        }
-        *wj = 2.0 * v / nf;
-    }
-    w
-}
-
-/// Balances a matrix by diagonal similarity with powers of two (rows and columns of equal
-/// norm), as LAPACK's `gebal` does before an eigenvalue solve: the eigenvalues are the same and
-/// their rounding errors much smaller for a matrix whose entries span many decades.
-fn balance(m: &mut DMatrix<f64>) {
-    let n = m.nrows();
-    for _sweep in 0..100 {
-        let mut changed = false;
-        for i in 0..n {
-            let c: f64 = (0..n).filter(|&j| j != i).map(|j| m[(j, i)].abs()).sum();
-            let r: f64 = (0..n).filter(|&j| j != i).map(|j| m[(i, j)].abs()).sum();
-            if c == 0.0 || r == 0.0 {
-                continue;
-            }
-            let mut f = 1.0;
-            let (mut cc, mut rr) = (c, r);
-            while cc < rr / 2.0 {
-                cc *= 2.0;
-                rr /= 2.0;
-                f *= 2.0;
-            }
-            while cc >= rr * 2.0 {
-                cc /= 2.0;
-                rr *= 2.0;
-                f /= 2.0;
-            }
-            if (cc + rr) < 0.95 * (c + r) {
-                changed = true;
-                for j in 0..n {
-                    m[(i, j)] /= f;
-                    m[(j, i)] *= f;
-                }
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
-}
-
-/// Eigenvalues of a real matrix, balanced first; `None` if the QR iteration does not converge.
-pub fn eigenvalues(m: &DMatrix<f64>) -> Option<Vec<Complex64>> {
-    let mut b = m.clone();
-    balance(&mut b);
-    Schur::try_new(b, 1e-15, 100_000).map(|s| s.complex_eigenvalues().iter().copied().collect())
-}
 
 /// The plant as the loop sees it: `ẋ = a·x + b·V(t − τ)`, the stroke `u = u_row·x` and the
 /// body acceleration `ÿ = ydd_row·x + ydd_b·V(t − τ)` (platform still), in scaled states.
@@ -373,187 +252,9 @@ impl ClosedLoopModes {
     }
 }
 
-/// A gain crossover, `|L(jω)| = 1`.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct GainCrossover {
-    /// Frequency [Hz].
-    pub freq_hz: f64,
-    /// Phase margin `180° + ∠L` wrapped to (−180°, 180°] [deg].
-    pub phase_margin_deg: f64,
-    /// The extra delay that would put a closed-loop pole on the imaginary axis here [s].
-    pub delay_margin_s: f64,
-    /// |L| falls through 1 here: added delay moves the pole on the axis into the right half
-    /// plane (destabilising). Where |L| rises through 1 the pole crosses the other way
-    /// (Re ds/dδ = −ω·(d ln|L|/dω)/|…|², for `1 + L(s)·e^(−sδ) = 0`).
-    pub destabilising: bool,
-}
-
-/// A phase crossover, `L(jω)` on the negative real axis.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct PhaseCrossover {
-    /// Frequency [Hz].
-    pub freq_hz: f64,
-    /// Gain margin `−20·log10 |L|` [dB] (positive: the gain may rise by that much here;
-    /// negative: lowering the gain by that much puts a pole on the axis).
-    pub gain_margin_db: f64,
-}
-
-/// Every crossing of a loop gain `L` (negative-feedback form: `1 + L` in the closed loop's
-/// denominator), in ascending frequency.
-#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
-pub struct LoopMargins {
-    /// Every `|L| = 1` crossing.
-    pub gain_crossovers: Vec<GainCrossover>,
-    /// Every `∠L = −180°` crossing.
-    pub phase_crossovers: Vec<PhaseCrossover>,
-}
-
-impl LoopMargins {
-    /// The phase crossover closest to instability in gain (smallest |GM| in dB); `None` when
-    /// the phase never reaches −180° (an infinite gain margin).
-    pub fn worst_gain(&self) -> Option<PhaseCrossover> {
-        self.phase_crossovers
-            .iter()
-            .copied()
-            .min_by(|a, b| a.gain_margin_db.abs().total_cmp(&b.gain_margin_db.abs()))
-    }
-
-    /// The gain crossover closest to −1 in angle (smallest |phase margin|: a loop that pokes
-    /// above |L| = 1 inside a resonance can cross with a negative margin and stay stable, and
-    /// is then that many degrees of phase *lead* away from instability); `None` when |L|
-    /// never reaches 1.
-    pub fn worst_phase(&self) -> Option<GainCrossover> {
-        self.gain_crossovers.iter().copied().min_by(|a, b| {
-            a.phase_margin_deg
-                .abs()
-                .total_cmp(&b.phase_margin_deg.abs())
-        })
-    }
-
-    /// The delay margin [s]: the smallest extra delay that makes the loop unstable, over the
-    /// destabilising gain crossovers ([`GainCrossover::destabilising`]); ∞ without one.
-    pub fn delay_margin_s(&self) -> f64 {
-        self.gain_crossovers
-            .iter()
-            .filter(|c| c.destabilising)
-            .map(|c| c.delay_margin_s)
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    /// The gain margin of [`Self::worst_gain`] [dB] (signed); ∞ without a phase crossover.
-    pub fn gain_margin_db(&self) -> f64 {
-        self.worst_gain()
-            .map_or(f64::INFINITY, |c| c.gain_margin_db)
-    }
-
-    /// The phase margin of [`Self::worst_phase`] [deg]; ∞ without a gain crossover.
-    pub fn phase_margin_deg(&self) -> f64 {
-        self.worst_phase()
-            .map_or(f64::INFINITY, |c| c.phase_margin_deg)
-    }
-
-    /// Every crossing of `loop_gain` sampled on `freqs_hz` (ascending), each located by
-    /// bisection on `eval` (the same loop gain at any frequency).
-    pub fn from_loop(
-        freqs_hz: &[f64],
-        loop_gain: &[Complex64],
-        eval: impl Fn(f64) -> Complex64,
-    ) -> Self {
-        let mut out = Self::default();
-        let n = freqs_hz.len().min(loop_gain.len());
-        let finite = |c: &Complex64| c.re.is_finite() && c.im.is_finite() && c.norm() > 0.0;
-        for i in 1..n {
-            let (fa, fb) = (freqs_hz[i - 1], freqs_hz[i]);
-            let (la, lb) = (loop_gain[i - 1], loop_gain[i]);
-            if !(finite(&la) && finite(&lb)) {
-                continue;
-            }
-            // |L| through 1.
-            let ga = la.norm().ln();
-            if ga * lb.norm().ln() <= 0.0 && !(ga == 0.0 && i > 1) {
-                let f = bisect(fa, fb, |f| eval(f).norm().ln(), ga);
-                let l = eval(f);
-                let pm = wrap_deg(180.0 + l.arg().to_degrees());
-                let w = 2.0 * PI * f;
-                out.gain_crossovers.push(GainCrossover {
-                    freq_hz: f,
-                    phase_margin_deg: pm,
-                    delay_margin_s: pm.rem_euclid(360.0).to_radians() / w,
-                    destabilising: lb.norm() < la.norm(),
-                });
-            }
-            // L through the negative real axis: Im L changes sign with Re L < 0 between.
-            if la.im * lb.im <= 0.0 && !(la.im == 0.0 && i > 1) && (la.re < 0.0 || lb.re < 0.0) {
-                let f = bisect(fa, fb, |f| eval(f).im, la.im);
-                let l = eval(f);
-                if l.re < 0.0 {
-                    out.phase_crossovers.push(PhaseCrossover {
-                        freq_hz: f,
-                        gain_margin_db: -20.0 * l.norm().log10(),
-                    });
-                }
-            }
-        }
-        out
-    }
-}
-
-/// Wraps an angle to (−180°, 180°] [deg].
-fn wrap_deg(a: f64) -> f64 {
-    let w = (a + 180.0).rem_euclid(360.0) - 180.0;
-    if w == -180.0 { 180.0 } else { w }
-}
-
-/// A zero of `g` between `a` and `b` (Hz, bisection on log f; `ga` = g(a)).
-fn bisect(a: f64, b: f64, g: impl Fn(f64) -> f64, ga: f64) -> f64 {
-    let (mut lo, mut hi, mut glo) = (a.ln(), b.ln(), ga);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        let gm = g(mid.exp());
-        if !gm.is_finite() {
-            break;
-        }
-        if glo * gm <= 0.0 {
-            hi = mid;
-        } else {
-            lo = mid;
-            glo = gm;
-        }
-        if hi - lo < 1e-13 {
-            break;
-        }
-    }
-    (0.5 * (lo + hi)).exp()
-}
-
-/// The margin grid [Hz]: 3000 log points from 0.01 Hz to [`MARGIN_F_MAX_HZ`], plus, around
-/// every pole with damping ratio below 0.3 in that range, points `|σ|/8` apart over `±40·|σ|`
-/// of its damped frequency (σ its real part), so that a resonance of any sharpness is sampled
-/// across its width.
-pub fn margin_grid(poles: &[Complex64]) -> Vec<f64> {
-    let mut f = log_space(0.01, MARGIN_F_MAX_HZ, 3000);
-    let (w_lo, w_hi) = (2.0 * PI * 0.01, 2.0 * PI * MARGIN_F_MAX_HZ);
-    for p in poles {
-        let wd = p.im.abs();
-        let sigma = p.re.abs().max(1e-9 * wd);
-        if !(wd > w_lo && wd < w_hi) || sigma > 0.3 * p.norm() {
-            continue;
-        }
-        for k in -320..=320 {
-            let w = wd + sigma * k as f64 / 8.0;
-            if w > w_lo && w < w_hi {
-                f.push(w / (2.0 * PI));
-            }
-        }
-    }
-    f.sort_by(f64::total_cmp);
-    f.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs());
-    f
-}
-
 /// The poles of the controller's feedback part (the Smith predictor's inner loop; the skyhook
 /// filters' real poles), for the margin grid.
-fn controller_poles(law: &ControlLaw) -> Vec<Complex64> {
+pub(super) fn controller_poles(law: &ControlLaw) -> Vec<Complex64> {
     let c = law.params();
     match c.kind {
         ControllerKind::Smith => {
@@ -697,33 +398,6 @@ pub fn remedy(params: &crate::params::Params, plants: &[(&LoopPlant, f64)]) -> S
          (less |Kp| or a shorter τ).",
         kp.abs()
     )
-}
-
-impl LoopMargins {
-    /// Every crossing of the loop of `plant` (delay excluded; `grid` evaluated on it) with
-    /// `law` and the command delay `tau_s`.
-    pub fn on_grid(
-        plant: &LinearisedModel,
-        grid: &MarginGrid,
-        law: &ControlLaw,
-        tau_s: f64,
-    ) -> Self {
-        let extra = controller_poles(law);
-        let (freqs, points) = if extra.is_empty() {
-            (grid.freqs_hz.clone(), grid.points.clone())
-        } else {
-            let mut f = grid.freqs_hz.clone();
-            f.extend(margin_grid(&extra));
-            f.sort_by(f64::total_cmp);
-            f.dedup();
-            let p = f.iter().map(|&x| plant.open_loop(x)).collect();
-            (f, p)
-        };
-        let loop_gain: Vec<Complex64> = points.iter().map(|p| p.loop_gain(law, tau_s)).collect();
-        Self::from_loop(&freqs, &loop_gain, |f| {
-            plant.open_loop(f).loop_gain(law, tau_s)
-        })
-    }
 }
 
 #[cfg(test)]
