@@ -3,7 +3,7 @@
 //! pole and located by bisection on the loop gain itself.
 
 use super::{MARGIN_F_MAX_HZ, MarginGrid, controller_poles};
-use crate::analysis::frequency_response::{LinearisedModel, log_space};
+use crate::analysis::frequency_response::{LinearisedModel, OpenLoop, log_space};
 use crate::control::ControlLaw;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -196,18 +196,22 @@ impl LoopMargins {
         tau_s: f64,
     ) -> Self {
         let extra = controller_poles(law);
+        // The plant's cached grid, borrowed; a grid of its own only when the controller adds
+        // poles (the Smith predictor's inner loop).
+        let refined: (Vec<f64>, Vec<OpenLoop>);
         let (freqs, points) = if extra.is_empty() {
-            (grid.freqs_hz.clone(), grid.points.clone())
+            (&grid.freqs_hz, &grid.points)
         } else {
             let mut f = grid.freqs_hz.clone();
             f.extend(margin_grid(&extra));
             f.sort_by(f64::total_cmp);
             f.dedup();
             let p = f.iter().map(|&x| plant.open_loop(x)).collect();
-            (f, p)
+            refined = (f, p);
+            (&refined.0, &refined.1)
         };
         let loop_gain: Vec<Complex64> = points.iter().map(|p| p.loop_gain(law, tau_s)).collect();
-        Self::from_loop(&freqs, &loop_gain, |f| {
+        Self::from_loop(freqs, &loop_gain, |f| {
             plant.open_loop(f).loop_gain(law, tau_s)
         })
     }
