@@ -41,10 +41,10 @@
 //! Filters are first-order sections stepped exactly for an input linear between grid points
 //! (first-order hold), so they agree with their transfer functions to round-off at any step.
 //! The Smith model is stepped exactly for a command held over the step (zero-order hold) and
-//! read `τm` back by the cubic interpolation of [`crate::delay`].
+//! read `τm` back by the cubic interpolation of [`crate::simulation::delay`].
 
-use crate::delay::{DelayLine, Tap};
 use crate::params::{ControllerKind, ControllerParams, LinearParams, MAX_DELAY_S, Params};
+use crate::simulation::delay::{DelayLine, Tap};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use num_complex::Complex64;
 use std::f64::consts::PI;

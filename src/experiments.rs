@@ -1,7 +1,6 @@
 //! The paper's experiments as one-call functions, shared by the CLI, the report, the app and
 //! the tests.
 
-use crate::lti::LtiSimulation;
 use crate::model::ModelKind;
 use crate::model::linear::LinearModel;
 use crate::model::passive::PassiveModel;
@@ -15,7 +14,7 @@ use std::path::Path;
 
 /// Largest step of the exact (first-order-hold) runs of the linear and passive models [s].
 /// Their inputs are smooth at this scale (ride ≤ 5 Hz, loop resonance 80 Hz): the hold error
-/// is below 0.2 % of the peak body acceleration (tests in [`crate::lti`]).
+/// is below 0.2 % of the peak body acceleration (tests in [`crate::simulation::lti`]).
 pub const LTI_MAX_STEP_S: f64 = 1e-3;
 
 /// One run of a model from rest: its drive and platform motion, for `duration_s` [s] recorded
@@ -58,29 +57,23 @@ impl RunSpec<'_> {
         match self.kind {
             ModelKind::Twin => Simulation::twin(params, h, drive, platform)
                 .run_streaming(duration_s, rate_hz, record),
-            // The linear models are stepped exactly (crate::lti) at up to 1 ms, unless the
-            // delay is shorter than that step; then RK4 at the twin's step, like the twin.
+            // The linear models are stepped exactly (crate::simulation::lti) at up to 1 ms,
+            // unless the delay is shorter than that step; then RK4 at the twin's step.
             ModelKind::Linear => {
                 let model = LinearModel::new(params);
                 let h_lti = step_for_rate(LTI_MAX_STEP_S, rate_hz);
-                match LtiSimulation::new(model.clone(), h_lti, drive.clone(), platform.clone()) {
-                    Some(mut sim) => sim.run_streaming(duration_s, rate_hz, record),
-                    None => Simulation::new(model, h, drive, platform)
-                        .run_streaming(duration_s, rate_hz, record),
-                }
+                let mut sim =
+                    Simulation::exact_hold(model.clone(), h_lti, drive.clone(), platform.clone())
+                        .unwrap_or_else(|| Simulation::new(model, h, drive, platform));
+                sim.run_streaming(duration_s, rate_hz, record)
             }
             ModelKind::Passive => {
+                let model = PassiveModel::new(params);
                 let h_lti = step_for_rate(LTI_MAX_STEP_S, rate_hz);
-                match LtiSimulation::new(
-                    PassiveModel::new(params),
-                    h_lti,
-                    drive.clone(),
-                    platform.clone(),
-                ) {
-                    Some(mut sim) => sim.run_streaming(duration_s, rate_hz, record),
-                    None => Simulation::new(PassiveModel::new(params), h, drive, platform)
-                        .run_streaming(duration_s, rate_hz, record),
-                }
+                let mut sim =
+                    Simulation::exact_hold(model.clone(), h_lti, drive.clone(), platform.clone())
+                        .unwrap_or_else(|| Simulation::new(model, h, drive, platform));
+                sim.run_streaming(duration_s, rate_hz, record)
             }
         }
     }

@@ -3,20 +3,50 @@
 //! The model — equations as implemented, units, parameters, the corrections to the paper and
 //! the validity range — is documented in `docs/model.md` in the repository.
 //!
-//! The engine of seat-twin, a pure library with no UI, clock, thread or file access in its
-//! core. The main types and how data flows:
+//! # The pure engine
 //!
-//! * [`params::Params`] — every physical parameter in SI, documented and validated;
-//!   [`preset`] reads and writes them as TOML presets.
-//! * [`model`] — the three plants: [`model::twin::Twin`] (10-state nonlinear multi-physics
-//!   twin), [`model::linear::LinearModel`] (G(s) of Eq. 15) and [`model::passive::PassiveModel`].
-//! * [`scenario`] — platform motions (cycloid, random ride, sine, CSV) and open-loop commands.
-//! * [`simulation::Simulation`] — a model, the controller `V = Kp·u + (Ki/s)·ẍ`, saturation,
-//!   the pure delay and an excitation, stepped by fixed-step RK4 ([`integrate`]) into a
-//!   [`simulation::Trace`].
+//! No UI, clock, thread or file in these modules (rayon parallelises some sweeps); the same
+//! parameters, excitation and seed give the same output bit for bit.
+//!
+//! * [`params`] — every physical parameter in SI, documented and validated, from one table
+//!   ([`params::table`]) that validation, sliders, calibration knobs and reports read.
+//! * [`model`] — the three plants as pure right-hand sides `derivatives(t, state, inputs)`:
+//!   [`model::twin::Twin`] (10-state nonlinear multi-physics twin),
+//!   [`model::linear::LinearModel`] (G(s) of Eq. 15) and [`model::passive::PassiveModel`].
+//! * [`control`] — one [`control::Controller`] for every structure (paper, predictive,
+//!   skyhook, Smith) and its transfer functions ([`control::ControlLaw`]).
+//! * [`scenario`] — every excitation: platform motions (cycloid, random ride, sine, records,
+//!   the seat-test classes' motions in [`scenario::class_motion`]) and open-loop commands.
+//! * [`simulation`] — the problem (a model, its command path: controller, saturation, pure
+//!   delay ([`simulation::delay`]), and an excitation) stepped on a fixed grid into a
+//!   [`simulation::Trace`] by [`simulation::Simulation`] with one of three steppers
+//!   ([`simulation::integrate::Method`]): the exponential RK4 ([`simulation::integrate::Etd4`],
+//!   the twin's default: its Jacobian at rest taken exactly), classical RK4, or the exact
+//!   first-order-hold transition of a linear model ([`simulation::lti`]).
 //! * [`experiments`] — the paper's experiments as one-call functions.
-//! * [`analysis`] — frequency responses (exact, linearised, simulated), vibration metrics
-//!   (RMS, ISO 2631-1 Wk, VDV, SEAT, A(8)).
+//! * [`analysis`] — frequency responses (exact, linearised, simulated by sine dwells), the
+//!   stability verdict and margins, vibration metrics (RMS, ISO 2631-1 Wk, VDV, SEAT, A(8)).
+//! * [`dsp`] — biquads, Butterworth filters and zero-phase filtering, shared by the metrics and
+//!   the identification.
+//! * [`identify`] — measured records → replay → calibrate → diagnose (cost function, optimiser,
+//!   observer, cancel flag, stop reason).
+//! * [`tune`] — the gain search on the nonlinear twin under stability and stroke constraints.
+//! * [`seat_test`] — the laboratory seat tests of ISO 7096 / ISO 5007 / EN 13490 on any model.
+//! * [`format`] — numbers for people: the one formatter of messages, reports and widgets.
+//!
+//! # The faces
+//!
+//! Where the engine meets files, threads, clocks and people:
+//!
+//! * [`engine`] — the worker thread of the app: [`engine::Command`] in, [`engine::Event`] out.
+//! * [`cli`] — the headless `seat-twin` subcommands, one file each (the binary's `main.rs`
+//!   parses and dispatches).
+//! * `gui` (feature `gui`) — the egui desktop app, a client of [`engine`].
+//! * [`report`], [`bench`] — `seat-twin report` (the paper's sections 4–6 reproduced) and
+//!   `seat-twin bench` (real-time factors and accuracy on this machine).
+//! * [`dataset`], [`preset`] — the rig's CSV records and the TOML presets, read and written.
+//! * [`plot`] — PNG and SVG figures; [`output`], [`fsutil`] — output sets written whole or not
+//!   at all (temporary file, then rename).
 //!
 //! ```
 //! use seat_twin::{experiments, model::ModelKind, params::Params};
@@ -33,16 +63,14 @@ pub mod bench;
 pub mod cli;
 pub mod control;
 pub mod dataset;
-pub mod delay;
 pub mod dsp;
 pub mod engine;
 pub mod experiments;
+pub mod format;
 pub mod fsutil;
 #[cfg(feature = "gui")]
 pub mod gui;
 pub mod identify;
-pub mod integrate;
-pub mod lti;
 pub mod model;
 pub mod output;
 pub mod params;
@@ -53,3 +81,6 @@ pub mod scenario;
 pub mod seat_test;
 pub mod simulation;
 pub mod tune;
+
+// transitional re-export, removed at merge
+pub use simulation::{delay, integrate, lti};

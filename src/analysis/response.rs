@@ -6,8 +6,9 @@
 use super::dwell::{self, DwellOptions};
 use super::frequency_response as fr;
 use crate::control::ControlLaw;
+use crate::format::general;
 use crate::model::ModelKind;
-use crate::params::{Params, fmt_value};
+use crate::params::Params;
 use crate::simulation::SimError;
 use num_complex::Complex64;
 
@@ -92,7 +93,7 @@ pub enum ResponseError {
     #[error(transparent)]
     Simulation(#[from] SimError),
     /// A point came out as NaN or infinite.
-    #[error("the response at {} Hz is not a finite number ({value})", fmt_value(*.freq_hz))]
+    #[error("the response at {} Hz is not a finite number ({value})", general(*.freq_hz))]
     NotFinite {
         /// Frequency of the first such point [Hz].
         freq_hz: f64,

@@ -2,8 +2,9 @@
 
 use super::{Outcome, Run, load_params};
 use super::{announce, estimate_wall_s};
+use crate::format::general;
 use crate::model::ModelKind;
-use crate::params::{Integrator, Params, fmt_value};
+use crate::params::{Integrator, Params};
 use anyhow::{Context, Result};
 
 /// Twin seconds the bench simulates one after the other, in units of its 10 s ride at the
@@ -17,8 +18,8 @@ const TABLE1_SWEEP_S: f64 = 3.0 * 69.0 * 1.0;
 fn cost(params: &Params) -> String {
     format!(
         "about {} s of the twin simulated at a {} s step and its finer references",
-        fmt_value(10.0 * SEQUENTIAL_RIDES + TABLE1_SWEEP_S),
-        fmt_value(params.numerics.max_step_s)
+        general(10.0 * SEQUENTIAL_RIDES + TABLE1_SWEEP_S),
+        general(params.numerics.max_step_s)
     )
 }
 

@@ -31,7 +31,8 @@ pub use seat_test::SeatTestArgs;
 pub use simulate::{ScenarioArg, SimulateArgs};
 pub use tune::TuneArgs;
 
-use crate::params::{Params, fmt_value};
+use crate::format::general;
+use crate::params::Params;
 use clap::Parser;
 
 /// Longest `simulate` run [s] (10 h).
@@ -266,11 +267,11 @@ pub fn estimate_wall_s(kind: crate::model::ModelKind, simulated_s: f64, step_s: 
 /// "40 s", "12 min", "3.5 h": a duration for people.
 pub fn fmt_duration(s: f64) -> String {
     if s < 90.0 {
-        format!("{} s", fmt_value(s.ceil()))
+        format!("{} s", general(s.ceil()))
     } else if s < 5400.0 {
-        format!("{} min", fmt_value((s / 60.0).round()))
+        format!("{} min", general((s / 60.0).round()))
     } else {
-        format!("{} h", fmt_value((s / 360.0).round() / 10.0))
+        format!("{} h", general((s / 360.0).round() / 10.0))
     }
 }
 
@@ -288,12 +289,12 @@ pub fn announce(what: &str, cost: &str, wall_s: f64) -> Heartbeat {
 }
 
 /// The seat-test input class called `name`, or an error listing the classes.
-pub fn find_class(name: &str) -> anyhow::Result<&'static crate::seat_test::InputClass> {
+pub fn find_class(name: &str) -> anyhow::Result<&'static crate::scenario::InputClass> {
     use anyhow::Context;
     crate::seat_test::find(name).with_context(|| {
         format!(
             "unknown input class `{name}`; the classes are {}",
-            crate::seat_test::classes::names()
+            crate::scenario::classes::names()
         )
     })
 }
@@ -358,9 +359,9 @@ pub fn check_range(name: &str, v: f64, min: f64, max: f64, unit: &str) -> Result
     } else {
         Err(OptionError(format!(
             "{name} {} is outside the allowed range [{}, {}] {unit}",
-            fmt_value(v),
-            fmt_value(min),
-            fmt_value(max)
+            general(v),
+            general(min),
+            general(max)
         )))
     }
 }
@@ -382,8 +383,8 @@ pub fn check_dwell_amp(amp: f64) -> Result<(), OptionError> {
     if amp.is_nan() || amp <= 0.0 {
         return Err(OptionError(format!(
             "--amp {} is outside the allowed range (0, {}] V: the sine dwell needs a command",
-            fmt_value(amp),
-            fmt_value(MAX_AMP_V)
+            general(amp),
+            general(MAX_AMP_V)
         )));
     }
     check_range("--amp", amp, 0.0, MAX_AMP_V, "V")
@@ -396,8 +397,8 @@ pub fn check_sample_count(samples: u64, duration: f64, rate: f64) -> Result<(), 
         return Err(OptionError(format!(
             "{} s at --rate {} Hz is {samples} samples, over the limit of \
              {MAX_SIMULATE_SAMPLES} samples per file; lower --duration or --rate",
-            fmt_value(duration),
-            fmt_value(rate)
+            general(duration),
+            general(rate)
         )));
     }
     Ok(())
@@ -487,11 +488,11 @@ pub fn check_record_memory(
         need += r * (cost.row + cost.column * fields);
     }
     if need > limit {
-        let mb = |b: u64| fmt_value((b as f64 / 1e6).round());
+        let mb = |b: u64| general((b as f64 / 1e6).round());
         return Err(OptionError(format!(
             "{what} on about {} thousand record rows would need about {} MB, over the {} MB \
              of {source}; split the record or shorten it",
-            fmt_value((rows as f64 / 1e3).round()),
+            general((rows as f64 / 1e3).round()),
             mb(need),
             mb(limit)
         )));

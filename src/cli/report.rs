@@ -1,8 +1,8 @@
 //! `seat-twin report`: the paper's sections 4–6 reproduced into a folder.
 
 use super::{Heartbeat, Outcome, Run, load_params};
+use crate::format::general;
 use crate::fsutil::OutputDir;
-use crate::params::fmt_value;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
@@ -31,10 +31,10 @@ impl Run for ReportArgs {
             eprintln!(
                 "note: numerics.max_step_s = {} s is {}× finer than the default {} s: the \
                  twin's runs take about {}× as long as usual (minutes, not seconds)",
-                fmt_value(params.numerics.max_step_s),
-                fmt_value(factor.round()),
-                fmt_value(default_step),
-                fmt_value(factor.round())
+                general(params.numerics.max_step_s),
+                general(factor.round()),
+                general(default_step),
+                general(factor.round())
             );
         }
         let heartbeat = Heartbeat::start("report".into(), std::time::Duration::from_secs(10));

@@ -7,8 +7,8 @@ use super::{
 use crate::analysis::dwell::{self, DwellOptions};
 use crate::analysis::response::{Method, Response, ResponseError, response};
 use crate::dataset;
+use crate::format::general;
 use crate::model::ModelKind;
-use crate::params::fmt_value;
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
 
@@ -107,8 +107,8 @@ fn write_response(
     // What a non-finite point is traced back to, and the input's own comment line.
     let (input, extra) = match what {
         Response::Bode { amplitude_v } => (
-            format!("--amp {} V", fmt_value(amplitude_v)),
-            vec![("amplitude_v".to_string(), fmt_value(amplitude_v))],
+            format!("--amp {} V", general(amplitude_v)),
+            vec![("amplitude_v".to_string(), general(amplitude_v))],
         ),
         Response::Transmissibility => (format!("preset {preset}"), Vec::new()),
     };
@@ -131,7 +131,7 @@ fn write_response(
             &format!(
                 "{} sine dwells, {} s simulated in all on the {} model",
                 freqs.len(),
-                fmt_value(simulated.round()),
+                general(simulated.round()),
                 kind.name()
             ),
             estimate_wall_s(kind, simulated, params.numerics.max_step_s),

@@ -3,7 +3,7 @@
 use super::{OptionError, Outcome, Run, check_range, find_class, load_params};
 use crate::fsutil::OutputDir;
 use crate::model::ModelKind;
-use crate::seat_test::ClassMotion;
+use crate::scenario::ClassMotion;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
@@ -42,7 +42,7 @@ const MAX_DURATION_S: f64 = 3600.0;
 /// Shortest `--duration` [s]: the two fades and one Welch segment of the PSD check between
 /// them (20.384 s with the 2 s fades at 1 kHz).
 pub fn min_duration_s() -> f64 {
-    use crate::seat_test::signal::{CLASS_RATE_HZ, WELCH_SEGMENT};
+    use crate::scenario::class_motion::{CLASS_RATE_HZ, WELCH_SEGMENT};
     let fade = ClassMotion::new(&crate::seat_test::CLASSES[0], MAX_DURATION_S).fade_s;
     (WELCH_SEGMENT as f64 + 2.0 * (fade * CLASS_RATE_HZ).ceil()) / CLASS_RATE_HZ
 }

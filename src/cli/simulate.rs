@@ -8,8 +8,8 @@ use super::{
 use crate::analysis::dwell;
 use crate::dataset::{self, RecordKind};
 use crate::experiments::RunSpec;
+use crate::format::general;
 use crate::model::ModelKind;
-use crate::params::fmt_value;
 use crate::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, SampledMotion};
 use crate::simulation::{
     ContactEvent, CsvRunError, Drive, SAMPLE_UNITS, sample_count, step_for_rate,
@@ -213,7 +213,7 @@ impl Run for SimulateArgs {
                 }),
                 PlatformMotion::Still,
                 (6.0 / freq).max(3.0),
-                format!("valve sine {} Hz {} V", fmt_value(freq), fmt_value(amp)),
+                format!("valve sine {} Hz {} V", general(freq), general(amp)),
             ),
             (Some(ScenarioArg::Chirp), None) => {
                 let d = duration.unwrap_or(10.0);
@@ -223,9 +223,9 @@ impl Run for SimulateArgs {
                     d,
                     format!(
                         "valve chirp {}–{} Hz {} V",
-                        fmt_value(f0),
-                        fmt_value(f1),
-                        fmt_value(amp)
+                        general(f0),
+                        general(f1),
+                        general(amp)
                     ),
                 )
             }
@@ -233,13 +233,13 @@ impl Run for SimulateArgs {
                 let Some(name) = class.as_deref() else {
                     bail!(
                         "--scenario class needs --class NAME ({})",
-                        crate::seat_test::classes::names()
+                        crate::scenario::classes::names()
                     );
                 };
                 let class = find_class(name)?;
-                let motion = crate::seat_test::ClassMotion {
+                let motion = crate::scenario::ClassMotion {
                     seed,
-                    ..crate::seat_test::ClassMotion::new(
+                    ..crate::scenario::ClassMotion::new(
                         class,
                         duration.unwrap_or(crate::seat_test::run::DEFAULT_DURATION_S),
                     )
@@ -311,7 +311,7 @@ impl Run for SimulateArgs {
                             ),
                             (None, _) => format!(
                                 "the {label} run diverged (preset {preset}, --rate {})",
-                                fmt_value(rate)
+                                general(rate)
                             ),
                         }),
                     );
@@ -375,8 +375,8 @@ fn record_peak(rec: &dataset::Record) -> Option<String> {
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
     Some(format!(
         "its column \"{name}\" peaks at {} {unit} at t = {} s (data row {})",
-        fmt_value(*v),
-        fmt_value(rec.t[i]),
+        general(*v),
+        general(rec.t[i]),
         i + 1
     ))
 }

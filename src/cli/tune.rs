@@ -3,9 +3,9 @@
 use super::{
     OptionError, Outcome, Run, announce, check_range, estimate_wall_s, find_class, load_params,
 };
+use crate::format::general;
 use crate::fsutil::OutputDir;
 use crate::model::ModelKind;
-use crate::params::fmt_value;
 use crate::tune;
 use anyhow::{Context, Result, bail};
 use std::path::PathBuf;
@@ -58,7 +58,7 @@ impl TuneArgs {
                 Some(name) => Ok(tune::TuneInput::Class(find_class(name)?)),
                 None => bail!(
                     "--excitation {other}: expected `ride` or `class:NAME` (classes: {})",
-                    crate::seat_test::classes::names()
+                    crate::scenario::classes::names()
                 ),
             },
         }
@@ -87,8 +87,9 @@ impl Run for TuneArgs {
         check_range("--duration", self.duration, lo, hi, "s")?;
         if let tune::TuneInput::Class(class) = input {
             // A class record has its own shortest length (the fades and the spectrum).
-            if let Err(crate::seat_test::signal::SignalError::OutOfRange { min, max, .. }) =
-                crate::seat_test::ClassMotion::new(class, self.duration).validate()
+            if let Err(crate::scenario::class_motion::SignalError::OutOfRange {
+                min, max, ..
+            }) = crate::scenario::ClassMotion::new(class, self.duration).validate()
             {
                 check_range(
                     "--duration",
@@ -166,8 +167,8 @@ impl Run for TuneArgs {
                 "at most {evaluations} evaluations of {} twin run(s) of {} s each, {} s \
                  simulated in all",
                 n as f64 * plants,
-                fmt_value(duration),
-                fmt_value(simulated.round())
+                general(duration),
+                general(simulated.round())
             ),
             estimate_wall_s(ModelKind::Twin, simulated, params.numerics.max_step_s),
         );

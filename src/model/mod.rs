@@ -5,7 +5,7 @@
 //! * [`passive::PassiveModel`] — the passive reference (same m and k, viscous damper).
 //!
 //! A model is a pure function `derivatives(t, state, inputs)`; the delay of the command and the
-//! controller live in the simulation, the integrator in [`crate::integrate`].
+//! controller live in the simulation, the integrator in [`crate::simulation::integrate`].
 
 pub mod linear;
 pub mod passive;

@@ -34,9 +34,9 @@ pub enum ParamError {
     /// A value outside `[min, max]` (or not finite).
     #[error(
         "parameter `{name}` = {} is outside the allowed range [{}, {}] {unit}",
-        fmt_value(*.value),
-        fmt_value(*.min),
-        fmt_value(*.max)
+        crate::format::general(*.value),
+        crate::format::general(*.min),
+        crate::format::general(*.max)
     )]
     OutOfRange {
         /// Dotted name as in the preset file, e.g. `valve.cd`.
@@ -55,22 +55,8 @@ pub enum ParamError {
     Inconsistent(String),
 }
 
-/// A number for people: at most 6 significant digits, plain for 1e-4 ≤ |x| < 1e7 (`0.0005`,
-/// `11.7`, `3680`), scientific otherwise (`1e-6`, `1.5e300`); never hundreds of digits.
-pub fn fmt_value(x: f64) -> String {
-    if !x.is_finite() {
-        return format!("{x}");
-    }
-    let r: f64 = format!("{x:.5e}").parse().unwrap_or(x);
-    let a = r.abs();
-    if a == 0.0 {
-        "0".into()
-    } else if (1e-4..1e7).contains(&a) {
-        format!("{r}")
-    } else {
-        format!("{r:e}")
-    }
-}
+// transitional re-export, removed at merge (the number formatter is `crate::format`)
+pub use crate::format::general as fmt_value;
 
 /// Checks `min <= value <= max` and finiteness.
 pub(crate) fn check(
@@ -165,8 +151,8 @@ impl Params {
                 return Err(ParamError::Inconsistent(format!(
                     "`{name}` has no allowed value with these parameters: the largest it may \
                      be is {} {unit}, below its smallest allowed value {}",
-                    fmt_value(max),
-                    fmt_value(min)
+                    crate::format::general(max),
+                    crate::format::general(min)
                 )));
             }
             if value > max || (strict && value == max) {
@@ -356,7 +342,7 @@ mod tests {
             (f64::NAN, "NaN"),
             (f64::NEG_INFINITY, "-inf"),
         ] {
-            assert_eq!(fmt_value(x), text, "{x:e}");
+            assert_eq!(crate::format::general(x), text, "{x:e}");
         }
         let mut p = Params::paper();
         p.plant.body.mass_kg = 1e300;

@@ -6,12 +6,12 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Integrator {
-    /// Exponential RK4 (ETDRK4, [`crate::integrate::Etd4`]): the twin's Jacobian at rest is
+    /// Exponential RK4 (ETDRK4, [`crate::simulation::integrate::Etd4`]): the twin's Jacobian at rest is
     /// integrated exactly, the nonlinear remainder explicitly. The default: it resolves the
     /// lightly damped 912 Hz hose modes at any step, so 0.5 ms meets the 1e-4 m/s² accuracy.
     #[default]
     Exponential,
-    /// Classical RK4 ([`crate::integrate::rk4_step`]); needs ≈ 0.1 ms for the same accuracy.
+    /// Classical RK4 ([`crate::simulation::integrate::rk4_step`]); needs ≈ 0.1 ms for the same accuracy.
     Rk4,
 }
 

@@ -265,7 +265,7 @@ impl Params {
 /// `p` (SI and in display units), the valid range, the paper's value and what it is. The
 /// other controller kinds' gains are listed as unused.
 pub fn describe(p: &Params) -> String {
-    use super::fmt_value;
+    use crate::format::general;
     let mut out = String::from(
         "| key | symbol | value | unit | shown as | valid range | paper | what |\n\
          |---|---|---|---|---|---|---|---|\n",
@@ -275,7 +275,7 @@ pub fn describe(p: &Params) -> String {
         let shown = if s.display.scale == 1.0 && s.display.unit == s.unit.trim_matches('-') {
             String::new()
         } else {
-            format!("{} {}", fmt_value(s.to_display(v)), s.display.unit)
+            format!("{} {}", general(s.to_display(v)), s.display.unit)
         };
         let what = if s.applies_to(p.controller.kind) {
             s.doc.to_string()
@@ -286,12 +286,12 @@ pub fn describe(p: &Params) -> String {
             "| `{}` | {} | {} | {} | {} | {} … {} | {} | {} |\n",
             s.key,
             s.symbol,
-            fmt_value(v),
+            general(v),
             s.unit,
             shown,
-            fmt_value(s.min),
-            fmt_value(s.max),
-            s.paper.map_or("–".into(), fmt_value),
+            general(s.min),
+            general(s.max),
+            s.paper.map_or("–".into(), general),
             what
         ));
     }

@@ -368,7 +368,9 @@ pub fn cd_eq12(params: &Params, dp_pa: f64) -> f64 {
 }
 
 fn fmt_opt(v: Option<f64>, digits: usize) -> String {
-    v.map_or("none in range".to_string(), |x| format!("{x:.digits$}"))
+    v.map_or("none in range".to_string(), |x| {
+        crate::format::fixed(x, digits)
+    })
 }
 
 fn spread_cell(s: &Spread, scale: f64, digits: usize) -> String {

@@ -1,9 +1,9 @@
 //! Unit tests of the report's numbers.
 
 use super::*;
-use crate::integrate::StepStats;
 use crate::model::ModelKind;
 use crate::simulation::Sample;
+use crate::simulation::integrate::StepStats;
 use std::f64::consts::PI;
 
 /// A trace at `fs` with ÿ = a·sin(2π·f·t), ẍ = 2·ÿ and u = 3 mm·cos(2π·f·t).

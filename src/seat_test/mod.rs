@@ -1,10 +1,11 @@
-//! Standard laboratory seat tests: the input spectral classes of ISO 7096 (EM1–EM9),
-//! ISO 5007 (AG1–AG3) and EN 13490 (IT1–IT4) as data ([`classes`]), platform motions that meet
-//! a class's target PSD within its tolerance ([`signal`]), and the seat test itself on any
-//! model ([`run`]) with its report ([`report`]).
+//! Standard laboratory seat tests: the seat test itself on any model ([`run`]) with its
+//! report ([`report`]). The input spectral classes of ISO 7096 (EM1–EM9), ISO 5007 (AG1–AG3)
+//! and EN 13490 (IT1–IT4) ([`crate::scenario::classes`]) and the platform motions that meet a
+//! class's target PSD within its tolerance ([`crate::scenario::class_motion`]) live with the
+//! other platform motions in [`crate::scenario`].
 //!
 //! ```
-//! use seat_twin::seat_test::{classes, signal::ClassMotion};
+//! use seat_twin::scenario::{classes, class_motion::ClassMotion};
 //! let em6 = classes::find("em6").expect("a class of ISO 7096");
 //! let motion = ClassMotion::new(em6, 30.0).generate().expect("a valid duration");
 //! // Starts and ends at rest, at the same place: no drift.
@@ -15,11 +16,13 @@
 //! A class motion is an ordinary [`crate::scenario::SampledMotion`]; wrap it in
 //! [`crate::scenario::PlatformMotion::Sampled`] to run it anywhere a platform motion runs.
 
-pub mod classes;
 pub mod report;
 pub mod run;
-pub mod signal;
 
-pub use classes::{CLASSES, InputClass, find};
+// transitional re-export, removed at merge
+pub use crate::scenario::class_motion as signal;
+// transitional re-export, removed at merge
+pub use crate::scenario::class_motion::ClassMotion;
+pub use crate::scenario::classes;
+pub use crate::scenario::classes::{CLASSES, InputClass, find};
 pub use run::{SeatTestOptions, SeatTestResult, run_seat_test};
-pub use signal::ClassMotion;

@@ -1,10 +1,10 @@
 //! `seat-twin seat-test`: `report.md`, `numbers.json` and PNG + SVG plots of one seat test.
 
-use super::classes::{InputClass, PSD_TOLERANCE_OF_PEAK};
 use super::run::{CREST_FACTOR_LIMIT, SeatTestResult};
 use crate::output::OutputError;
 use crate::plot::{self, Figure, Panel, Series, SeriesStyle, palette};
 use crate::preset::write_atomic;
+use crate::scenario::classes::{InputClass, PSD_TOLERANCE_OF_PEAK};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -98,7 +98,7 @@ fn platform_psd_figure(
 fn response_figure(r: &SeatTestResult, path: &Path) -> Result<(), SeatReportError> {
     let n = &r.numbers;
     let (f0, f1) = (0.0, 20.0);
-    let spec = |p: &super::signal::Psd| -> (Vec<f64>, Vec<f64>) {
+    let spec = |p: &crate::scenario::class_motion::Psd| -> (Vec<f64>, Vec<f64>) {
         p.freq_hz
             .iter()
             .zip(&p.psd)
@@ -258,7 +258,7 @@ pub fn markdown(r: &SeatTestResult, class: &InputClass, preset: &str) -> String 
          the peak at {:.2} Hz | ≤ 10 % ({}) |",
         class.rms_band_hz.0,
         class.rms_band_hz.1,
-        super::run::SEAT_TEST_RATE_HZ / super::signal::WELCH_SEGMENT as f64,
+        super::run::SEAT_TEST_RATE_HZ / crate::scenario::class_motion::WELCH_SEGMENT as f64,
         r.psd_check.segments,
         n.psd_error_percent,
         n.psd_error_at_hz,

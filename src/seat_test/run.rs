@@ -5,13 +5,15 @@
 //! is `100 · a_w,seat / a_w,floor` with ISO 2631-1 Wk weighting ([`metrics::seat_percent`]);
 //! the ratio of VDVs is given beside it, for when the crest factor is high.
 
-use super::classes::InputClass;
-use super::signal::{ClassMotion, Psd, PsdCheck, SignalError, WELCH_SEGMENT, check_psd, welch_psd};
 use crate::analysis::metrics::{self, MetricsError};
 use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::{ParamError, Params};
 use crate::scenario::PlatformMotion;
+use crate::scenario::class_motion::{
+    ClassMotion, Psd, PsdCheck, SignalError, WELCH_SEGMENT, check_psd, welch_psd,
+};
+use crate::scenario::classes::InputClass;
 use crate::simulation::{Drive, SimError, Trace};
 
 /// Default duration of a seat-test record \[s\], fades included (a choice made here: the

@@ -40,9 +40,9 @@ use crate::control::ControlLaw;
 use crate::experiments;
 use crate::model::ModelKind;
 use crate::params::{ControllerKind, ControllerParams, Params};
+use crate::scenario::InputClass;
+use crate::scenario::class_motion::ClassMotion;
 use crate::scenario::{PlatformMotion, RandomRide};
-use crate::seat_test::InputClass;
-use crate::seat_test::signal::ClassMotion;
 use crate::simulation::Drive;
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
@@ -391,8 +391,28 @@ fn score_rides(
     (mean, max_u, contacts)
 }
 
-/// The evaluation problem: a plant (or its spread), rides and an objective.
-struct Problem {
+/// Why the gain search stopped before the optimiser's own termination: carried through
+/// argmin's error as a type, and read back by downcasting, not by matching its text.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+enum SearchStop {
+    /// The caller set the cancel flag.
+    #[error("tuning was cancelled")]
+    Cancelled,
+    /// The search asked for an evaluation past [`TuneOptions::max_evaluations`].
+    #[error("budget of evaluations used")]
+    BudgetUsed,
+}
+
+impl SearchStop {
+    /// The stop reason an optimiser's error carries, if it is one of these.
+    fn of(e: &argmin::core::Error) -> Option<Self> {
+        e.downcast_ref::<SearchStop>().copied()
+    }
+}
+
+/// The gain search: the cost of a controller's gains on a plant (or its spread), rides and an
+/// objective, with the evaluation log, the budget and the cancel flag.
+struct GainSearch {
     /// Plants whose rides and margins are evaluated: the nominal alone, or the spread's
     /// corners and nominal when robust.
     plants: Vec<(Params, LinearisedModel, MarginGrid)>,
@@ -412,14 +432,12 @@ struct Problem {
     progress: Option<Progress>,
     /// Most search evaluations ([`TuneOptions::max_evaluations`]).
     budget: usize,
-    /// Set when the search asked for an evaluation past `budget` and was stopped.
-    budget_used: AtomicBool,
 }
 
 /// A progress observer: called with `(evaluations done, budget)` from the tuning thread.
 pub type Progress = std::sync::Arc<dyn Fn(usize, usize) + Send + Sync>;
 
-impl Problem {
+impl GainSearch {
     fn controller_at(&self, x: &[f64]) -> ControllerParams {
         let mut c = self.start;
         c.kind = self.kind;
@@ -538,7 +556,7 @@ impl Problem {
     }
 }
 
-impl CostFunction for &Problem {
+impl CostFunction for &GainSearch {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, x: &Self::Param) -> Result<f64, argmin::core::Error> {
@@ -547,19 +565,18 @@ impl CostFunction for &Problem {
             .as_ref()
             .is_some_and(|c| c.load(Ordering::Relaxed))
         {
-            return Err(argmin::core::Error::msg("cancelled"));
+            return Err(SearchStop::Cancelled.into());
         }
         // The budget is a hard maximum (issue 21): the evaluation past it stops the search.
         if self.count.load(Ordering::Relaxed) >= self.budget {
-            self.budget_used.store(true, Ordering::Relaxed);
-            return Err(argmin::core::Error::msg("budget of evaluations used"));
+            return Err(SearchStop::BudgetUsed.into());
         }
         let e = self.evaluate(self.controller_at(x));
         let done = self.count.fetch_add(1, Ordering::Relaxed) + 1;
         if let Some(p) = &self.progress {
             p(done, self.budget);
         }
-        let cost = Problem::cost(self, &e);
+        let cost = GainSearch::cost(self, &e);
         if let Ok(mut log) = self.log.lock() {
             log.push(e);
         }
@@ -635,7 +652,7 @@ pub fn tune_observed(
             .collect::<Result<Vec<_>, _>>()
     };
     let rides = motions(&opts.tune_seeds)?;
-    let problem = Problem {
+    let search = GainSearch {
         plants,
         spread: spread_plants,
         rides: rides.clone(),
@@ -649,15 +666,14 @@ pub fn tune_observed(
         cancel,
         progress,
         budget: opts.max_evaluations,
-        budget_used: AtomicBool::new(false),
     };
-    let baseline = problem.evaluate(nominal.controller);
+    let baseline = search.evaluate(nominal.controller);
     let scale = if baseline.objective.is_finite() {
         baseline.objective
     } else {
         1.0
     };
-    if let Ok(mut s) = problem.scale.lock() {
+    if let Ok(mut s) = search.scale.lock() {
         *s = Some(scale);
     }
     // Start simplex: the preset's gains and one step along each axis: |Kp| × 0.6, half a
@@ -683,7 +699,7 @@ pub fn tune_observed(
     // Every iteration evaluates at least once, so the evaluation budget bounds the iterations;
     // the budget itself is enforced in `cost`.
     let max_iters = opts.max_evaluations as u64;
-    let res = Executor::new(&problem, solver)
+    let res = Executor::new(&search, solver)
         .configure(|state| state.max_iters(max_iters))
         .run();
     let stop_reason = match &res {
@@ -691,13 +707,13 @@ pub fn tune_observed(
             || "budget of iterations used".to_string(),
             |t| t.text().to_string(),
         ),
-        Err(_) if problem.budget_used.load(Ordering::Relaxed) => {
-            "budget of evaluations used".to_string()
-        }
-        Err(e) if e.to_string().contains("cancelled") => return Err(TuneError::Cancelled),
-        Err(e) => return Err(TuneError::Optimiser(e.to_string())),
+        Err(e) => match SearchStop::of(e) {
+            Some(SearchStop::BudgetUsed) => SearchStop::BudgetUsed.to_string(),
+            Some(SearchStop::Cancelled) => return Err(TuneError::Cancelled),
+            None => return Err(TuneError::Optimiser(e.to_string())),
+        },
     };
-    let log = problem.log.lock().map(|l| l.clone()).unwrap_or_default();
+    let log = search.log.lock().map(|l| l.clone()).unwrap_or_default();
     // The best feasible evaluation that passes the robustness check at every point of the
     // spread (eigenvalues, settle at rest); the start if none beats it.
     let mut candidates: Vec<&Evaluation> = log
@@ -709,7 +725,7 @@ pub fn tune_observed(
     candidates.dedup_by(|a, b| a.gains == b.gains);
     let mut checked = None;
     for e in candidates.into_iter().take(MAX_CHECKED_CANDIDATES) {
-        if let Some(cancel) = &problem.cancel
+        if let Some(cancel) = &search.cancel
             && cancel.load(Ordering::Relaxed)
         {
             return Err(TuneError::Cancelled);
@@ -730,20 +746,20 @@ pub fn tune_observed(
     };
     let failures = claim_failures(&tuned, &robustness);
     let heldout = motions(&opts.heldout_seeds)?;
-    let nominal_problem = Problem {
+    let heldout_search = GainSearch {
         plants: plants_of(vec![nominal]),
         rides: heldout,
         progress: None,
-        ..problem
+        ..search
     };
-    let baseline_heldout = nominal_problem.evaluate(nominal.controller);
-    let tuned_heldout = nominal_problem.evaluate(tuned.controller);
+    let baseline_heldout = heldout_search.evaluate(nominal.controller);
+    let tuned_heldout = heldout_search.evaluate(tuned.controller);
     Ok(TuneResult {
         kind: opts.kind,
         objective: opts.objective,
         input: opts.input.describe(),
         pareto: pareto_front(&log),
-        evaluations: nominal_problem.count.load(Ordering::Relaxed),
+        evaluations: heldout_search.count.load(Ordering::Relaxed),
         baseline,
         tuned,
         baseline_heldout,

@@ -113,11 +113,7 @@ fn pct_change(before: f64, after: f64) -> String {
 }
 
 fn fmt_num(v: f64, digits: usize) -> String {
-    if v.is_finite() {
-        format!("{v:.digits$}")
-    } else {
-        "n/a (diverged or not simulated)".into()
-    }
+    crate::format::fixed_or(v, digits, "n/a (diverged or not simulated)")
 }
 
 /// A margin for people: the number, or in words when there is no crossing (infinite).

@@ -6,7 +6,8 @@ use seat_twin::control::ControlLaw;
 use seat_twin::engine::{self, Command, EngineHandle, Event, Excitation, Speed};
 use seat_twin::params::{ControllerKind, ControllerParams, Params};
 use seat_twin::scenario::PlatformMotion;
-use seat_twin::seat_test::{self, signal::band_rms};
+use seat_twin::scenario::{class_motion::band_rms, classes};
+use seat_twin::seat_test;
 use seat_twin::simulation::{Drive, Run, Sample, Simulation, step_for_rate};
 use std::time::{Duration, Instant};
 
@@ -30,12 +31,17 @@ fn until(h: &EngineHandle, mut done: impl FnMut(&Event) -> bool) -> Vec<Event> {
     );
 }
 
+/// New gains reach the running twin: once the engine echoes them, every command it streams is
+/// the paper's law `V = Kp·u + Ki·∫ẍ dt` with the new `Kp` (checked against the sample's own `u`
+/// and platform velocity, which the controller's `∫ẍ dt` integrates from rest), and not the
+/// old one; a changed plant parameter (the valve's Cd) is echoed alongside.
 #[test]
 fn new_gains_reach_the_running_simulation() {
     let h = engine::spawn(Params::paper(), || {});
     h.send(Command::SetSpeed(Speed::Max));
     until(&h, |e| matches!(e, Event::Samples(b) if !b.twin.is_empty()));
-    let mut p = Params::paper();
+    let old = Params::paper();
+    let mut p = old;
     p.controller.kp_v_per_m = -20.0;
     p.plant.valve.cd = 0.12;
     h.send(Command::SetParams(Box::new(p)));
@@ -43,6 +49,41 @@ fn new_gains_reach_the_running_simulation() {
         matches!(e, Event::Status { params, .. }
             if params.controller.kp_v_per_m == -20.0 && params.plant.valve.cd == 0.12)
     });
+    // The next batch may still hold samples made before the change: skip it, then take 1 s.
+    let mut t_from = None;
+    let mut samples = Vec::new();
+    until(&h, |e| {
+        let Event::Samples(b) = e else { return false };
+        let Some(last) = b.twin.last() else {
+            return false;
+        };
+        match t_from {
+            None => t_from = Some(last.t),
+            Some(t0) => samples.extend(b.twin.iter().filter(|s| s.t > t0).copied()),
+        }
+        samples
+            .last()
+            .is_some_and(|s| s.t > t_from.unwrap_or(0.0) + 1.0)
+    });
+    let v_max = p.plant.valve.v_max_v;
+    let law =
+        |kp: f64, s: &Sample| (kp * s.u + p.controller.ki_v_s_per_m * s.xd).clamp(-v_max, v_max);
+    let worst = |kp: f64| {
+        samples
+            .iter()
+            .map(|s| (s.v_in - law(kp, s)).abs())
+            .fold(0.0, f64::max)
+    };
+    let (new_err, old_err) = (worst(-20.0), worst(old.controller.kp_v_per_m));
+    assert!(samples.len() > 500, "{} samples", samples.len());
+    assert!(
+        new_err < 1e-3,
+        "the command is off the new law by {new_err} V"
+    );
+    assert!(
+        old_err > 20.0 * new_err.max(1e-4),
+        "the old law fits as well: {old_err} V"
+    );
 }
 
 /// Every sample of `b`'s stream (`pick` chooses the model) with `t` in `[t0, t1)` until the
@@ -234,7 +275,7 @@ fn ab_reference_runs_as_the_offline_simulation_of_that_controller() {
 
 #[test]
 fn seat_test_class_excitation_meets_the_class_band_rms() {
-    let class = seat_test::find("EM6").expect("a class of ISO 7096");
+    let class = classes::find("EM6").expect("a class of ISO 7096");
     let h = engine::spawn(Params::paper(), || {});
     h.send(Command::SetSpeed(Speed::Max));
     h.send(Command::SetExcitation(Box::new(Excitation::Class {

@@ -3,6 +3,12 @@
 //! Platform motions give `x`, `ẋ`, `ẍ` at any time; all start from rest. Commands give
 //! `V_in(t)` for open-loop tests (the valve sine tests of Table 1, chirps, replayed records).
 
+pub mod class_motion;
+pub mod classes;
+
+pub use class_motion::ClassMotion;
+pub use classes::InputClass;
+
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};

@@ -9,17 +9,21 @@
 //! ```
 
 use crate::control::{ControlLaw, Controller, Measurement};
-use crate::delay::{DelayLine, Tap};
-use crate::integrate::{Etd4, Method, Rk4, StepStats, Stepper};
 pub use crate::model::CommandPath;
 use crate::model::{Inputs, Model, ModelKind, Outputs};
 use crate::params::MAX_DELAY_S;
 use crate::scenario::{CommandSignal, PlatformMotion, PlatformSample};
+use crate::simulation::delay::{DelayLine, Tap};
+use crate::simulation::integrate::{Etd4, Method, Rk4, StepStats, Stepper};
+use crate::simulation::lti::{ExactHold, LinearTimeInvariant};
 
 mod csv;
+pub mod delay;
+pub mod integrate;
+pub mod lti;
 mod run;
 pub use csv::{CsvRunError, SAMPLE_UNITS, SampleColumns, write_csv_streamed};
-pub use run::{Run, RunState};
+pub use run::{Run, RunState, wide_simd};
 pub(crate) use run::{check_bounds, trace_buffer};
 
 /// Where the valve command comes from.
@@ -45,8 +49,8 @@ pub enum SimError {
     #[error(
         "{model} model diverged at t = {t:.6} s: state {state} = {} (bound ±{}); \
          check the gains (an unstable loop) or reduce numerics.max_step_s",
-        crate::params::fmt_value(*.value),
-        crate::params::fmt_value(*.bound)
+        crate::format::general(*.value),
+        crate::format::general(*.bound)
     )]
     Diverged {
         /// Which model.
@@ -213,9 +217,10 @@ pub struct Simulation<M: Model<N>, const N: usize> {
     /// Platform acceleration at the current time [m/s²] (the previous step's end value).
     xdd_now: f64,
     stats: StepStats,
-    /// The stepper (the solver; everything above is the problem it solves): RK4, or the
+    /// The stepper (the solver; everything above is the problem it solves): RK4, the
     /// exponential integrator for
-    /// [`Integrator::Exponential`](crate::params::Integrator::Exponential).
+    /// [`Integrator::Exponential`](crate::params::Integrator::Exponential), or the exact hold
+    /// of a linear model ([`Self::exact_hold`]).
     method: Method<N>,
 }
 
@@ -237,6 +242,26 @@ impl Simulation<crate::model::twin::Twin, 10> {
         }
         sim
     }
+}
+
+impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> Simulation<M, N> {
+    /// A linear model from rest stepped exactly at step `h` [s] ([`crate::simulation::lti`]), or
+    /// `None` when the command delay is shorter than the step (then the delayed command at a
+    /// step's end is not yet known at its start; use [`Self::new`], RK4).
+    pub fn exact_hold(model: M, h: f64, drive: Drive, platform: PlatformMotion) -> Option<Self> {
+        if !hold_fits(&model, h) {
+            return None;
+        }
+        let hold = ExactHold::new(&model, h);
+        let mut sim = Self::new(model, h, drive, platform);
+        sim.method = Method::ExactHold(Box::new(hold));
+        Some(sim)
+    }
+}
+
+/// Whether the exact hold can step `model` at `h` [s]: no command, or one delayed by ≥ h.
+fn hold_fits<M: CommandPath>(model: &M, h: f64) -> bool {
+    model.command_limit() == 0.0 || model.command_delay() >= h
 }
 
 impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
@@ -289,14 +314,27 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         self.v_max = model.command_limit();
         self.taps = stage_taps(&self.history, self.tau, self.run.h);
         self.model = model;
-        if self.is_exponential() && self.use_exponential().is_err() {
-            self.method = Method::Rk4(Rk4 { h: self.run.h });
+        match &self.method {
+            Method::Rk4(_) => {}
+            Method::Exponential(_) => {
+                if self.use_exponential().is_err() {
+                    self.method = Method::Rk4(Rk4 { h: self.run.h });
+                }
+            }
+            // The model is of the same (linear) type: its new transition, while τ ≥ h.
+            Method::ExactHold(_) => {
+                self.method = if hold_fits(&self.model, self.run.h) {
+                    Method::ExactHold(Box::new(ExactHold::new(&self.model, self.run.h)))
+                } else {
+                    Method::Rk4(Rk4 { h: self.run.h })
+                };
+            }
         }
     }
 
     /// Steps with the exponential integrator [`Etd4`], its matrix the model's Jacobian at rest
     /// (central differences at the model's state scales). On error RK4 stays in use.
-    pub fn use_exponential(&mut self) -> Result<(), crate::integrate::Etd4Error> {
+    pub fn use_exponential(&mut self) -> Result<(), crate::simulation::integrate::Etd4Error> {
         let rest = self.model.rest_state();
         let scales = self.model.state_scales();
         let a = crate::model::jacobian(&self.model, &rest, &scales);
@@ -432,6 +470,79 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         self.run.track_contact(u, self.model.half_stroke());
     }
 
+    /// One step of a stage method (RK4, exponential) from the current state: the new state,
+    /// the platform's acceleration at the step's end [m/s²] and the controller's `∫ẍ dt` over
+    /// the step [m/s] (Simpson's rule, as the stages see ẍ).
+    #[inline(always)]
+    fn stages_step<S: Stepper<N>>(&self, method: &S) -> ([f64; N], f64, f64) {
+        let (t, h, n) = (self.time(), self.run.h, self.run.steps);
+        let xdd0 = self.xdd_now;
+        let xdd_mid = self.platform.xdd_at(t + 0.5 * h);
+        let xdd1 = self.platform.xdd_at_grid(n + 1, h, self.stride);
+        let mut y = self.y;
+        // Closed loop with τ ≥ h (the usual case): the delayed command at the three distinct
+        // stage times is already in the history, so read it once per step, not per stage.
+        let pre = match (&self.drive, &self.taps) {
+            (Drive::ClosedLoop(_), Some([t0, t1, t2])) => Some([
+                self.history.value_at_tap(n, t0),
+                self.history.value_at_tap(n, t1),
+                self.history.value_at_tap(n, t2),
+            ]),
+            _ => None,
+        };
+        let rhs = |ts: f64, ys: &[f64; N]| {
+            let (xdds, side) = if ts == t {
+                (xdd0, 1.0)
+            } else if ts == t + h {
+                (xdd1, -1.0)
+            } else {
+                (xdd_mid, 0.0)
+            };
+            let v_valve = match pre {
+                Some(v) => v[(1.0 - side) as usize],
+                None => self.valve_command(ts, side, ys, xdd0, xdds),
+            };
+            let inputs = Inputs { v_valve, xdd: xdds };
+            self.model.derivatives(ts, ys, &inputs)
+        };
+        method.step(t, &mut y, rhs);
+        (y, xdd1, h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1))
+    }
+
+    /// One exact-hold step (see [`Self::stages_step`]); the controller's `∫ẍ dt` is the
+    /// trapezoid, the same hold as the plant's input.
+    #[inline(always)]
+    fn hold_step(&self, hold: &ExactHold<N>) -> ([f64; N], f64, f64) {
+        let (h, n) = (self.run.h, self.run.steps);
+        let xdd0 = self.xdd_now;
+        let xdd1 = self.platform.xdd_at_grid(n + 1, h, self.stride);
+        let mut y = self.y;
+        hold.step(
+            &mut y,
+            [self.valve_at_grid(n, 1.0), xdd0],
+            [self.valve_at_grid(n + 1, -1.0), xdd1],
+        );
+        (y, xdd1, 0.5 * h * (xdd0 + xdd1))
+    }
+
+    /// Command at the valve at grid time `n·h` [V] when τ ≥ h (it is then in the history); an
+    /// open-loop command's jump there is read as its right limit for `side` = +1 and its left
+    /// limit for −1 (see [`Self::valve_command`]).
+    #[inline(always)]
+    fn valve_at_grid(&self, n: u64, side: f64) -> f64 {
+        if self.v_max == 0.0 {
+            // No valve (the passive seat): nothing to read.
+            return 0.0;
+        }
+        match (&self.drive, &self.taps) {
+            (Drive::ClosedLoop(_), Some([tap, ..])) => self.history.value_at_tap(n, tap),
+            (Drive::ClosedLoop(_), None) => self.history.value_at(n as f64 * self.run.h - self.tau),
+            (Drive::OpenLoop(sig), _) => {
+                self.saturate(sig.at(n as f64 * self.run.h - self.tau + side * 1e-6 * self.run.h))
+            }
+        }
+    }
+
     /// Inputs at the current time (for outputs).
     fn inputs_now(&self) -> Inputs {
         Inputs {
@@ -459,47 +570,22 @@ impl<M: Model<N> + CommandPath, const N: usize> Run for Simulation<M, N> {
         &self.run
     }
 
-    #[inline]
+    #[inline(always)]
     fn step(&mut self) -> Result<(), SimError> {
-        let (t, h, n) = (self.time(), self.run.h, self.run.steps);
-        let xdd0 = self.xdd_now;
-        let xdd_mid = self.platform.xdd_at(t + 0.5 * h);
-        let xdd1 = self.platform.xdd_at_grid(n + 1, h, self.stride);
-        let mut y = self.y;
-        let this = &*self;
-        // Closed loop with τ ≥ h (the usual case): the delayed command at the three distinct
-        // stage times is already in the history, so read it once per step, not per stage.
-        let pre = match (&self.drive, &self.taps) {
-            (Drive::ClosedLoop(_), Some(taps)) => {
-                Some(taps.map(|tap| self.history.value_at_tap(n, &tap)))
-            }
-            _ => None,
+        // Right-hand-side evaluations: four per step for the stage methods, none for the hold.
+        let ((y, xdd1, dxd), evals) = match &self.method {
+            Method::Rk4(m) => (self.stages_step(m), 4),
+            Method::Exponential(m) => (self.stages_step(&**m), 4),
+            Method::ExactHold(m) => (self.hold_step(m), 0),
         };
-        let rhs = |ts: f64, ys: &[f64; N]| {
-            let (xdds, side) = if ts == t {
-                (xdd0, 1.0)
-            } else if ts == t + h {
-                (xdd1, -1.0)
-            } else {
-                (xdd_mid, 0.0)
-            };
-            let v_valve = match pre {
-                Some(v) => v[(1.0 - side) as usize],
-                None => this.valve_command(ts, side, ys, xdd0, xdds),
-            };
-            let inputs = Inputs { v_valve, xdd: xdds };
-            this.model.derivatives(ts, ys, &inputs)
-        };
-        self.method.step(t, &mut y, rhs);
-        self.model.project(&mut y);
-        self.stats.steps += 1;
-        self.stats.rhs_evals += 4;
-        self.run.steps += 1;
         self.y = y;
+        self.model.project(&mut self.y);
+        self.stats.steps += 1;
+        self.stats.rhs_evals += evals;
+        self.run.steps += 1;
         self.xdd_now = xdd1;
         self.check_state()?;
-        // The controller's ∫ẍ by Simpson's rule, as the RK stages see ẍ.
-        self.advance_controller(h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1));
+        self.advance_controller(dxd);
         let v = self.command_now();
         send_command(&mut self.controller, &mut self.history, v);
         self.track_contact();
