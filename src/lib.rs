@@ -37,6 +37,7 @@ pub mod delay;
 pub mod dsp;
 pub mod engine;
 pub mod experiments;
+pub mod export;
 pub mod fsutil;
 #[cfg(feature = "gui")]
 pub mod gui;
