@@ -41,6 +41,4 @@ work="$target/fmu-check"
 rm -rf "$work"
 mkdir -p "$work"
 "$venv/bin/python" tests/fmu/check_fmu.py "$exe" "$work"
-if [ -f tests/fmu/check_controller.py ]; then
-    "$venv/bin/python" tests/fmu/check_controller.py "$exe" "$work"
-fi
+"$venv/bin/python" tests/fmu/check_controller.py "$exe" "$work"

@@ -21,6 +21,66 @@ pub enum ExportWhat {
     /// with --controller external); outputs u, ydd, p1, p2, q1, q2, xv, v_in; the preset's
     /// keys as parameters.
     Fmu(ExportFmuArgs),
+    /// The preset's controller at a fixed rate as portable C99: seat_controller.h,
+    /// seat_controller.c (double and float variants) and seat_controller.json (the
+    /// discretised transfer functions) in DIR.
+    Controller(ExportControllerArgs),
+}
+
+/// `--lang` of `export controller`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LangArg {
+    /// C99: one header and one source file.
+    C,
+}
+
+/// Options of `seat-twin export controller`.
+#[derive(Debug, clap::Args)]
+pub struct ExportControllerArgs {
+    /// Preset file or shipped preset name.
+    #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
+    pub preset: String,
+    /// Controller rate [Hz] (50 to 100000).
+    #[arg(long, allow_hyphen_values = true)]
+    pub rate: f64,
+    /// Language.
+    #[arg(long, value_enum)]
+    pub lang: LangArg,
+    /// Output directory (written whole or not at all).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+impl Run for ExportControllerArgs {
+    fn validate(&self) -> Result<(), OptionError> {
+        let (lo, hi) = crate::export::controller::RATE_RANGE_HZ;
+        super::check_range("--rate", self.rate, lo, hi, "Hz")
+    }
+
+    fn run(&self) -> Result<Outcome> {
+        let preset_path = preset_file(&self.preset);
+        let mut inputs: Vec<(&str, &std::path::Path)> = Vec::new();
+        inputs.extend(preset_path.as_deref().map(|p| ("--preset", p)));
+        check_output_is_not_an_input(&self.out, &inputs)?;
+        let preset = crate::preset::resolve(&self.preset)?;
+        let LangArg::C = self.lang;
+        crate::export::controller::write(
+            &preset,
+            &self.preset,
+            self.rate,
+            &self.out,
+            &mut |_, _| {},
+        )
+        .with_context(|| format!("exporting the controller to {}", self.out.display()))?;
+        println!(
+            "wrote {}: {} controller at {} Hz ({})",
+            self.out.display(),
+            preset.params.controller.kind.name(),
+            crate::params::fmt_value(self.rate),
+            crate::export::controller::FILES.join(", ")
+        );
+        Ok(Outcome::Done)
+    }
 }
 
 /// `--controller` of `export fmu`.
@@ -53,12 +113,14 @@ impl Run for ExportArgs {
     fn validate(&self) -> Result<(), OptionError> {
         match &self.what {
             ExportWhat::Fmu(a) => a.validate(),
+            ExportWhat::Controller(a) => a.validate(),
         }
     }
 
     fn run(&self) -> Result<Outcome> {
         match &self.what {
             ExportWhat::Fmu(a) => a.run(),
+            ExportWhat::Controller(a) => a.run(),
         }
     }
 }

@@ -25,7 +25,9 @@ mod tune;
 
 pub use bench::BenchArgs;
 pub use calibrate::CalibrateArgs;
-pub use export::{ExportArgs, ExportFmuArgs, ExportWhat, PlacementArg};
+pub use export::{
+    ExportArgs, ExportControllerArgs, ExportFmuArgs, ExportWhat, LangArg, PlacementArg,
+};
 pub use replay::ReplayArgs;
 pub use report::ReportArgs;
 pub use response::{BodeArgs, SweepArgs, TransmissibilityArgs};
