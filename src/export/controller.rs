@@ -425,7 +425,6 @@ pub fn c_source(params: &Params, rate_hz: f64, provenance: &Provenance) -> (Stri
         let _ = writeln!(src, "    const {t} half_h = {}; /* s */", l(0.5 * h));
         let _ = writeln!(src, "    const {t} v_max = {}; /* V */", l(v_max));
         let _ = writeln!(src, "    {t} xd, v;");
-        if kind != ControllerKind::Skyhook {}
         let _ = writeln!(src, "    if (s->started) {{");
         let _ = writeln!(
             src,

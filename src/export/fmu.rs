@@ -237,7 +237,13 @@ fn fmi_unit(unit: &str) -> Option<(String, [i32; 5])> {
         "Pa/(m³/s)" => [1, -4, -1, 0, 0],
         _ => return None,
     };
-    let name = unit.replace('·', ".").replace('³', "3").replace('²', "2");
+    // Modelica's unit syntax, which the importers read: `.` for a product, exponents as
+    // digits.
+    let name = unit
+        .replace('·', ".")
+        .replace('³', "3")
+        .replace('²', "2")
+        .replace('^', "");
     Some((name, exps))
 }
 
@@ -527,6 +533,8 @@ mod tests {
         assert_eq!(fmi_unit("V·s/m").unwrap().1, [1, 1, -2, -1, 0]);
         // m/(s·V) = m/s · A·s³/(kg·m²) = A·s²/(kg·m).
         assert_eq!(fmi_unit("m/(s·V)").unwrap().1, [-1, -1, 2, 1, 0]);
+        assert_eq!(fmi_unit("m/s^2").unwrap().0, "m/s2");
+        assert_eq!(fmi_unit("kg/m³").unwrap().0, "kg/m3");
     }
 
     #[test]

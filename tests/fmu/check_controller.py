@@ -16,18 +16,10 @@ import subprocess
 import sys
 
 import numpy as np
+from check_report import check, finish
 import control
 
 TOLERANCE = 1e-9
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        failures.append(what)
-
-
 def preset_for(kind, work):
     path = os.path.join(work, f"preset_{kind}.toml")
     with open(path, "w") as f:
@@ -77,10 +69,7 @@ def main():
                     check(err <= TOLERANCE,
                           f"{kind} {rate:g} Hz: Smith model {name} (zoh) = sample_system, "
                           f"largest error {err:.1e} of its largest element")
-    if failures:
-        print(f"{len(failures)} controller check(s) failed")
-        sys.exit(1)
-    print("all controller checks passed")
+    finish("controller")
 
 
 if __name__ == "__main__":
