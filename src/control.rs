@@ -294,6 +294,36 @@ impl Controller {
     pub fn platform_velocity(&self) -> f64 {
         self.xd
     }
+
+    /// The numbers of its discretisation at its step, for a port of the controller to
+    /// another language ([`crate::export::controller`]).
+    pub fn coefficients(&self) -> Coefficients {
+        let section = |f: &FirstOrder| [f.alpha, f.c0, f.c1];
+        Coefficients {
+            lead: section(&self.lead),
+            sky: section(&self.sky),
+            sky_lp: section(&self.sky_lp),
+            smith: self.smith.as_ref().map(|m| {
+                let phi = std::array::from_fn(|i| std::array::from_fn(|j| m.phi[(i, j)]));
+                (phi, [m.gamma[0], m.gamma[1], m.gamma[2]])
+            }),
+        }
+    }
+}
+
+/// A controller's discretisation ([`Controller::coefficients`]). Each first-order section is
+/// `[α, c0, c1]`, stepped as `w ← α·w + c0·x0 + c1·x1` (evaluated in that order) from its input
+/// at the step's start `x0` and end `x1`; the Smith model is `z ← Φ·z + Γ·V` with `z = [ũ, w, ẇ]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coefficients {
+    /// The predictive kind's low-pass on ẍ (input ẍ).
+    pub lead: [f64; 3],
+    /// The skyhook kind's leaky integrator (input ÿ).
+    pub sky: [f64; 3],
+    /// The skyhook kind's low-pass on the velocity estimate (input: the leaky integrator).
+    pub sky_lp: [f64; 3],
+    /// The Smith model's `(Φ, Γ)` (row-major Φ), for the `smith` kind.
+    pub smith: Option<([[f64; 3]; 3], [f64; 3])>,
 }
 
 /// A controller's transfer functions at one frequency: `V = c_u·u + c_y·ÿ + c_x·ẍ`.

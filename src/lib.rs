@@ -45,6 +45,8 @@
 //! * [`report`], [`bench`] — `seat-twin report` (the paper's sections 4–6 reproduced) and
 //!   `seat-twin bench` (real-time factors and accuracy on this machine).
 //! * [`dataset`], [`preset`] — the rig's CSV records and the TOML presets, read and written.
+//! * [`export`] — the twin as an FMI 2.0 co-simulation FMU (the C API in this crate's
+//!   shared library) and the controller as portable C99.
 //! * [`plot`] — PNG and SVG figures; [`output`], [`fsutil`] — output sets written whole or not
 //!   at all (temporary file, then rename).
 //!
@@ -66,6 +68,7 @@ pub mod dataset;
 pub mod dsp;
 pub mod engine;
 pub mod experiments;
+pub mod export;
 pub mod format;
 pub mod fsutil;
 #[cfg(feature = "gui")]

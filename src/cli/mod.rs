@@ -3,7 +3,7 @@
 //!
 //! One file per subcommand holds its options (a `clap::Args` struct), their checks and its
 //! run, through the [`Run`] trait: `simulate`, `report`, `response` (`bode` and
-//! `transmissibility`), `replay`, `calibrate`, `seat_test`, `tune` and `bench`. This module
+//! `transmissibility`), `replay`, `calibrate`, `seat_test`, `tune`, `bench` and `export`. This module
 //! holds what they share: the [`Command`] enum and its one dispatch ([`Command::args`]), the
 //! range checks, [`load_params`] and [`Heartbeat`]. Adding a subcommand is a file, a variant
 //! and an arm of that dispatch.
@@ -15,6 +15,7 @@
 
 mod bench;
 mod calibrate;
+mod export;
 mod replay;
 mod report;
 mod response;
@@ -24,6 +25,9 @@ mod tune;
 
 pub use bench::BenchArgs;
 pub use calibrate::CalibrateArgs;
+pub use export::{
+    ExportArgs, ExportControllerArgs, ExportFmuArgs, ExportWhat, LangArg, PlacementArg,
+};
 pub use replay::ReplayArgs;
 pub use report::ReportArgs;
 pub use response::{BodeArgs, SweepArgs, TransmissibilityArgs};
@@ -99,6 +103,9 @@ pub enum Command {
     /// point); writes report.md, report.json, plots and — when the claim holds — tuned.toml
     /// to DIR.
     Tune(TuneArgs),
+    /// Export the twin as an FMI 2.0 co-simulation FMU (`export fmu`) or the controller as
+    /// portable C99 (`export controller`).
+    Export(ExportArgs),
 }
 
 /// Exit code of an error: bad input, a failed run, an output that could not be written
@@ -154,6 +161,7 @@ impl Command {
             Command::SeatTest(a) => a,
             Command::Bench(a) => a,
             Command::Tune(a) => a,
+            Command::Export(a) => a,
         }
     }
 }

@@ -344,6 +344,35 @@ pub enum PlatformMotion {
     Sine(PlatformSine),
     /// Sampled record (random ride, CSV excitation).
     Sampled(SampledMotion),
+    /// The acceleration given at one instant with its time derivatives, extrapolated by its
+    /// Taylor polynomial (an FMU's input over a communication step).
+    Extrapolated(InputSegment),
+}
+
+/// A platform acceleration known at `t0` with its first three time derivatives, read at
+/// `t ≥ t0` as `ẍ(t) = Σ dᵢ·(t − t0)ⁱ/i!` (a held value when the derivatives are zero). The
+/// position is reported as given; the velocity is not known (NaN).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct InputSegment {
+    /// Time the values are given at [s].
+    pub t0: f64,
+    /// Platform position at `t0` [m] (reported only).
+    pub x: f64,
+    /// `ẍ(t0)` [m/s²] and its derivatives of order 1, 2, 3 [m/s³, m/s⁴, m/s⁵].
+    pub xdd: [f64; 4],
+}
+
+impl InputSegment {
+    /// Acceleration at `t` [m/s²].
+    #[inline(always)]
+    pub fn xdd_at(&self, t: f64) -> f64 {
+        let d = t - self.t0;
+        let [a0, a1, a2, a3] = self.xdd;
+        if a1 == 0.0 && a2 == 0.0 && a3 == 0.0 {
+            return a0;
+        }
+        a0 + d * (a1 + d * (a2 / 2.0 + d * (a3 / 6.0)))
+    }
 }
 
 impl PlatformMotion {
@@ -355,6 +384,11 @@ impl PlatformMotion {
             PlatformMotion::Cycloid(c) => c.at(t),
             PlatformMotion::Sine(s) => s.at(t),
             PlatformMotion::Sampled(s) => s.at(t),
+            PlatformMotion::Extrapolated(e) => PlatformSample {
+                x: e.x,
+                xd: f64::NAN,
+                xdd: e.xdd_at(t),
+            },
         }
     }
 
@@ -364,6 +398,7 @@ impl PlatformMotion {
         match self {
             PlatformMotion::Still => 0.0,
             PlatformMotion::Sampled(s) => s.xdd_at(t),
+            PlatformMotion::Extrapolated(e) => e.xdd_at(t),
             other => other.at(t).xdd,
         }
     }
@@ -512,6 +547,44 @@ pub enum CommandSignal {
         /// Samples from t = 0 [V].
         values: Arc<Vec<f64>>,
     },
+    /// A command received sample by sample (an FMU's command input), linearly interpolated
+    /// between its samples and held after the newest: the valve reads it τ late, as it reads
+    /// the internal controller's command from its history.
+    Streamed(CommandStream),
+}
+
+/// The recent samples of a command received as it goes, oldest first (see
+/// [`CommandSignal::Streamed`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CommandStream {
+    samples: std::collections::VecDeque<(f64, f64)>,
+}
+
+impl CommandStream {
+    /// Appends the sample `v` [V] at `t` [s] (after every earlier sample; one at the same
+    /// time replaces it), forgetting the samples older than `keep_s` [s] before `t` except the
+    /// newest of them.
+    pub fn push(&mut self, t: f64, v: f64, keep_s: f64) {
+        while self.samples.len() >= 2 && self.samples[1].0 <= t - keep_s {
+            self.samples.pop_front();
+        }
+        if self.samples.back().is_some_and(|s| s.0 >= t) {
+            self.samples.pop_back();
+        }
+        self.samples.push_back((t, v));
+    }
+
+    /// The command at `t` [V]: zero before the first sample, held after the newest.
+    pub fn at(&self, t: f64) -> f64 {
+        let Some(i) = self.samples.iter().rposition(|s| s.0 <= t) else {
+            return 0.0;
+        };
+        let (t0, v0) = self.samples[i];
+        match self.samples.get(i + 1) {
+            Some(&(t1, v1)) => v0 + (t - t0) / (t1 - t0) * (v1 - v0),
+            None => v0,
+        }
+    }
 }
 
 impl CommandSignal {
@@ -549,6 +622,7 @@ impl CommandSignal {
                     _ => values.last().copied().unwrap_or(0.0),
                 }
             }
+            CommandSignal::Streamed(c) => c.at(t),
         }
     }
 }

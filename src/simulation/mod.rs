@@ -360,6 +360,15 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         self.method.exponential().is_some()
     }
 
+    /// Replaces the platform motion from the current time on (an FMU's inputs at a
+    /// communication point), keeping the state and time. The step that starts now reads the
+    /// new motion at its start too: a motion that jumps now is taken at its right limit.
+    pub fn set_platform(&mut self, platform: PlatformMotion) {
+        self.stride = platform.grid_stride(self.run.h);
+        self.xdd_now = platform.xdd_at_grid(self.run.steps, self.run.h, self.stride);
+        self.platform = platform;
+    }
+
     /// The drive in use.
     pub fn drive(&self) -> &Drive {
         &self.drive

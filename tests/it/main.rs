@@ -9,6 +9,7 @@ mod cli_round2;
 mod control;
 mod dataset_props;
 mod engine;
+mod export;
 mod fuzz;
 mod gui;
 mod gui_edges;
