@@ -15,6 +15,8 @@
 //!   the pure delay and an excitation, stepped by fixed-step RK4 ([`integrate`]) into a
 //!   [`simulation::Trace`].
 //! * [`experiments`] — the paper's experiments as one-call functions.
+//! * [`export`] — the twin as an FMI 2.0 co-simulation FMU (its C API is this crate's
+//!   `cdylib`) and the controller at a fixed rate as portable C99.
 //! * [`analysis`] — frequency responses (exact, linearised, simulated), vibration metrics
 //!   (RMS, ISO 2631-1 Wk, VDV, SEAT, A(8)).
 //!
