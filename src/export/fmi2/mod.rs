@@ -10,8 +10,6 @@
 //! `fmi2Error` and a message through the importer's logger: the host never crashes. The
 //! model-exchange-only and non-Real functions answer `fmi2Error` with a message.
 
-#![allow(unsafe_code)]
-
 pub mod slave;
 
 use super::fmu::{ControllerPlacement, MODEL_IDENTIFIER};
@@ -131,7 +129,7 @@ unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
 }
 
 /// The directory a `file:` URI names (`file:///a/b`, `file:/a/b`, `file://localhost/a/b`),
-/// percent-decoded.
+/// percent-decoded (`None` for another scheme or a path that is not UTF-8).
 fn uri_to_path(uri: &str) -> Option<std::path::PathBuf> {
     let rest = uri.strip_prefix("file:")?;
     let rest = if let Some(r) = rest.strip_prefix("//") {
@@ -156,8 +154,7 @@ fn uri_to_path(uri: &str) -> Option<std::path::PathBuf> {
             i += 1;
         }
     }
-    use std::os::unix::ffi::OsStringExt;
-    Some(std::ffi::OsString::from_vec(out).into())
+    String::from_utf8(out).ok().map(std::path::PathBuf::from)
 }
 
 /// The preset and placement in the FMU's resources, checked against the GUID.
