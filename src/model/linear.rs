@@ -73,6 +73,7 @@ impl Model<3> for LinearModel {
         [0.0; 3]
     }
 
+    #[inline]
     fn outputs(&self, y: &[f64; 3], inputs: &Inputs) -> Outputs {
         Outputs::mechanical(y[0], y[1], inputs.xdd + y[2])
     }

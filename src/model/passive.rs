@@ -68,6 +68,7 @@ impl Model<2> for PassiveModel {
         [0.0; 2]
     }
 
+    #[inline]
     fn outputs(&self, y: &[f64; 2], _inputs: &Inputs) -> Outputs {
         Outputs::mechanical(y[0], y[1], self.body_acceleration(y))
     }
