@@ -7,9 +7,9 @@
 //! renamed, so a crash never leaves half a preset.
 
 use crate::params::{
-    BodyParams, ControllerParams, CylinderParams, EffectsParams, FluidParams, HoseParams,
-    LinearParams, NumericsParams, ParamError, Params, PassiveParams, PlantParams, SensorParams,
-    SupplyParams, ValveParams,
+    BodyParams, ControllerParams, CorrectionParams, CylinderParams, EffectsParams, FluidParams,
+    HoseParams, LinearParams, NumericsParams, ParamError, Params, PassiveParams, PlantParams,
+    SensorParams, SupplyParams, ValveParams,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -66,6 +66,8 @@ struct PresetFile {
     effects: EffectsParams,
     /// The records' sensors (exact unless a calibration found a property).
     sensors: SensorParams,
+    /// Terms beyond the effect library a calibration proposed (zero unless it did).
+    corrections: CorrectionParams,
 }
 
 impl From<&Preset> for PresetFile {
@@ -85,6 +87,7 @@ impl From<&Preset> for PresetFile {
             numerics: q.numerics,
             effects: q.plant.effects,
             sensors: q.sensors,
+            corrections: q.plant.corrections,
         }
     }
 }
@@ -102,6 +105,7 @@ impl From<PresetFile> for Preset {
                     valve: f.valve,
                     fluid: f.fluid,
                     effects: f.effects,
+                    corrections: f.corrections,
                 },
                 controller: f.controller,
                 passive: f.passive,

@@ -104,6 +104,18 @@ impl Run for CalibrateArgs {
                 .collect();
             println!("effect {}: {}", e.effect.name(), params.join(", "));
         }
+        for t in &report.proposed {
+            println!("proposed {}: {}", t.name, t.description);
+        }
+        if let Some(e) = &report.raw_error_proposed {
+            println!(
+                "with the proposed terms (in calibrated.toml): {}",
+                e.summary()
+            );
+        }
+        for d in &report.drifts {
+            println!("drift: {}", d.description);
+        }
         let calibrated = report.verdict != identify::Verdict::InsufficientData;
         for v in report.calibrated.iter().filter(|_| calibrated) {
             println!(

@@ -46,6 +46,7 @@
 
 mod columns;
 mod error;
+mod lines;
 mod read;
 mod validate;
 mod write;

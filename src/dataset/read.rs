@@ -2,6 +2,7 @@
 
 use super::columns::{COLUMNS, RecordKind, T, column_limit, column_unit};
 use super::error::{DatasetError, fmt_num, quote, shorten};
+use super::lines::LineMap;
 use super::{MAX_FILE_BYTES, MAX_ROWS, Record, validate};
 use std::collections::HashMap;
 use std::io::{self, Read};
@@ -117,31 +118,6 @@ fn check_text(bytes: &[u8], path: &Path, partial: bool) -> Result<(), DatasetErr
             })
         }
         _ => Ok(()),
-    }
-}
-
-/// Where each data row is in the file: rows are consecutive lines except after skipped
-/// (blank or comment) lines, recorded as jumps.
-pub(super) struct LineMap {
-    /// `(row index, line)` at the first row and wherever a row does not follow the previous
-    /// row's line directly; increasing in both.
-    pub(super) jumps: Vec<(usize, usize)>,
-}
-
-impl LineMap {
-    pub(super) fn push(&mut self, row: usize, line: usize) {
-        match self.jumps.last() {
-            Some(&(r, l)) if l + (row - r) == line => {}
-            _ => self.jumps.push((row, line)),
-        }
-    }
-
-    pub(super) fn line_of(&self, row: usize) -> usize {
-        let k = self.jumps.partition_point(|&(r, _)| r <= row);
-        match k.checked_sub(1).and_then(|k| self.jumps.get(k)) {
-            Some(&(r, l)) => l + (row - r),
-            None => 0,
-        }
     }
 }
 

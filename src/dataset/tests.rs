@@ -1,7 +1,8 @@
 //! Tests of reading, checking and writing records.
 
 use super::error::{fmt_num, sig};
-use super::read::{LineMap, parse_with_row_limit};
+use super::lines::LineMap;
+use super::read::parse_with_row_limit;
 use super::*;
 use std::fmt::Write as _;
 use std::fs::File;

@@ -3,7 +3,7 @@
 
 use super::columns::RecordKind;
 use super::error::{DatasetError, fmt_num, quote, sig};
-use super::read::LineMap;
+use super::lines::LineMap;
 use super::{DT_ABS_TOLERANCE_S, DT_REL_TOLERANCE};
 use std::path::Path;
 

@@ -59,8 +59,11 @@ pub struct ReplayView {
     pub params: Params,
     /// Per-channel errors (SI).
     pub errors: ChannelErrors,
-    /// RMS of the noise-weighted residual, as in the calibration (1.0 = sensor noise).
+    /// RMS of the noise-weighted residual, the fit's metric (1.0 = sensor noise).
     pub weighted_rms: f64,
+    /// The raw error measure of this record (every raw channel and band against its noise
+    /// floor), as the calibration's verdict and report use it.
+    pub raw: identify::raw_error::RawErrorReport,
     /// Whiteness of the relative-velocity residual, decimated to the metric's rate.
     pub whiteness: Whiteness,
     /// Correlation of the residual with the signature features of the library effects.
@@ -116,6 +119,11 @@ fn replay_view(params: &Params, rec: &PreparedRecord, index: usize) -> Result<Re
         params: *params,
         errors: r.errors,
         weighted_rms: identify::replay::rms(&weighted),
+        raw: identify::raw_error::raw_error_report(
+            std::slice::from_ref(rec),
+            &[&r.sim],
+            identify::raw_error::DEFAULT_LIMIT,
+        ),
         whiteness,
         correlations,
         du: [
@@ -641,7 +649,32 @@ impl MeasuredData {
                 v.before, v.after
             ));
         }
-        ui.weak("weighted error: 1.0 = sensor-noise level (see report.md for the metric)");
+        ui.weak("weighted error: the fit's metric, 1.0 = sensor-noise level");
+        let worst = |e: &identify::raw_error::RawErrorReport| {
+            e.worst
+                .as_ref()
+                .map_or("–".to_string(), |w| format!("{:.1}×", w.ratio))
+        };
+        ui.label(
+            RichText::new(format!(
+                "raw error (the verdict's measure, worst band against its noise floor, limit                  {:.1}): before {}, after {}{}",
+                r.raw_error_after.limit,
+                worst(&r.raw_error_before),
+                worst(&r.raw_error_after),
+                r.raw_error_proposed
+                    .as_ref()
+                    .map(|p| format!(", with the proposed terms {}", worst(p)))
+                    .unwrap_or_default()
+            ))
+            .strong(),
+        );
+        ui.label(r.raw_error_after.summary());
+        for t in &r.proposed {
+            ui.label(format!("proposed beyond the library: {}", t.description));
+        }
+        for d in &r.drifts {
+            ui.label(format!("drift: {}", d.description));
+        }
         for v in &r.calibrated {
             ui.monospace(super::format::fitted(&v.name, v.value, v.std));
         }

@@ -45,13 +45,25 @@ pub fn multi_start(
             grid.push(-g);
         }
     }
-    let costs: Vec<Option<(f64, Params)>> = grid
-        .par_iter()
+    let starts: Vec<Params> = grid
+        .iter()
         .map(|&g| {
             let mut p = off;
             e.knobs()[0].set(&mut p, g);
-            ev.residuals(&p)
-                .map(|r| (r.iter().map(|v| v * v).sum::<f64>(), p))
+            p
+        })
+        .collect();
+    Ok(best_of(ev, &starts)?.unwrap_or(off))
+}
+
+/// The parameter set of `starts` with the smallest residual sum of squares on the fit
+/// records (replayed in parallel); `None` for no starts.
+pub fn best_of(ev: &Evaluator<'_>, starts: &[Params]) -> Result<Option<Params>, IdentifyError> {
+    let costs: Vec<Option<(f64, Params)>> = starts
+        .par_iter()
+        .map(|p| {
+            ev.residuals(p)
+                .map(|r| (r.iter().map(|v| v * v).sum::<f64>(), *p))
         })
         .collect();
     let mut best: Option<(f64, Params)> = None;
@@ -61,7 +73,7 @@ pub fn multi_start(
             best = Some((cost, p));
         }
     }
-    Ok(best.map(|b| b.1).unwrap_or(off))
+    Ok(best.map(|b| b.1))
 }
 
 /// A candidate effect fitted on top of the current model in one round.
@@ -133,7 +145,7 @@ pub fn rank_candidates(
 }
 
 /// Weighted RMS error of `p` on the held-out records.
-fn validation_rms(p: &Params, validation: &[PreparedRecord]) -> Result<f64, IdentifyError> {
+pub fn validation_rms(p: &Params, validation: &[PreparedRecord]) -> Result<f64, IdentifyError> {
     let reps = replay_all(p, validation)?;
     Ok(rms(&weighted_of(validation, &reps)))
 }

@@ -53,6 +53,21 @@ pub enum Knob {
     Compliance,
     /// `effects.supply_sag.droop_pa_per_m3_s` [Pa/(m³/s)] = 1e10·|θ|.
     SupplySag,
+    /// `corrections.cd_opening_slope` [-] = 0.1·θ.
+    CdSlope,
+    /// `corrections.flow_gain_direction` [-] = 0.05·θ.
+    FlowDirection,
+    /// `corrections.flow_gain_direction_width_m` [m] = 1e-4·|θ|.
+    FlowDirectionWidth,
+    /// `corrections.flow_gain_return_edge` [-] = 0.05·θ.
+    ReturnEdge,
+    /// `corrections.spring_n_per_m` [N/m] = 1000·θ, within ±90 % of the declared stiffness
+    /// (a larger negative one would leave the body without a spring).
+    ExtraSpring,
+    /// `corrections.quadratic_damping_n_s2_per_m2` [N·s²/m²] = 1000·|θ|.
+    QuadraticDamping,
+    /// `corrections.turbulent_leakage_m3_per_s_sqrt_pa` [m³/(s·√Pa)] = 1e-9·|θ|.
+    TurbulentLeakage,
 }
 
 impl Knob {
@@ -84,6 +99,7 @@ impl Knob {
     /// θ of the parameter's current value in `p`.
     pub fn theta(self, p: &Params) -> f64 {
         let e = &p.plant.effects;
+        let c = &p.plant.corrections;
         match self {
             Knob::Cd => p.plant.valve.cd / 0.1,
             Knob::Tau => p.plant.valve.tau_s / 0.01,
@@ -104,6 +120,13 @@ impl Knob {
                     .max(0.0)
             }
             Knob::SupplySag if e.supply_sag.enabled => e.supply_sag.droop_pa_per_m3_s / 1e10,
+            Knob::CdSlope => c.cd_opening_slope / 0.1,
+            Knob::FlowDirection => c.flow_gain_direction / 0.05,
+            Knob::FlowDirectionWidth => c.flow_gain_direction_width_m / 1e-4,
+            Knob::ReturnEdge => c.flow_gain_return_edge / 0.05,
+            Knob::ExtraSpring => c.spring_n_per_m / 1000.0,
+            Knob::QuadraticDamping => c.quadratic_damping_n_s2_per_m2 / 1000.0,
+            Knob::TurbulentLeakage => c.turbulent_leakage_m3_per_s_sqrt_pa / 1e-9,
             _ => 0.0,
         }
     }
@@ -127,6 +150,13 @@ impl Knob {
             Knob::Leakage => "effects.leakage.coefficient_m3_per_s_pa",
             Knob::Compliance => "effects.compliance.effective_bulk_modulus_pa",
             Knob::SupplySag => "effects.supply_sag.droop_pa_per_m3_s",
+            Knob::CdSlope => "corrections.cd_opening_slope",
+            Knob::FlowDirection => "corrections.flow_gain_direction",
+            Knob::FlowDirectionWidth => "corrections.flow_gain_direction_width_m",
+            Knob::ReturnEdge => "corrections.flow_gain_return_edge",
+            Knob::ExtraSpring => "corrections.spring_n_per_m",
+            Knob::QuadraticDamping => "corrections.quadratic_damping_n_s2_per_m2",
+            Knob::TurbulentLeakage => "corrections.turbulent_leakage_m3_per_s_sqrt_pa",
         };
         spec(key).expect("every knob is in the parameter table")
     }
@@ -153,6 +183,15 @@ impl Knob {
             Knob::Leakage => 1e-12 * a,
             Knob::Compliance => p.plant.fluid.bulk_modulus_pa / (1.0 + a),
             Knob::SupplySag => 1e10 * a,
+            Knob::CdSlope => 0.1 * theta,
+            Knob::FlowDirection | Knob::ReturnEdge => 0.05 * theta,
+            Knob::FlowDirectionWidth => 1e-4 * a,
+            Knob::ExtraSpring => {
+                let k = 0.9 * p.plant.body.stiffness_n_per_m;
+                (1000.0 * theta).clamp(-k, k)
+            }
+            Knob::QuadraticDamping => 1000.0 * a,
+            Knob::TurbulentLeakage => 1e-9 * a,
         };
         s.set_unchecked(p, value.clamp(s.min, s.max));
         let e = &mut p.plant.effects;
@@ -167,6 +206,14 @@ impl Knob {
             Knob::Leakage => e.leakage.enabled = true,
             Knob::Compliance => e.compliance.enabled = true,
             Knob::SupplySag => e.supply_sag.enabled = true,
+            // Corrections have no switch: zero is off.
+            Knob::CdSlope
+            | Knob::FlowDirection
+            | Knob::FlowDirectionWidth
+            | Knob::ReturnEdge
+            | Knob::ExtraSpring
+            | Knob::QuadraticDamping
+            | Knob::TurbulentLeakage => {}
         }
     }
 

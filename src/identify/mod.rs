@@ -35,7 +35,15 @@
 //!    ([`diagnose::ResidualLeft`]: records, channels, band, correlations). The fit's own
 //!    metric gains a stroke-drift channel (`u` below 0.5 Hz) so that the fit sees what the
 //!    verdict judges.
-//! 6. Errors are reported on all records, on the fit part and on the held-out part
+//! 6. Beyond the library ([`proposed`]): when the library's twin leaves a raw band above the
+//!    floor, a family of physically meaningful corrections ([`proposed::CorrectionId`]: Cd
+//!    against spool opening, flow gain per direction and per metering edge, a spring,
+//!    quadratic damping, a turbulent leakage) is searched the same way (ΔBIC, share of the
+//!    residual, held-out records). What is kept is *proposed*: described in physical words,
+//!    carried by `calibrated.toml`, never counted by the verdict. Then each drift candidate
+//!    ([`drift`]) is fitted on every record alone and reported when it changes with the
+//!    record order beyond its uncertainty.
+//! 7. Errors are reported on all records, on the fit part and on the held-out part
 //!    (`error_validation`), weighted and as raw-signal NRMSE ([`RawNrmse`]), every stage
 //!    replayed exactly as `seat-twin replay` replays its preset.
 //!
@@ -63,12 +71,14 @@
 
 pub mod data;
 pub mod diagnose;
+pub mod drift;
 pub mod effects;
 mod evaluate;
 pub mod figures;
 pub mod fit;
 pub mod paper;
 pub mod progress;
+pub mod proposed;
 pub mod raw_error;
 pub mod replay;
 pub mod report;
@@ -256,6 +266,13 @@ pub struct CalibrationOptions {
     /// Largest RK4 step used while fitting [s] (the preset's own step, if smaller, wins);
     /// the reported errors always use the preset's step.
     pub fit_step_s: f64,
+    /// Most corrections beyond the library proposed ([`proposed`]); 0 = do not search them.
+    #[serde(default = "default_max_proposed")]
+    pub max_proposed: usize,
+}
+
+fn default_max_proposed() -> usize {
+    3
 }
 
 impl Default for CalibrationOptions {
@@ -275,6 +292,7 @@ impl Default for CalibrationOptions {
             raw_error_limit: raw_error::DEFAULT_LIMIT,
             min_validation_gain: 0.01,
             fit_step_s: 2.5e-4,
+            max_proposed: default_max_proposed(),
         }
     }
 }
@@ -348,17 +366,53 @@ pub fn calibrate_with(
     };
     let search = effects::search(&cx, &campaign, params, &declared.fit, &declared.knobs)?;
     notes.extend(search.notes.iter().cloned());
+    let proposal = beyond_the_library(params, &cx, &campaign, &search)?;
+    if let Some(p) = &proposal {
+        notes.extend(p.notes.iter().cloned());
+    }
+    monitor.enter(Stage::Drifts, 1);
+    let final_params = proposal
+        .as_ref()
+        .map_or(search.current.params, |p| p.fit.params);
+    let (drifts, drift_notes) = drift::find(&final_params, &campaign.all, bic.ratio(), &monitor)?;
+    monitor.advance();
+    notes.extend(drift_notes);
     let found = stages::Findings {
         campaign,
         nominal,
         paper,
         declared,
         search,
+        proposal,
+        drifts,
         bic,
         notes,
     };
     let report = stages::report(params, found, options, &monitor)?;
     Ok(refuse_undetermined(report))
+}
+
+/// The search beyond the library ([`proposed`]), run only when the library's final twin,
+/// replayed at the preset's step, leaves a raw residual above the floor on some record
+/// ([`raw_error`]), and when [`CalibrationOptions::max_proposed`] allows it.
+fn beyond_the_library(
+    params: &Params,
+    cx: &effects::SearchContext<'_>,
+    campaign: &data::Campaign,
+    search: &effects::EffectSearch,
+) -> Result<Option<proposed::Proposal>, IdentifyError> {
+    if cx.options.max_proposed == 0 {
+        return Ok(None);
+    }
+    let probe = evaluate::replay_all(
+        &stages::with_numerics_of(search.current.params, params),
+        &campaign.all,
+    )?;
+    let sims: Vec<&SimChannels> = probe.iter().map(|r| &r.sim).collect();
+    if raw_error::raw_error_report(&campaign.all, &sims, cx.options.raw_error_limit).at_floor() {
+        return Ok(None);
+    }
+    proposed::search(cx, &search.current, &search.knobs)
 }
 
 /// The final fit's own uncertainty decides as the declared fit's does (issue 21): a Cd or τ

@@ -33,6 +33,15 @@ pub enum Stage {
         /// The effect tried.
         effect: EffectId,
     },
+    /// Beyond the library: fitting and ranking the corrections of
+    /// [`super::proposed::CorrectionId`], re-fitting and validating the best (only when the
+    /// library leaves a raw residual above the floor).
+    Proposed {
+        /// Round (1 = first).
+        round: usize,
+    },
+    /// Every drift candidate fitted on each record alone ([`super::drift`]).
+    Drifts,
     /// Final replays at the preset's step, errors, diagnostics and the verdict.
     Report,
 }
@@ -52,6 +61,10 @@ impl fmt::Display for Stage {
             Stage::DeclaredFit => f.write_str("declared parameters (Cd, τ, mass)"),
             Stage::Candidates { round } => write!(f, "candidate effects (round {round})"),
             Stage::Refit { effect, .. } => write!(f, "re-fit with {}", effect.name()),
+            Stage::Proposed { round } => {
+                write!(f, "corrections beyond the library (round {round})")
+            }
+            Stage::Drifts => f.write_str("parameters record by record (drifts)"),
             Stage::Report => f.write_str("diagnostics"),
         }
     }

@@ -71,6 +71,20 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             "relative_gain": c.relative_gain, "params": c.params})).collect::<Vec<_>>(),
         "score": "ΔBIC = n_eff·ln(RSS_candidate/RSS_current) + Δk·ln(n_eff) against the model of that round, on the fit records; negative is better",
         "calibrated_parameters": calibrated,
+        "proposed": r.proposed.iter().map(|t| json!({
+            "name": t.name,
+            "description": t.description,
+            "params": t.params,
+            "uncertainties": t.uncertainties.iter()
+                .map(|(k, v)| (k.clone(), json_number(*v))).collect::<serde_json::Map<_, _>>(),
+            "evidence": t.evidence,
+        })).collect::<Vec<_>>(),
+        "proposed_explains": r.raw_error_proposed.as_ref().map(|e| e.at_floor()),
+        "proposed_calibrated_parameters": r.proposed_calibrated.iter()
+            .map(|v| (v.name.clone(), json!({"value": json_number(v.value), "uncertainty": json_number(v.std)})))
+            .collect::<serde_json::Map<_, _>>(),
+        "proposed_candidates": r.proposed_candidates,
+        "drifts": r.drifts,
         "sensors": r.sensors,
         "calibrated_uncertainties": unc,
         "mass_fitted": r.mass_fitted,
@@ -98,6 +112,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             "verdict_uses": "after",
             "before": raw_error_json(&r.raw_error_before),
             "after": raw_error_json(&r.raw_error_after),
+            "proposed": r.raw_error_proposed.as_ref().map(raw_error_json),
         },
         "residual_left": r.residual_left,
         "diagnostics_before": r.diagnostics_before,
@@ -252,6 +267,46 @@ fn raw_error_markdown(s: &mut String, r: &CalibrationReport) {
     let _ = writeln!(s);
 }
 
+/// The terms proposed beyond the library, in words, and what they leave.
+fn proposed_markdown(s: &mut String, r: &CalibrationReport) {
+    let Some(raw) = &r.raw_error_proposed else {
+        return;
+    };
+    let _ = writeln!(
+        s,
+        "## Proposed beyond the library
+
+The library's effects leave a residual above the          noise; a search over corrections outside the library (Cd against spool opening, flow          gain per direction and per metering edge, a spring, quadratic damping, a turbulent          leakage; ranked by ΔBIC, each kept only if it lowers the held-out error) proposes:
+"
+    );
+    for t in &r.proposed {
+        let _ = writeln!(s, "- **{}**: {}. {}.", t.name, t.description, t.evidence);
+    }
+    let declared: Vec<String> = r
+        .proposed_calibrated
+        .iter()
+        .map(|v| format_parameter(&v.name, v.value, v.std))
+        .collect();
+    let _ = writeln!(
+        s,
+        "
+With {}: {}. The verdict stays `{}`: it judges the library. `calibrated.toml`          carries the proposed terms, with the declared parameters re-fitted alongside them          ({}), and `seat-twin replay` applies them.
+",
+        if r.proposed.len() == 1 {
+            "this term"
+        } else {
+            "these terms"
+        },
+        if raw.at_floor() {
+            format!("every raw channel of every record is at its noise floor ({})", raw.summary())
+        } else {
+            format!("the residual is smaller but not at the floor everywhere: {}", raw.summary())
+        },
+        r.verdict.name(),
+        declared.join(", ")
+    );
+}
+
 /// The Markdown report.
 pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String {
     let mut s = String::new();
@@ -265,12 +320,19 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
                 "with the added effect(s) below, every raw channel of every record is at its noise floor in every band (see the table below).",
             Verdict::NoMissingEffect =>
                 "the twin with re-fitted declared parameters has every raw channel of every record at its noise floor in every band; nothing was added.",
-            Verdict::Unexplained =>
-                "a residual above the sensor noise remains; the effects below (if any) helped, but what is left is not in the library (see \"What is left\").",
+            Verdict::Unexplained => match &r.raw_error_proposed {
+                Some(p) if p.at_floor() =>
+                    "a residual above the sensor noise remains that the library does not explain; the terms proposed beyond the library (below) explain it: with them every raw channel is at its noise floor.",
+                Some(_) =>
+                    "a residual above the sensor noise remains; the effects below (if any) and the terms proposed beyond the library reduce it, but what is left is explained by neither (see \"What is left\").",
+                None =>
+                    "a residual above the sensor noise remains; the effects below (if any) helped, but what is left is not in the library (see \"What is left\").",
+            },
             Verdict::InsufficientData =>
                 "the records cannot determine the twin's parameters; nothing was calibrated and no calibrated.toml was written.",
         }
     );
+    proposed_markdown(&mut s, r);
     raw_error_markdown(&mut s, r);
     if !r.missing.is_empty() {
         let _ = writeln!(s, "## What is missing\n");
@@ -425,6 +487,17 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
             s,
             "- {text} (a property of the measurement, not of the plant; calibrated.toml carries it and replay applies it)"
         );
+    }
+    if !r.drifts.is_empty() {
+        let _ = writeln!(s, "\n## Drifts\n");
+        for d in &r.drifts {
+            let _ = writeln!(
+                s,
+                "- {} (a parameter that changes during the campaign, as oil warming up does: \
+                 not averaged away; calibrated.toml holds the value fitted on all records).",
+                d.description
+            );
+        }
     }
     let _ = writeln!(s, "\n## Effects added\n");
     if r.effects.is_empty() {

@@ -126,8 +126,21 @@ pub struct Diagnostics {
 pub struct CalibrationReport {
     /// The starting (nominal) parameters.
     pub nominal: Params,
-    /// The calibrated parameters, with the added effects enabled.
+    /// The calibrated parameters (`calibrated.toml`): the added effects enabled and, when
+    /// terms beyond the library were proposed, those terms with every parameter re-fitted
+    /// alongside them ([`Self::proposed_calibrated`]).
     pub params: Params,
+    /// Terms beyond the library ([`super::proposed`]), in physical words, empty when none was
+    /// kept. The verdict does not count them: it stays the library's.
+    pub proposed: Vec<super::proposed::ProposedTerm>,
+    /// The declared parameters re-fitted with the proposed terms (empty without them).
+    pub proposed_calibrated: Vec<FittedValue>,
+    /// Every candidate correction's score, per round (empty when the search did not run).
+    pub proposed_candidates: Vec<super::proposed::ProposedScore>,
+    /// The raw error measure with the proposed terms (`calibrated.toml`), if any.
+    pub raw_error_proposed: Option<RawErrorReport>,
+    /// Parameters that change from record to record ([`super::drift`]), empty when none.
+    pub drifts: Vec<super::drift::Drift>,
     /// Verdict.
     pub verdict: Verdict,
     /// Effects added, most important first.
@@ -230,8 +243,12 @@ pub struct RawNrmse {
     pub nominal: BTreeMap<String, f64>,
     /// All records: declared parameters re-fitted, no effect.
     pub before: BTreeMap<String, f64>,
-    /// All records: calibrated (the `calibrated.toml`).
+    /// All records: calibrated with the library's effects (the `calibrated.toml` unless
+    /// terms beyond the library were proposed).
     pub after: BTreeMap<String, f64>,
+    /// All records: with the proposed terms (the `calibrated.toml` then), if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub proposed: Option<BTreeMap<String, f64>>,
     /// Held-out records only: `{nominal, before, after}` the same way.
     pub validation: BTreeMap<String, BTreeMap<String, f64>>,
 }

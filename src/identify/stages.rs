@@ -195,17 +195,50 @@ pub fn declared_fit(
     // delay (ÿ is not lagged) and the accelerometer's scale and offset from the plant. They
     // are fitted from the declared fit and kept only when the fit earns their three
     // parameters by ΔBIC < −10 (strong evidence), every one with a finite uncertainty.
+    // A property the data pin at its bound (a lag at 0) or cannot size (an infinite
+    // uncertainty) is dropped and the others re-fitted without it: an accelerometer offset
+    // and scale stand on their own when the stroke sensor has no lag.
     let mut fit = fit;
     if undetermined.is_empty() && ev.records.iter().all(|r| r.ydd.is_some()) {
+        let mut sensors = Knob::SENSORS.to_vec();
         let mut with = knobs.clone();
-        with.extend(Knob::SENSORS);
-        let s = fit::fit(
+        with.extend(&sensors);
+        let mut s = fit::fit(
             ev,
             &fit.params,
             &with,
             options.max_iterations,
             n_eff0 / n as f64,
         )?;
+        // At its bound first (a singular fit leaves every uncertainty undefined), else the
+        // properties without a finite uncertainty.
+        let at_bound: Vec<Knob> = s
+            .values
+            .iter()
+            .filter(|v| v.knob == Knob::SensorULag && v.value <= 0.0)
+            .map(|v| v.knob)
+            .collect();
+        let drop = if at_bound.is_empty() {
+            s.values
+                .iter()
+                .filter(|v| v.knob.sensor().is_some() && !v.std.is_finite())
+                .map(|v| v.knob)
+                .collect()
+        } else {
+            at_bound
+        };
+        if !drop.is_empty() && drop.len() < sensors.len() {
+            sensors.retain(|k| !drop.contains(k));
+            with = knobs.clone();
+            with.extend(&sensors);
+            let mut start = fit.params;
+            for k in &drop {
+                if let Some((_, _, exact)) = k.sensor() {
+                    k.spec().set_unchecked(&mut start, exact);
+                }
+            }
+            s = fit::fit(ev, &start, &with, options.max_iterations, n_eff0 / n as f64)?;
+        }
         let bic = fit::Bic { n, n_eff: n_eff0 };
         let gain = bic.value(s.rss, with.len()) - bic.value(fit.rss, knobs.len());
         let finite = s.values.iter().all(|v| v.std.is_finite());
@@ -252,6 +285,47 @@ pub fn verdict(effects_added: bool, before: &RawErrorReport, after: &RawErrorRep
     }
 }
 
+/// Sensor properties of `fit` within 3σ of exact are exact: set back in its parameters, not
+/// applied, not listed. Returns the others, as reported.
+fn set_back_exact_sensors(fit: &mut FitResult) -> Vec<SensorEstimate> {
+    let mut sensors = Vec::new();
+    for v in &fit.values {
+        if let Some((channel, kind, exact)) = v.knob.sensor() {
+            if (v.value - exact).abs() > 3.0 * v.std && v.std.is_finite() {
+                sensors.push(SensorEstimate {
+                    channel: channel.into(),
+                    kind: kind.into(),
+                    value: v.value,
+                    uncertainty: v.std,
+                });
+            } else {
+                v.knob.spec().set_unchecked(&mut fit.params, exact);
+            }
+        }
+    }
+    sensors
+}
+
+/// The declared parameters (Cd, τ, mass) of a fit, with their uncertainties.
+fn declared_values(fit: &FitResult) -> Vec<FittedValue> {
+    fit.values
+        .iter()
+        .filter(|v| matches!(v.knob, Knob::Cd | Knob::Tau | Knob::Mass))
+        .cloned()
+        .collect()
+}
+
+/// The proposed fit beyond the library, as the report needs it.
+struct Beyond {
+    terms: Vec<super::proposed::ProposedTerm>,
+    calibrated: Vec<FittedValue>,
+    candidates: Vec<super::proposed::ProposedScore>,
+    raw: RawErrorReport,
+    nrmse: std::collections::BTreeMap<String, f64>,
+    val: std::collections::BTreeMap<String, f64>,
+    params: Params,
+}
+
 /// What the stages before the report found.
 pub struct Findings {
     /// The records and their split.
@@ -264,6 +338,10 @@ pub struct Findings {
     pub declared: Declared,
     /// The effect search.
     pub search: EffectSearch,
+    /// The corrections proposed beyond the library, if any were kept.
+    pub proposal: Option<super::proposed::Proposal>,
+    /// Parameters that change from record to record.
+    pub drifts: Vec<super::drift::Drift>,
     /// BIC counts of the declared fit.
     pub bic: Bic,
     /// Notes of every stage, in order.
@@ -288,26 +366,35 @@ pub fn report(
     let before_params = with_numerics_of(found.declared.fit.params, params);
     let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
-    // Sensor properties within 3σ of exact are exact: set back, not applied, not listed.
-    let mut sensors = Vec::new();
-    for v in &current.values {
-        if let Some((channel, kind, exact)) = v.knob.sensor() {
-            if (v.value - exact).abs() > 3.0 * v.std && v.std.is_finite() {
-                sensors.push(SensorEstimate {
-                    channel: channel.into(),
-                    kind: kind.into(),
-                    value: v.value,
-                    uncertainty: v.std,
-                });
-            } else {
-                v.knob.spec().set_unchecked(&mut current.params, exact);
-            }
-        }
-    }
+    let sensors = set_back_exact_sensors(&mut current);
     let replay = |p: &Params, recs| -> Result<Vec<Replay>, IdentifyError> {
         let r = replay_all(p, recs)?;
         monitor.advance();
         Ok(r)
+    };
+    // Beyond the library: the proposed fit, replayed as its calibrated.toml is.
+    let beyond = match &found.proposal {
+        Some(prop) => {
+            let mut fit = prop.fit.clone();
+            fit.params = with_numerics_of(fit.params, params);
+            // Its sensor properties are set back the same way (the report lists the library's).
+            set_back_exact_sensors(&mut fit);
+            let reps = replay_all(&fit.params, all)?;
+            let sims: Vec<_> = reps.iter().map(|r| &r.sim).collect();
+            let raw = raw_error_report(all, &sims, options.raw_error_limit);
+            let nrmse = raw_pooled(&reps);
+            let val = raw_pooled(&replay_all(&fit.params, val_recs)?);
+            Some(Beyond {
+                terms: super::proposed::terms(prop, &fit),
+                calibrated: declared_values(&fit),
+                candidates: prop.candidates.clone(),
+                raw,
+                nrmse,
+                val,
+                params: fit.params,
+            })
+        }
+        None => None,
     };
     let replays_before = replay(&before_params, all)?;
     let w_before = weighted_of(all, &replays_before);
@@ -329,6 +416,7 @@ pub fn report(
         nominal: raw_pooled(&found.nominal.replays),
         before: raw_pooled(&replays_before),
         after: raw_pooled(&replays_after),
+        proposed: None,
         validation: [
             ("nominal", &val_nominal),
             ("before", &val_before),
@@ -402,15 +490,27 @@ pub fn report(
             }
         })
         .collect();
-    let calibrated = current
-        .values
-        .iter()
-        .filter(|v| matches!(v.knob, Knob::Cd | Knob::Tau | Knob::Mass))
-        .cloned()
-        .collect();
+    let calibrated = declared_values(&current);
+    let mut raw_nrmse = raw_nrmse;
+    if let Some(b) = &beyond {
+        raw_nrmse.proposed = Some(b.nrmse.clone());
+        raw_nrmse
+            .validation
+            .insert("proposed".into(), b.val.clone());
+    }
+    let (out_params, proposed, proposed_calibrated, proposed_candidates, raw_error_proposed) =
+        match beyond {
+            Some(b) => (b.params, b.terms, b.calibrated, b.candidates, Some(b.raw)),
+            None => (current.params, Vec::new(), Vec::new(), Vec::new(), None),
+        };
     Ok(CalibrationReport {
         nominal: *params,
-        params: current.params,
+        params: out_params,
+        proposed,
+        proposed_calibrated,
+        proposed_candidates,
+        raw_error_proposed,
+        drifts: found.drifts,
         verdict,
         effects,
         candidates: found.search.candidates,

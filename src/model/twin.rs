@@ -21,7 +21,8 @@
 //! (`√Δp ≈ Δp / (Δp² + δ²)^¼`), so the Jacobian stays finite at Δp = 0. The spool is clamped
 //! to `±xv,max` by projection after each step; the end stops at `±Lc/2` are a stiff,
 //! damped, push-only contact. Friction, overlap, offset, leakage, compliance and supply sag
-//! are the optional effects of [`crate::params::EffectsParams`].
+//! are the optional effects of [`crate::params::EffectsParams`]; the terms a calibration
+//! proposes beyond them are [`crate::params::CorrectionParams`] (docs/model.md, 9.3.1).
 
 use super::{Inputs, Model, ModelKind, Outputs};
 use crate::params::{Derived, Params, derived};
@@ -85,6 +86,8 @@ pub struct Twin {
     d: Derived,
     /// `Cd·ka·√(2/ρ)` [m^(3/2)·kg^(-1/2)… per m of spool], the orifice gain per metre of spool.
     orifice_gain: f64,
+    /// Whether a valve-flow correction ([`crate::params::CorrectionParams`]) is non-zero.
+    valve_corrected: bool,
     core_sq: f64,
     /// Reciprocals of m, C_chamber, C_hose and I_hose: the right-hand side multiplies instead
     /// of dividing (divisions share the square-root unit, the twin's bottleneck).
@@ -156,6 +159,7 @@ impl Twin {
             params,
             d,
             orifice_gain,
+            valve_corrected: params.plant.corrections.valve(),
             core_sq: params.plant.valve.laminar_core_pa.powi(2),
             inv: Reciprocals {
                 mass: 1.0 / params.plant.body.mass_kg,
@@ -211,15 +215,31 @@ impl Twin {
         let x = self.opening(xv);
         let p0 = self.params.plant.supply.return_pressure_pa;
         let g = self.orifice_gain * x;
-        let (d1, d2) = if x > 0.0 {
-            (p1v - p0, self.supply_pressure(g, p2v) - p2v)
+        // Supply-edge and return-edge gains (equal unless a proposed correction says not).
+        let (gs, gr) = if self.valve_corrected {
+            let (s, r) = self
+                .params
+                .plant
+                .corrections
+                .edge_gains(x, self.params.plant.valve.xv_max_m);
+            (g * s, g * r)
         } else {
-            (self.supply_pressure(-g, p1v) - p1v, p2v - p0)
+            (g, g)
         };
-        let (r1, r2) = signed_sqrt_pair(d1, d2, self.core_sq);
-        ValveFlows {
-            q1v: g * r1,
-            q2v: g * r2,
+        if x > 0.0 {
+            let (r1, r2) =
+                signed_sqrt_pair(p1v - p0, self.supply_pressure(gs, p2v) - p2v, self.core_sq);
+            ValveFlows {
+                q1v: gr * r1,
+                q2v: gs * r2,
+            }
+        } else {
+            let (r1, r2) =
+                signed_sqrt_pair(self.supply_pressure(-gs, p1v) - p1v, p2v - p0, self.core_sq);
+            ValveFlows {
+                q1v: gs * r1,
+                q2v: gr * r2,
+            }
         }
     }
 
@@ -255,16 +275,27 @@ impl Twin {
         -self.params.plant.body.stiffness_n_per_m * s.u - s.p1 * a + s.p2 * a
             - self.friction_force(s.du)
             + self.end_stop_force(s.u, s.du)
+            + self.params.plant.corrections.body_force(s.u, s.du)
     }
 
     /// Internal leakage flow chamber 1 → chamber 2 [m³/s].
     #[inline(always)]
     fn leakage(&self, s: &TwinState) -> f64 {
         let l = &self.params.plant.effects.leakage;
-        if l.enabled {
+        let laminar = if l.enabled {
             l.coefficient_m3_per_s_pa * (s.p1 - s.p2)
         } else {
             0.0
+        };
+        let c_t = self
+            .params
+            .plant
+            .corrections
+            .turbulent_leakage_m3_per_s_sqrt_pa;
+        if c_t == 0.0 {
+            laminar
+        } else {
+            laminar + c_t * signed_sqrt(s.p1 - s.p2, self.core_sq)
         }
     }
 

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 mod controller;
+mod corrections;
 mod effects;
 mod models;
 mod numerics;
@@ -16,6 +17,7 @@ mod sensors;
 mod table;
 
 pub use controller::{ControllerKind, ControllerParams};
+pub use corrections::CorrectionParams;
 pub use effects::{
     ComplianceEffect, EffectsParams, FrictionEffect, LeakageEffect, OffsetEffect, OverlapEffect,
     SupplySagEffect,

@@ -1,6 +1,6 @@
 //! The physical rig: body and springs, cylinder and end stops, hoses, supply, valve, oil.
 
-use super::EffectsParams;
+use super::{CorrectionParams, EffectsParams};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -23,6 +23,8 @@ pub struct PlantParams {
     pub fluid: FluidParams,
     /// Optional physical effects (off by default).
     pub effects: EffectsParams,
+    /// Terms beyond the effect library, proposed by a calibration (zero by default).
+    pub corrections: CorrectionParams,
 }
 
 /// The suspended body and its springs.

@@ -120,7 +120,7 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
-pub static PARAMS: [ParamSpec; 50] = [
+pub static PARAMS: [ParamSpec; 57] = [
     entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
     entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
@@ -227,6 +227,22 @@ pub static PARAMS: [ParamSpec; 50] = [
     entry!("effects.supply_sag.droop_pa_per_m3_s", plant.effects.supply_sag.droop_pa_per_m3_s, "droop",
         "Pa/(m³/s)", [0.0, 1e12], None, (L_PER_MIN / BAR, "bar/(L/min)"),
         "supply pressure droop per drawn flow"),
+    entry!("corrections.cd_opening_slope", plant.corrections.cd_opening_slope, "s_Cd", "-",
+        [-0.5, 0.5], None, (100.0, "%"), "relative change of Cd from small to full spool opening"),
+    entry!("corrections.flow_gain_direction", plant.corrections.flow_gain_direction, "a_dir", "-",
+        [-0.5, 0.5], None, (100.0, "%"), "flow-gain difference between the spool directions"),
+    entry!("corrections.flow_gain_direction_width_m", plant.corrections.flow_gain_direction_width_m,
+        "w_dir", "m", [0.0, 0.01], None, (1e6, "µm"),
+        "spool travel over which the direction difference builds up"),
+    entry!("corrections.flow_gain_return_edge", plant.corrections.flow_gain_return_edge, "e_edge", "-",
+        [-0.5, 0.5], None, (100.0, "%"), "flow-gain difference between tank and supply edges"),
+    entry!("corrections.spring_n_per_m", plant.corrections.spring_n_per_m, "k_c", "N/m",
+        [-1e5, 1e5], None, (1.0, "N/m"), "spring on the body beyond the declared stiffness"),
+    entry!("corrections.quadratic_damping_n_s2_per_m2", plant.corrections.quadratic_damping_n_s2_per_m2,
+        "c_q", "N·s²/m²", [0.0, 1e6], None, (1.0, "N·s²/m²"), "damping quadratic in the velocity"),
+    entry!("corrections.turbulent_leakage_m3_per_s_sqrt_pa",
+        plant.corrections.turbulent_leakage_m3_per_s_sqrt_pa, "c_t", "m³/(s·√Pa)", [0.0, 1e-7], None,
+        (1.0, "m³/(s·√Pa)"), "leakage across the piston growing with √|Δp|"),
 ];
 
 /// The table entry of a dotted key (`valve.cd`), `None` for an unknown key.
@@ -376,6 +392,7 @@ mod tests {
             include_str!("numerics.rs"),
             include_str!("effects.rs"),
             include_str!("sensors.rs"),
+            include_str!("corrections.rs"),
         ];
         let section = |ty: &str| -> Option<&str> {
             Some(match ty {
@@ -390,6 +407,7 @@ mod tests {
                 "LinearParams" => "linear",
                 "NumericsParams" => "numerics",
                 "SensorParams" => "sensors",
+                "CorrectionParams" => "corrections",
                 "FrictionEffect" => "effects.friction",
                 "OverlapEffect" => "effects.valve_overlap",
                 "OffsetEffect" => "effects.valve_offset",

@@ -61,6 +61,21 @@ fn demo_campaign_loads_from_the_menu_and_replays_with_the_live_parameters() {
         v.weighted_rms
     );
     h.get_by_label_contains("Measured vs twin");
+    // Issue 20: the window judges the record by the report's raw error measure (every raw
+    // channel and band against its noise floor), not by the weighted velocity error: the
+    // same numbers as the calibration's raw_error for this record and parameters.
+    let rec = &m.records[v.record];
+    let same = seat_twin::identify::raw_error::raw_error_report(
+        std::slice::from_ref(&*rec.prepared),
+        &[
+            &seat_twin::identify::replay::replay_prepared(&v.params, &rec.prepared)
+                .unwrap()
+                .sim,
+        ],
+        seat_twin::identify::raw_error::DEFAULT_LIMIT,
+    );
+    assert_eq!(v.raw, same);
+    h.get_by_label_contains("raw error: ");
 
     // A slider change re-runs the replay with the new parameters.
     let before = v.errors.du;

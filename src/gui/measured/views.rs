@@ -153,15 +153,18 @@ impl MeasuredData {
                 _ => String::new(),
             }
         ));
-        let above = v.weighted_rms > self.options.noise_level;
+        // The verdict's measure: every raw channel and band against its noise floor.
+        let above = !v.raw.at_floor();
         ui.label(
             RichText::new(format!(
-                "weighted error {:.2} (1.0 = sensor noise): {}",
-                v.weighted_rms,
+                "raw error: {}",
                 if above {
-                    "above the noise, the twin misses something here"
+                    format!(
+                        "above the noise floor, the twin misses something here: {}",
+                        v.raw.summary()
+                    )
                 } else {
-                    "at the noise level (or within 1 % of the signal)"
+                    v.raw.summary()
                 }
             ))
             .color(if above {
@@ -170,6 +173,10 @@ impl MeasuredData {
                 Color32::from_rgb(40, 160, 60)
             }),
         );
+        ui.weak(format!(
+            "weighted error {:.2} (the fit's metric, 1.0 = sensor noise)",
+            v.weighted_rms
+        ));
         let w = &v.whiteness;
         ui.weak(format!(
             "whiteness of the (25 Hz low-passed, so never white) residual: lag-1 \

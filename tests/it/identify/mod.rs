@@ -15,6 +15,8 @@
 //! library effect, the pairs and an effect outside the library; `records` checks the replay
 //! of the raw records, degenerate data and the held-out claims of `calibrated.toml`.
 
+mod campaigns;
 mod effects;
 mod records;
 mod rig;
+mod survey;

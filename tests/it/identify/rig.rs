@@ -34,8 +34,22 @@ pub(super) struct RigEffects {
     /// start. The stroke drifts slowly, faster and faster; a constant offset can follow its
     /// mean only.
     pub(super) null_drift_v_per_s: Option<f64>,
+    /// Outside the library: a discharge coefficient that rises with the opening and levels
+    /// off (the jet angle changing), `Cd·(1 + c·(1 − exp(−|x|/0.2 mm)))`.
+    pub(super) cd_opening: Option<f64>,
+    /// Outside the library: a damping force that grows with the square of the velocity (oil
+    /// forced through a gap), `c·u̇·√(u̇² + (5 mm/s)²)` with `c` in N·s²/m².
+    pub(super) quadratic_damping: Option<f64>,
+    /// Outside the library: a spring the declared stiffness lacks (a seat cushion), slightly
+    /// progressive: `k·u·(1 + (u/30 mm)²)` with `k` in N/m.
+    pub(super) extra_spring: Option<f64>,
+    /// A drift, not an effect: the discharge coefficient grows by this fraction from one test
+    /// to the next (oil warming up through the campaign: test i has Cd·(1 + d·i)).
+    pub(super) cd_drift_per_test: Option<f64>,
     /// Sensor, not plant: the body accelerometer reads this fraction of the truth.
     pub(super) ydd_scale: Option<f64>,
+    /// Sensor, not plant: the body accelerometer's offset [m/s²].
+    pub(super) ydd_offset: Option<f64>,
     /// Sensor, not plant: the stroke sensor's first-order lag [s], integrated at the rig's
     /// step.
     pub(super) u_lag_s: Option<f64>,
@@ -102,7 +116,15 @@ impl Rig {
         } else {
             0.0
         };
-        let ydd = (-k * u - p1 * area + p2 * area - ff + stop) / m;
+        let fq = self
+            .fx
+            .quadratic_damping
+            .map_or(0.0, |c| c * du * (du * du + 25e-6).sqrt());
+        let fk = self
+            .fx
+            .extra_spring
+            .map_or(0.0, |ke| ke * u * (1.0 + (u / 0.03).powi(2)));
+        let ydd = (-k * u - p1 * area + p2 * area - ff - fq - fk + stop) / m;
         // Valve opening.
         let mut x = xv.clamp(-0.8e-3, 0.8e-3) - self.fx.offset.unwrap_or(0.0);
         if let Some(ov) = self.fx.overlap {
@@ -115,6 +137,10 @@ impl Rig {
         let cd = match self.fx.cd_spool {
             Some(a) => self.cd * (1.0 + a * (x / 1e-4).tanh()),
             None => self.cd,
+        };
+        let cd = match self.fx.cd_opening {
+            Some(c) => cd * (1.0 + c * (1.0 - (-x.abs() / 2e-4).exp())),
+            None => cd,
         };
         let g = cd * 0.0251 * (2.0 / rho).sqrt() * x;
         let supply = |p_line: f64| -> f64 {
@@ -162,12 +188,25 @@ impl Rig {
     /// Simulates one test and returns a measured record (1 kHz, noisy, quantised); with
     /// `pressures`, the chamber pressures too (Pa gauge, 0.2 bar noise, 12-bit on 250 bar).
     pub(super) fn record(&self, test: &Test, seed: u64, pressures: bool) -> Record {
+        self.record_at(test, seed, pressures, 1000.0)
+    }
+
+    /// [`Self::record`] sampled at `rate_hz` (a divisor of the rig's 20 kHz step rate,
+    /// 200 Hz … 10 kHz), with the same sensor noise per sample.
+    pub(super) fn record_at(
+        &self,
+        test: &Test,
+        seed: u64,
+        pressures: bool,
+        rate_hz: f64,
+    ) -> Record {
         let h = 5e-5;
-        let per_sample = 20;
+        let per_sample = (1.0 / (rate_hz * h)).round() as usize;
+        let dt_s = per_sample as f64 * h;
         let dur = match test {
             Test::Sine { dur, .. } | Test::Ride { dur } => *dur,
         };
-        let n = (dur * 1000.0).round() as usize + 1;
+        let n = (dur / dt_s).round() as usize + 1;
         let mut y = [0.0; 10];
         for i in [2, 3, 6, 7] {
             y[i] = 55e5;
@@ -211,7 +250,7 @@ impl Rig {
         hist.push(cmd(0.0, &y));
         for s in 0..n {
             let (x, _, xdd) = plat(t);
-            t_col.push(s as f64 * 1e-3);
+            t_col.push(s as f64 * dt_s);
             v_col.push(hist[hist.len() - 1]);
             let u_true = if self.fx.u_lag_s.is_some() {
                 u_sensed
@@ -224,6 +263,7 @@ impl Rig {
             xdd_col.push(xdd + acc_noise.sample(&mut rng));
             ydd_col.push(
                 self.fx.ydd_scale.unwrap_or(1.0) * self.body_acc(&y, xdd)
+                    + self.fx.ydd_offset.unwrap_or(0.0)
                     + acc_noise.sample(&mut rng),
             );
             if pressures {
@@ -271,7 +311,7 @@ impl Rig {
                 Test::Ride { .. } => "ride.csv".into(),
             }),
             metadata: vec![],
-            dt: 1e-3,
+            dt: dt_s,
             t: t_col,
             v_in: Some(v_col),
             u: Some(u_col),
@@ -286,9 +326,27 @@ impl Rig {
 }
 
 pub(super) fn campaign(fx: RigEffects, seed: u64, pressures: bool) -> Vec<Record> {
-    let rig = Rig {
-        cd: 0.95 * 0.1506,
-        tau: 0.0175 + 0.0015,
+    campaign_at(fx, seed, pressures, 1000.0)
+}
+
+/// The five tests of [`campaign`] sampled at `rate_hz`.
+pub(super) fn campaign_at(fx: RigEffects, seed: u64, pressures: bool, rate_hz: f64) -> Vec<Record> {
+    campaign_of(0.95 * 0.1506, 0.0175 + 0.0015, fx, seed, pressures, rate_hz)
+}
+
+/// The five tests of [`campaign`] on a rig of discharge coefficient `cd` and valve delay
+/// `tau` [s], sampled at `rate_hz`.
+pub(super) fn campaign_of(
+    cd: f64,
+    tau: f64,
+    fx: RigEffects,
+    seed: u64,
+    pressures: bool,
+    rate_hz: f64,
+) -> Vec<Record> {
+    let rig = |i: usize| Rig {
+        cd: cd * (1.0 + fx.cd_drift_per_test.unwrap_or(0.0) * i as f64),
+        tau,
         fx,
     };
     let tests = [
@@ -317,7 +375,7 @@ pub(super) fn campaign(fx: RigEffects, seed: u64, pressures: bool) -> Vec<Record
     tests
         .iter()
         .enumerate()
-        .map(|(i, t)| rig.record(t, seed * 100 + i as u64, pressures))
+        .map(|(i, t)| rig(i).record_at(t, seed * 100 + i as u64, pressures, rate_hz))
         .collect()
 }
 

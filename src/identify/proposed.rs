@@ -1,0 +1,431 @@
+//! Beyond the library (issue 20, item 2): when the library's twin leaves a raw residual above
+//! the noise floor, a family of physically meaningful corrections
+//! ([`crate::params::CorrectionParams`]) is searched the way the library is: each candidate
+//! is fitted on top of the current model with the current knobs but the mass, ranked by ΔBIC
+//! on the fit records, and the best is re-fitted with every knob and kept only when it removes
+//! at least [`CalibrationOptions::min_relative_gain`] of the residual *and* lowers the
+//! weighted error on the held-out records by [`CalibrationOptions::min_validation_gain`].
+//! Rounds repeat up to [`CalibrationOptions::max_proposed`] terms. What is kept is
+//! *proposed*: the verdict stays the library's, and the report says in physical words what the
+//! terms are and whether they bring every raw channel to its floor.
+
+use super::effects::{SearchContext, best_of, validation_rms};
+use super::fit::{self, FitResult, Knob};
+use super::progress::Stage;
+use super::{CalibrationOptions, IdentifyError};
+use crate::params::Params;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A correction term beyond the library, one parameter each.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum CorrectionId {
+    /// Discharge coefficient changing with the spool opening.
+    CdOpening,
+    /// Flow gain differing between the spool directions.
+    FlowDirection,
+    /// Flow gain differing between the metering edges to tank and from supply.
+    ReturnEdge,
+    /// A spring on the body beyond the declared stiffness.
+    Spring,
+    /// Damping quadratic in the velocity.
+    QuadraticDamping,
+    /// Leakage across the piston growing with √|Δp|.
+    TurbulentLeakage,
+}
+
+impl CorrectionId {
+    /// Every correction of the family.
+    pub const ALL: [CorrectionId; 6] = [
+        CorrectionId::CdOpening,
+        CorrectionId::FlowDirection,
+        CorrectionId::ReturnEdge,
+        CorrectionId::Spring,
+        CorrectionId::QuadraticDamping,
+        CorrectionId::TurbulentLeakage,
+    ];
+
+    /// The id in reports (`cd_opening`, `flow_direction`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            CorrectionId::CdOpening => "cd_opening",
+            CorrectionId::FlowDirection => "flow_direction",
+            CorrectionId::ReturnEdge => "return_edge",
+            CorrectionId::Spring => "spring",
+            CorrectionId::QuadraticDamping => "quadratic_damping",
+            CorrectionId::TurbulentLeakage => "turbulent_leakage",
+        }
+    }
+
+    /// The parameter that sizes it (the first of [`Self::knobs`]).
+    pub fn knob(self) -> Knob {
+        self.knobs()[0]
+    }
+
+    /// The parameters fitted for it: its size, and for the direction difference the spool
+    /// travel it builds up over.
+    pub fn knobs(self) -> &'static [Knob] {
+        match self {
+            CorrectionId::CdOpening => &[Knob::CdSlope],
+            CorrectionId::FlowDirection => &[Knob::FlowDirection, Knob::FlowDirectionWidth],
+            CorrectionId::ReturnEdge => &[Knob::ReturnEdge],
+            CorrectionId::Spring => &[Knob::ExtraSpring],
+            CorrectionId::QuadraticDamping => &[Knob::QuadraticDamping],
+            CorrectionId::TurbulentLeakage => &[Knob::TurbulentLeakage],
+        }
+    }
+
+    /// Whether its parameter has a sign (else it is `≥ 0`).
+    fn signed(self) -> bool {
+        !matches!(
+            self,
+            CorrectionId::QuadraticDamping | CorrectionId::TurbulentLeakage
+        )
+    }
+
+    /// The term in physical words, with its value `v` and 1-σ uncertainty `s` (SI).
+    pub fn describe(self, v: f64, s: f64, p: &Params) -> String {
+        let pm = |x: f64, dx: f64, d: usize| format!("{x:.d$} ± {dx:.d$}");
+        match self {
+            CorrectionId::CdOpening => format!(
+                "Cd {} {} % from small to full spool opening",
+                if v >= 0.0 { "rises" } else { "falls" },
+                pm(100.0 * v.abs(), 100.0 * s, 1)
+            ),
+            CorrectionId::FlowDirection => {
+                // Gain ratio (1 + a)/(1 − a) − 1 ≈ 2a.
+                let r = (1.0 + v) / (1.0 - v) - 1.0;
+                let dr = 2.0 * s / (1.0 - v).powi(2);
+                format!(
+                    "the valve passes {} % {} flow with the spool opened positive (supply to \
+                     chamber 2) than negative, at the same opening and pressure drop",
+                    pm(100.0 * r.abs(), 100.0 * dr, 1),
+                    if r >= 0.0 { "more" } else { "less" }
+                )
+            }
+            CorrectionId::ReturnEdge => {
+                let r = (1.0 + v) / (1.0 - v) - 1.0;
+                let dr = 2.0 * s / (1.0 - v).powi(2);
+                format!(
+                    "the metering edges to tank pass {} % {} flow than the edges from supply \
+                     at the same opening and pressure drop",
+                    pm(100.0 * r.abs(), 100.0 * dr, 1),
+                    if r >= 0.0 { "more" } else { "less" }
+                )
+            }
+            CorrectionId::Spring => format!(
+                "a spring of {} N/m acts on the body beyond the declared stiffness ({:+.1} % of \
+                 its {:.0} N/m)",
+                pm(v, s, 0),
+                100.0 * v / p.plant.body.stiffness_n_per_m,
+                p.plant.body.stiffness_n_per_m
+            ),
+            CorrectionId::QuadraticDamping => format!(
+                "a damping force quadratic in the velocity, c·u̇·|u̇| with c = {} N·s²/m² \
+                 ({:.1} N at 0.1 m/s)",
+                pm(v, s, 0),
+                v * 0.01
+            ),
+            CorrectionId::TurbulentLeakage => format!(
+                "a leakage across the piston growing with the square root of the pressure \
+                 difference: {} L/min at 10 bar",
+                pm(6e4 * v * 1e3, 6e4 * s * 1e3, 3)
+            ),
+        }
+    }
+}
+
+/// A term proposed beyond the library (`report.json`'s `proposed` list).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProposedTerm {
+    /// The term's id ([`CorrectionId::name`]).
+    pub name: String,
+    /// What it is, in physical words, with its value and uncertainty.
+    pub description: String,
+    /// Its parameter (SI) by preset-key name (`cd_opening_slope`, …).
+    pub params: BTreeMap<String, f64>,
+    /// 1-σ uncertainty of each parameter (SI).
+    pub uncertainties: BTreeMap<String, f64>,
+    /// Why it was kept: ΔBIC, share of the residual removed, held-out error.
+    pub evidence: String,
+}
+
+/// One candidate correction's score in one round.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProposedScore {
+    /// The correction.
+    pub name: String,
+    /// Round (1 = first).
+    pub round: usize,
+    /// ΔBIC against the model of the round (negative = better).
+    pub score: f64,
+    /// Share of the residual sum of squares removed [-].
+    pub relative_gain: f64,
+    /// Its fitted parameter (SI).
+    pub value: f64,
+}
+
+/// What the search beyond the library found.
+#[derive(Debug, Clone)]
+pub struct Proposal {
+    /// The fit with the kept terms (every knob re-fitted), at the fit step.
+    pub fit: FitResult,
+    /// Its knobs.
+    pub knobs: Vec<Knob>,
+    /// The kept terms, in order, with their ΔBIC, gain and held-out error `[before, after]`.
+    pub kept: Vec<(CorrectionId, f64, f64, [f64; 2])>,
+    /// Every candidate's score, per round.
+    pub candidates: Vec<ProposedScore>,
+    /// Notes (rejected terms).
+    pub notes: Vec<String>,
+}
+
+/// Coarse start for a correction: its parameter on a small grid (both signs when signed), the
+/// best of the grid and zero.
+fn multi_start(
+    cx: &SearchContext<'_>,
+    current: &Params,
+    c: CorrectionId,
+) -> Result<Params, IdentifyError> {
+    let mut grid = vec![0.0];
+    for g in [0.3, 1.0, 3.0] {
+        grid.push(g);
+        if c.signed() {
+            grid.push(-g);
+        }
+    }
+    let starts: Vec<Params> = grid
+        .iter()
+        .map(|&g| {
+            let mut p = *current;
+            c.knob().set(&mut p, g);
+            if c.knobs().len() > 1 {
+                // The direction difference starts built up over 50 µm.
+                c.knobs()[1].set(&mut p, 0.5);
+            }
+            p
+        })
+        .collect();
+    Ok(best_of(cx.ev, &starts)?.unwrap_or(*current))
+}
+
+/// Rounds of ranking and re-fitting corrections from the library's final fit `start` (of
+/// `knobs`), as described in the [module docs](self). `None` when nothing was kept.
+pub fn search(
+    cx: &SearchContext<'_>,
+    start: &FitResult,
+    knobs: &[Knob],
+) -> Result<Option<Proposal>, IdentifyError> {
+    let (ev, options): (_, &CalibrationOptions) = (cx.ev, cx.options);
+    let mut current = start.clone();
+    let mut knobs = knobs.to_vec();
+    let mut current_val = validation_rms(&current.params, cx.validation)?;
+    let mut remaining = CorrectionId::ALL.to_vec();
+    let (mut kept, mut candidates, mut notes) = (Vec::new(), Vec::new(), Vec::new());
+    let mut round = 0;
+    while !remaining.is_empty() && kept.len() < options.max_proposed && round < 6 {
+        round += 1;
+        ev.monitor
+            .enter(Stage::Proposed { round }, remaining.len() + 1);
+        let screen: Vec<Knob> = knobs.iter().copied().filter(|k| *k != Knob::Mass).collect();
+        let fits: Vec<Result<(CorrectionId, FitResult), IdentifyError>> = remaining
+            .par_iter()
+            .map(|&c| {
+                let mut ks = screen.clone();
+                ks.extend_from_slice(c.knobs());
+                let p0 = multi_start(cx, &current.params, c)?;
+                let f = fit::fit(ev, &p0, &ks, options.screen_iterations, cx.bic.ratio())?;
+                ev.monitor.advance();
+                Ok((c, f))
+            })
+            .collect();
+        ev.monitor.check()?;
+        let mut ranked = Vec::new();
+        for f in fits {
+            let (c, f) = f?;
+            let k = c.knobs().len();
+            let score =
+                cx.bic.value(f.rss, knobs.len() + k) - cx.bic.value(current.rss, knobs.len());
+            let gain = 1.0 - f.rss / current.rss;
+            candidates.push(ProposedScore {
+                name: c.name().into(),
+                round,
+                score,
+                relative_gain: gain,
+                value: c.knob().value(&f.params),
+            });
+            ranked.push((c, f, score, gain));
+        }
+        ranked.sort_by(|a, b| a.2.total_cmp(&b.2));
+        let Some((c, screened, score, gain)) = ranked.into_iter().next() else {
+            break;
+        };
+        if !(score < 0.0 && gain >= options.min_relative_gain) {
+            break;
+        }
+        remaining.retain(|r| *r != c);
+        let mut trial_knobs = knobs.clone();
+        trial_knobs.extend_from_slice(c.knobs());
+        let refit = fit::fit(
+            ev,
+            &screened.params,
+            &trial_knobs,
+            options.max_iterations,
+            cx.bic.ratio(),
+        )?;
+        let val = validation_rms(&refit.params, cx.validation)?;
+        ev.monitor.advance();
+        // A NaN held-out error does not improve it either.
+        let improves = val < (1.0 - options.min_validation_gain) * current_val;
+        if !improves {
+            notes.push(format!(
+                "proposed round {round}: `{}` improved the fit records (ΔBIC {score:.1}, {:.1} % \
+                 of the residual) but not the held-out ones (validation weighted RMS \
+                 {current_val:.3} → {val:.3}): not proposed",
+                c.name(),
+                100.0 * gain
+            ));
+            continue;
+        }
+        kept.push((c, score, gain, [current_val, val]));
+        knobs = trial_knobs;
+        current = refit;
+        current_val = val;
+    }
+    Ok((!kept.is_empty()).then_some(Proposal {
+        fit: current,
+        knobs,
+        kept,
+        candidates,
+        notes,
+    }))
+}
+
+/// The kept terms of `proposal` as reported, with the values of its final fit `fit`.
+pub fn terms(proposal: &Proposal, fit: &FitResult) -> Vec<ProposedTerm> {
+    proposal
+        .kept
+        .iter()
+        .map(|&(c, score, gain, [v0, v1])| {
+            let value = |k: Knob| {
+                fit.values
+                    .iter()
+                    .find(|x| x.knob == k)
+                    .map_or((k.value(&fit.params), f64::NAN), |x| (x.value, x.std))
+            };
+            let (v, s) = value(c.knob());
+            let mut description = c.describe(v, s, &fit.params);
+            if c == CorrectionId::FlowDirection {
+                let (w, sw) = value(Knob::FlowDirectionWidth);
+                description.push_str(&format!(
+                    ", building up over {:.0} ± {:.0} µm of spool travel about null",
+                    1e6 * w,
+                    1e6 * sw
+                ));
+            }
+            ProposedTerm {
+                name: c.name().into(),
+                description,
+                params: c
+                    .knobs()
+                    .iter()
+                    .map(|k| (k.name().to_string(), value(*k).0))
+                    .collect(),
+                uncertainties: c
+                    .knobs()
+                    .iter()
+                    .map(|k| (k.name().to_string(), value(*k).1))
+                    .collect(),
+                evidence: format!(
+                    "ΔBIC = {score:.1} when added; removed {:.1} % of the remaining weighted \
+                     residual sum of squares on the fit records; validation weighted RMS \
+                     {v0:.3} → {v1:.3} on the held-out records",
+                    100.0 * gain
+                ),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// calibrated.toml carries the proposed terms (`[corrections]`, read back exactly), and
+    /// the twin a replay builds from it applies them: at rest pressures and 1 cm of stroke, a
+    /// spring of 500 N/m changes the body acceleration by −500·0.01/m; a 10 % flow gain for
+    /// a positive spool raises the supply-edge flow by 10 %.
+    #[test]
+    fn calibrated_toml_carries_the_terms_and_the_twin_applies_them() {
+        use crate::model::{Inputs, Model, twin::Twin};
+        use crate::preset::{Preset, PresetMeta};
+        let mut p = Params::paper();
+        p.plant.corrections.spring_n_per_m = 500.0;
+        p.plant.corrections.flow_gain_direction = 0.1;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("calibrated.toml");
+        Preset {
+            meta: PresetMeta::default(),
+            params: p,
+        }
+        .save(&path)
+        .unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains("[corrections]"), "{text}");
+        let loaded = Preset::load(&path).unwrap().params;
+        assert_eq!(loaded.plant.corrections, p.plant.corrections);
+        let (plain, corrected) = (Twin::new(Params::paper()), Twin::new(loaded));
+        let mut y = plain.rest_state();
+        y[0] = 0.01;
+        let inputs = Inputs {
+            v_valve: 0.0,
+            xdd: 0.0,
+        };
+        let (a0, a1) = (
+            plain.derivatives(0.0, &y, &inputs)[1],
+            corrected.derivatives(0.0, &y, &inputs)[1],
+        );
+        let m = p.plant.body.mass_kg;
+        assert!((a1 - a0 + 500.0 * 0.01 / m).abs() < 1e-9, "{a0} {a1}");
+        let x = 4e-4;
+        let (f0, f1) = (
+            plain.valve_flows(x, 50e5, 50e5),
+            corrected.valve_flows(x, 50e5, 50e5),
+        );
+        assert!((f1.q2v / f0.q2v - 1.1).abs() < 1e-12, "{f0:?} {f1:?}");
+        assert!((f1.q1v / f0.q1v - 1.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn corrections_have_distinct_knobs_and_words() {
+        let p = Params::paper();
+        let mut knobs: Vec<Knob> = CorrectionId::ALL
+            .iter()
+            .flat_map(|c| c.knobs().to_vec())
+            .collect();
+        let n = knobs.len();
+        knobs.dedup();
+        assert_eq!(knobs.len(), n);
+        assert_eq!(
+            CorrectionId::CdOpening.describe(0.05, 0.004, &p),
+            "Cd rises 5.0 ± 0.4 % from small to full spool opening"
+        );
+        let d = CorrectionId::Spring.describe(-368.0, 12.0, &p);
+        assert!(d.contains("-368 ± 12 N/m") && d.contains("-10.0 %"), "{d}");
+        // A flow gain 1.05 one way and 0.95 the other: 10.5 % more flow.
+        let d = CorrectionId::FlowDirection.describe(0.05, 0.001, &p);
+        assert!(
+            d.starts_with("the valve passes 10.5 ± 0.2 % more flow"),
+            "{d}"
+        );
+        // The parameter round-trips through its knob.
+        for c in CorrectionId::ALL {
+            let mut q = p;
+            c.knob().set(&mut q, 0.7);
+            assert!((c.knob().theta(&q) - 0.7).abs() < 1e-12, "{}", c.name());
+            q.validate().unwrap();
+        }
+    }
+}

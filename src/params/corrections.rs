@@ -1,0 +1,112 @@
+//! Corrections beyond the effect library: terms that `seat-twin calibrate` proposes when the
+//! library leaves a residual (issue 20, item 2). Each is a physically meaningful term of the
+//! twin's equations, zero (off) by default; `calibrated.toml` carries the proposed ones and
+//! the twin (replay, simulation, app) applies them.
+
+use serde::{Deserialize, Serialize};
+
+/// Proposed terms of the twin's equations, all zero by default (the paper's twin).
+///
+/// * Valve flow, Eqs. (12)–(13): the orifice gain `Cd·ka·xv` is multiplied by
+///   `(1 + s·(|x|/xv,max − ½))·(1 + a·x/√(x² + w²))·(1 ± e)`: `s` a discharge coefficient
+///   that changes from small to full opening, `a` a flow gain that differs between the two
+///   spool directions (`+a` for `xv > 0`, supply to chamber 2), built up over a spool travel
+///   `w` about null, `e` a flow gain that differs between the metering edges to tank
+///   (`1 + e`) and from supply (`1 − e`).
+/// * Body force, Eq. (1): `− k_c·u − c_q·u̇·|u̇|` (a spring not in the declared stiffness;
+///   a damping quadratic in the velocity, as an orifice or a seat cushion's air gives it).
+/// * Chamber flows, Eqs. (4)–(5): a leakage across the piston that grows with the square root
+///   of the pressure difference (a turbulent gap), `c_t·sign(Δp)·√|Δp|`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct CorrectionParams {
+    /// Relative change `s` of the discharge coefficient from small to full spool opening [-], -0.5 ..= 0.5 (0: Cd constant).
+    pub cd_opening_slope: f64,
+    /// Flow-gain difference `a` between the spool directions [-], -0.5 ..= 0.5; gain `1 + a` for `xv > 0`, `1 − a` for `xv < 0`.
+    pub flow_gain_direction: f64,
+    /// Spool travel `w` over which the direction difference builds up [m], 0 ..= 0.01; the gain is `1 + a·x/√(x² + w²)` (0: a sharp step at null).
+    pub flow_gain_direction_width_m: f64,
+    /// Flow-gain difference `e` between the metering edges [-], -0.5 ..= 0.5; gain `1 + e` on the edges to tank, `1 − e` on the edges from supply.
+    pub flow_gain_return_edge: f64,
+    /// Spring `k_c` on the body beyond the declared stiffness [N/m], -1e5 ..= 1e5.
+    pub spring_n_per_m: f64,
+    /// Quadratic damping `c_q` on the body [N·s²/m²], 0 ..= 1e6.
+    pub quadratic_damping_n_s2_per_m2: f64,
+    /// Turbulent leakage `c_t` across the piston [m³/(s·√Pa)], 0 ..= 1e-7.
+    pub turbulent_leakage_m3_per_s_sqrt_pa: f64,
+}
+
+impl CorrectionParams {
+    /// Whether any term is non-zero.
+    pub fn any(&self) -> bool {
+        *self != Self::default()
+    }
+
+    /// Whether a valve-flow term is non-zero.
+    pub fn valve(&self) -> bool {
+        self.cd_opening_slope != 0.0
+            || self.flow_gain_direction != 0.0
+            || self.flow_gain_return_edge != 0.0
+    }
+
+    /// Gains of the supply and the return edge for an opening `x` of a valve of travel
+    /// `xv_max` [m], relative to the uncorrected gain: `(supply, return)`.
+    #[inline(always)]
+    pub fn edge_gains(&self, x: f64, xv_max: f64) -> (f64, f64) {
+        let w = self.flow_gain_direction_width_m;
+        let sign = if w > 0.0 {
+            x / (x * x + w * w).sqrt()
+        } else {
+            x.signum()
+        };
+        let m = (1.0 + self.cd_opening_slope * (x.abs() / xv_max - 0.5))
+            * (1.0 + self.flow_gain_direction * sign);
+        (
+            m * (1.0 - self.flow_gain_return_edge),
+            m * (1.0 + self.flow_gain_return_edge),
+        )
+    }
+
+    /// Force of the body terms [N] at relative position `u` [m] and velocity `du` [m/s],
+    /// acting on the body (negative = downward).
+    #[inline(always)]
+    pub fn body_force(&self, u: f64, du: f64) -> f64 {
+        -self.spring_n_per_m * u - self.quadratic_damping_n_s2_per_m2 * du * du.abs()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The documented laws at hand-computed points.
+    #[test]
+    fn corrections_follow_their_documented_laws() {
+        let c = CorrectionParams {
+            cd_opening_slope: 0.1,
+            flow_gain_direction: 0.05,
+            flow_gain_return_edge: 0.02,
+            flow_gain_direction_width_m: 0.0,
+            spring_n_per_m: 500.0,
+            quadratic_damping_n_s2_per_m2: 2000.0,
+            turbulent_leakage_m3_per_s_sqrt_pa: 0.0,
+        };
+        // Full opening, positive: (1 + 0.05)·(1.05) and the edges ∓2 %.
+        let (s, r) = c.edge_gains(8e-4, 8e-4);
+        assert!((s - 1.05 * 1.05 * 0.98).abs() < 1e-12);
+        assert!((r - 1.05 * 1.05 * 1.02).abs() < 1e-12);
+        // Small opening, negative: (1 − 0.05)·(1 − 0.05).
+        let (s, _) = c.edge_gains(-1e-9, 8e-4);
+        assert!((s - 0.95 * 0.95 * 0.98).abs() < 1e-6);
+        // Cd rises by s from small to full opening (direction and edge terms off).
+        let only_s = CorrectionParams {
+            cd_opening_slope: 0.1,
+            ..Default::default()
+        };
+        let (full, _) = only_s.edge_gains(8e-4, 8e-4);
+        let (small, _) = only_s.edge_gains(1e-12, 8e-4);
+        assert!((full - small - 0.1).abs() < 1e-9);
+        assert!((c.body_force(0.01, -0.1) - (-5.0 + 20.0)).abs() < 1e-12);
+        assert!(!CorrectionParams::default().any() && c.any() && c.valve());
+    }
+}
