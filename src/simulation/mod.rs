@@ -547,9 +547,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         let (h, n) = (self.run.h, self.run.steps);
         let xdd0 = self.xdd_now;
         let xdd1 = self.platform.xdd_at_grid(n + 1, h, self.stride);
-        let v0 = self
-            .valve_now
-            .unwrap_or_else(|| self.valve_at_grid(n, 1.0));
+        let v0 = self.valve_now.unwrap_or_else(|| self.valve_at_grid(n, 1.0));
         let v1 = self.valve_at_grid(n + 1, -1.0);
         let mut y = self.y;
         hold.step(&mut y, [v0, xdd0], [v1, xdd1]);
