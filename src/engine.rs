@@ -8,9 +8,17 @@
 //!
 //! A numerical blow-up or a panic inside a step is caught, reported as
 //! [`Event::Error`] and leaves the thread alive, waiting for [`Command::Reset`].
+//!
+//! In a browser (wasm32) there is no thread: [`spawn`] keeps the same loop inside the
+//! handle, and [`EngineHandle::pump`], called once per frame by the app, handles the
+//! commands and steps it under a time budget. The protocol and the app code are the same on
+//! both (on the desktop `pump` does nothing); a panic there is not caught (wasm aborts).
 
 use crate::analysis::watch::{Finding, Watch};
 use crate::control::ControlLaw;
+use crate::experiments::LTI_MAX_STEP_S;
+use crate::lti::{LinearTimeInvariant, LtiSimulation};
+use crate::model::Model;
 use crate::model::linear::LinearModel;
 use crate::model::passive::PassiveModel;
 use crate::model::twin::Twin;
@@ -18,12 +26,14 @@ use crate::params::ControllerParams;
 use crate::params::Params;
 use crate::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, SampledMotion};
 use crate::seat_test::{ClassMotion, InputClass};
-use crate::simulation::{ContactEvent, Drive, Run, Sample, SimError, Simulation, step_for_rate};
+use crate::simulation::{
+    CommandPath, ContactEvent, Drive, Run, Sample, SimError, Simulation, step_for_rate,
+};
 use serde::{Deserialize, Serialize};
 use std::panic::AssertUnwindSafe;
-use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
-use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::time::Duration;
+use web_time::Instant;
 
 /// Rate at which samples are streamed to the UI [Hz].
 pub const STREAM_RATE_HZ: f64 = 500.0;
@@ -227,6 +237,10 @@ pub enum Command {
     Pause,
     /// Back to rest at t = 0 (also clears an error).
     Reset,
+    /// What happens when a finite excitation (random ride, record, class, bump) ends:
+    /// `true` (the default) restarts it from rest (with the next seed); `false` pauses at
+    /// its end, so its whole record can be read (the web page's `?seed=` ride does this).
+    SetRepeat(bool),
     /// End the thread.
     Shutdown,
     /// TEST HOOK, never sent by the app: the next engine step panics inside the
@@ -290,29 +304,135 @@ pub struct EngineHandle {
     pub commands: Sender<Command>,
     /// Receive events here (drain without blocking each frame).
     pub events: Receiver<Event>,
-    join: Option<JoinHandle<()>>,
+    #[cfg(not(target_arch = "wasm32"))]
+    join: Option<std::thread::JoinHandle<()>>,
+    /// The engine stepped in the app's frames (web).
+    #[cfg(target_arch = "wasm32")]
+    local: Option<Local>,
 }
 
 impl EngineHandle {
-    /// Sends a command; returns false if the engine thread is gone.
+    /// Sends a command; returns false if the engine is gone.
     pub fn send(&self, c: Command) -> bool {
         self.commands.send(c).is_ok()
+    }
+
+    /// Lets the engine work for one frame of the app: on the web, handles the commands sent
+    /// since the last frame and steps the models, paced to wall-clock time as the thread
+    /// does, for at most about `budget` of wall time (at [`Speed::Max`] it steps in chunks
+    /// until the budget is spent). On the desktop the thread does this and `pump` returns
+    /// at once.
+    pub fn pump(&mut self, budget: Duration) {
+        #[cfg(target_arch = "wasm32")]
+        if let Some(local) = self.local.as_mut()
+            && !local.pump(budget)
+        {
+            // Shutdown: the loop and its event sender go, so the app sees it disconnected.
+            self.local = None;
+        }
+        #[cfg(not(target_arch = "wasm32"))]
+        let _ = budget;
     }
 }
 
 impl Drop for EngineHandle {
     fn drop(&mut self) {
         let _ = self.commands.send(Command::Shutdown);
+        #[cfg(not(target_arch = "wasm32"))]
         if let Some(j) = self.join.take() {
             let _ = j.join();
         }
     }
 }
 
+/// The engine loop kept in the handle and stepped by [`EngineHandle::pump`] (web).
+#[cfg(target_arch = "wasm32")]
+struct Local {
+    l: Loop<Box<dyn Fn()>>,
+    commands: Receiver<Command>,
+}
+
+#[cfg(target_arch = "wasm32")]
+impl Local {
+    /// One frame's work; false once a [`Command::Shutdown`] arrived.
+    fn pump(&mut self, budget: Duration) -> bool {
+        let pending: Vec<Command> = self.commands.try_iter().collect();
+        for c in pending {
+            if !self.l.handle(c) {
+                return false;
+            }
+        }
+        let t0 = Instant::now();
+        while self.l.running && !self.l.failed {
+            self.l.step_paced();
+            if self.l.speed != Speed::Max || t0.elapsed() >= budget {
+                break;
+            }
+        }
+        true
+    }
+}
+
+/// A linear model stepped as `seat-twin simulate` steps it: exactly (first-order hold at
+/// up to [`LTI_MAX_STEP_S`]) where it can, else RK4 at the twin's step. The exact stepper
+/// cannot take new parameters in mid-run; at the first change the model is re-stepped from
+/// rest to the same instant by RK4 under the parameters it ran with, and goes on by RK4 with
+/// the new ones (the state kept, as the twin keeps its state).
+enum Stepper<M: Model<N>, const N: usize> {
+    Exact(LtiSimulation<M, N>),
+    Rk4(Simulation<M, N>),
+}
+
+impl<M, const N: usize> Stepper<M, N>
+where
+    M: Model<N> + CommandPath + LinearTimeInvariant + Clone,
+{
+    fn new(model: M, h: f64, drive: &Drive, platform: &PlatformMotion) -> Self {
+        let h_exact = step_for_rate(LTI_MAX_STEP_S, STREAM_RATE_HZ);
+        match LtiSimulation::new(model.clone(), h_exact, drive.clone(), platform.clone()) {
+            Some(sim) => Stepper::Exact(sim),
+            None => Stepper::Rk4(Simulation::new(model, h, drive.clone(), platform.clone())),
+        }
+    }
+
+    /// Runs to `t_end` [s], passing the samples at [`STREAM_RATE_HZ`].
+    fn run_until(&mut self, t_end: f64, record: impl FnMut(Sample)) -> Result<(), SimError> {
+        match self {
+            Stepper::Exact(sim) => {
+                let every = ((1.0 / STREAM_RATE_HZ) / sim.step_size()).round() as u64;
+                sim.run_until(t_end, every, record)
+            }
+            Stepper::Rk4(sim) => {
+                let every = ((1.0 / STREAM_RATE_HZ) / sim.step_size()).round() as u64;
+                sim.run_until(t_end, every, record)
+            }
+        }
+    }
+
+    /// New parameters: `model` of them; `before` is how the run was built (the model, step,
+    /// drive and platform of the exact stepper), to re-step it by RK4 to now.
+    fn set_params(&mut self, model: M, params: &Params, before: impl FnOnce() -> Simulation<M, N>) {
+        if let Stepper::Exact(exact) = self {
+            let now = exact.time();
+            let mut rk4 = before();
+            // The same run so far (its samples were streamed already); a failure here shows
+            // in the next step of the live run.
+            let _ = rk4.run_until(now, u64::MAX, |_| {});
+            *self = Stepper::Rk4(rk4);
+        }
+        if let Stepper::Rk4(sim) = self {
+            sim.set_model(model);
+            sim.update_gains(params);
+        }
+    }
+}
+
 struct Sims {
     twin: Simulation<Twin, 10>,
-    linear: Simulation<LinearModel, 3>,
-    passive: Simulation<PassiveModel, 2>,
+    linear: Stepper<LinearModel, 3>,
+    passive: Stepper<PassiveModel, 2>,
+    /// The parameters, RK4 step, drive and platform the run was built with.
+    built: (Params, f64, Drive, PlatformMotion),
     /// The A/B reference twin and its controller.
     reference: Option<(Simulation<Twin, 10>, ControllerParams)>,
     every: u64,
@@ -348,8 +468,9 @@ impl Sims {
         Ok(Self {
             reference,
             twin: Simulation::twin(params, h, drive.clone(), platform.clone()),
-            linear: Simulation::new(LinearModel::new(params), h, drive.clone(), platform.clone()),
-            passive: Simulation::new(PassiveModel::new(params), h, drive, platform),
+            linear: Stepper::new(LinearModel::new(params), h, &drive, &platform),
+            passive: Stepper::new(PassiveModel::new(params), h, &drive, &platform),
+            built: (*params, h, drive, platform),
             every,
             duration,
             contacts_seen: 0,
@@ -363,15 +484,16 @@ impl Sims {
             sim.update_gains(&rp);
         }
         self.twin.set_model(Twin::new(*params));
-        self.linear.set_model(LinearModel::new(params));
-        self.passive.set_model(PassiveModel::new(params));
-        for d in [
-            &mut self.twin as &mut dyn DriveTarget,
-            &mut self.linear,
-            &mut self.passive,
-        ] {
-            d.update_gains(params);
-        }
+        self.twin.update_gains(params);
+        let (p0, h, drive, platform) = &self.built;
+        self.linear
+            .set_params(LinearModel::new(params), params, || {
+                Simulation::new(LinearModel::new(p0), *h, drive.clone(), platform.clone())
+            });
+        self.passive
+            .set_params(PassiveModel::new(params), params, || {
+                Simulation::new(PassiveModel::new(p0), *h, drive.clone(), platform.clone())
+            });
     }
 
     fn time(&self) -> f64 {
@@ -382,10 +504,8 @@ impl Sims {
     fn advance(&mut self, t_end: f64, batch: &mut Batch) -> Result<(), SimError> {
         let every = self.every;
         self.twin.run_until(t_end, every, |s| batch.twin.push(s))?;
-        self.linear
-            .run_until(t_end, every, |s| batch.linear.push(s))?;
-        self.passive
-            .run_until(t_end, every, |s| batch.passive.push(s))?;
+        self.linear.run_until(t_end, |s| batch.linear.push(s))?;
+        self.passive.run_until(t_end, |s| batch.passive.push(s))?;
         if let Some((sim, _)) = self.reference.as_mut() {
             sim.run_until(t_end, every, |s| batch.reference.push(s))?;
         }
@@ -410,17 +530,34 @@ where
 
 /// Starts the engine thread. `waker` is called after events are sent (the app passes
 /// `ctx.request_repaint()`; tests pass a no-op).
+/// On the web the loop lives in the handle instead and runs in [`EngineHandle::pump`].
 pub fn spawn(params: Params, waker: impl Fn() + Send + 'static) -> EngineHandle {
     let (cmd_tx, cmd_rx) = channel::<Command>();
     let (ev_tx, ev_rx) = channel::<Event>();
-    let join = std::thread::Builder::new()
-        .name("seat-twin-engine".into())
-        .spawn(move || engine_loop(params, cmd_rx, ev_tx, waker))
-        .ok();
-    EngineHandle {
-        commands: cmd_tx,
-        events: ev_rx,
-        join,
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let join = std::thread::Builder::new()
+            .name("seat-twin-engine".into())
+            .spawn(move || engine_loop(params, cmd_rx, ev_tx, waker))
+            .ok();
+        EngineHandle {
+            commands: cmd_tx,
+            events: ev_rx,
+            join,
+        }
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let waker: Box<dyn Fn()> = Box::new(waker);
+        let local = Loop::start(params, ev_tx, waker).map(|l| Local {
+            l,
+            commands: cmd_rx,
+        });
+        EngineHandle {
+            commands: cmd_tx,
+            events: ev_rx,
+            local,
+        }
     }
 }
 
@@ -431,6 +568,8 @@ struct Loop<W: Fn()> {
     speed: Speed,
     running: bool,
     failed: bool,
+    /// Restart a finite excitation when it ends ([`Command::SetRepeat`]).
+    repeat: bool,
     sims: Sims,
     events: Sender<Event>,
     waker: W,
@@ -450,36 +589,16 @@ struct Loop<W: Fn()> {
     watch: Watch,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn engine_loop<W: Fn()>(
     params: Params,
     commands: Receiver<Command>,
     events: Sender<Event>,
     waker: W,
 ) {
-    let excitation = Excitation::default();
-    // The default random ride always builds.
-    let Ok(sims) = Sims::new(&params, &excitation, None) else {
+    use std::sync::mpsc::RecvTimeoutError;
+    let Some(mut l) = Loop::start(params, events, waker) else {
         return;
-    };
-    let mut l = Loop {
-        params,
-        excitation,
-        reference: None,
-        speed: Speed::RealTime,
-        running: true,
-        failed: false,
-        sims,
-        events,
-        waker,
-        wall_anchor: Instant::now(),
-        sim_anchor: 0.0,
-        rtf_window: (Instant::now(), 0.0),
-        rtf: 0.0,
-        seed_bump: 0,
-        epoch: 0.0,
-        stepped: 0.0,
-        fault_armed: false,
-        watch: Watch::new(1.0 / STREAM_RATE_HZ),
     };
     let tick = Duration::from_millis(10);
     loop {
@@ -512,6 +631,34 @@ fn engine_loop<W: Fn()>(
 }
 
 impl<W: Fn()> Loop<W> {
+    /// The loop at rest on the default excitation, running at real time (`None` only if
+    /// the default random ride could not be built, which it always can).
+    fn start(params: Params, events: Sender<Event>, waker: W) -> Option<Self> {
+        let excitation = Excitation::default();
+        let sims = Sims::new(&params, &excitation, None).ok()?;
+        Some(Loop {
+            params,
+            excitation,
+            reference: None,
+            speed: Speed::RealTime,
+            running: true,
+            failed: false,
+            repeat: true,
+            sims,
+            events,
+            waker,
+            wall_anchor: Instant::now(),
+            sim_anchor: 0.0,
+            rtf_window: (Instant::now(), 0.0),
+            rtf: 0.0,
+            seed_bump: 0,
+            epoch: 0.0,
+            stepped: 0.0,
+            fault_armed: false,
+            watch: Watch::new(1.0 / STREAM_RATE_HZ),
+        })
+    }
+
     fn send(&self, e: Event) {
         let _ = self.events.send(e);
     }
@@ -590,6 +737,7 @@ impl<W: Fn()> Loop<W> {
                 self.rtf = 0.0;
                 self.restart();
             }
+            Command::SetRepeat(r) => self.repeat = r,
             Command::Shutdown => return false,
             Command::InjectFault => self.fault_armed = true,
         }
@@ -626,7 +774,11 @@ impl<W: Fn()> Loop<W> {
             // Never try to catch up more than 0.25 s of simulated time in one tick.
             t.min(self.sims.time() + 0.25)
         };
-        let t_end = target.min(self.sims.duration);
+        // On the stream's sample grid, where the twin's and the linear models' steps meet,
+        // so that every batch holds the same instants of all three.
+        let dt_out = 1.0 / STREAM_RATE_HZ;
+        let end = (self.sims.duration / dt_out - 1e-9).ceil() * dt_out;
+        let t_end = ((target / dt_out + 1e-9).floor() * dt_out).min(end);
         let mut batch = Batch::default();
         let sims = &mut self.sims;
         let t_before = sims.time();
@@ -679,7 +831,11 @@ impl<W: Fn()> Loop<W> {
             self.rtf = (self.stepped - s0) / dt_wall;
             self.rtf_window = (now, self.stepped);
         }
-        if self.sims.time() >= self.sims.duration - 1e-9 && self.sims.duration.is_finite() {
+        let ended = self.sims.time() >= self.sims.duration - 1e-9 && self.sims.duration.is_finite();
+        if ended && !self.repeat {
+            self.running = false;
+            self.rtf = 0.0;
+        } else if ended {
             self.seed_bump += 1;
             self.epoch += self.sims.time();
             self.restart();

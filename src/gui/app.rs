@@ -8,6 +8,9 @@ mod accessors;
 mod export;
 mod file_ops;
 mod panels;
+mod teaching;
+
+pub use teaching::{PRESENTATION_SCALE, Teaching};
 
 use super::ab::{self, AbAction, AbView};
 use super::controls::{self, ExcitationAction, ExcitationEditor, ExcitationKind, LoadedRecord};
@@ -30,7 +33,8 @@ use serde::{Deserialize, Serialize};
 use std::collections::{BTreeSet, VecDeque};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 /// Theme choice (persisted).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -141,6 +145,10 @@ enum Pending {
     Quit,
 }
 
+/// Wall time the engine may step in one frame on the web, where it has no thread of its own
+/// (at 60 frames a second this leaves about 4 ms for the UI).
+const ENGINE_BUDGET: Duration = Duration::from_millis(12);
+
 /// Longest wait between a wake from a worker (engine, jobs) and the frame that shows it.
 const REPAINT_PERIOD: Duration = Duration::from_millis(33);
 
@@ -248,6 +256,7 @@ pub struct SeatTwinApp {
     tune: super::tune::TunePanel,
     scopes_frozen: bool,
     window_checked: bool,
+    teach: Teaching,
 }
 
 impl SeatTwinApp {
@@ -321,6 +330,7 @@ impl SeatTwinApp {
             tune: super::tune::TunePanel::default(),
             scopes_frozen: false,
             window_checked: false,
+            teach: Teaching::default(),
         };
         if app.settings.excitation.kind == ExcitationKind::Record {
             // The record itself is not persisted.
@@ -720,6 +730,13 @@ impl SeatTwinApp {
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let t0 = Instant::now();
         let ctx = ui.ctx().clone();
+        // On the web the engine runs here, in the frame (on the desktop in its thread).
+        self.engine.pump(ENGINE_BUDGET);
+        #[cfg(target_arch = "wasm32")]
+        if self.engine_view.running && self.settings.speed == Speed::Max {
+            // As fast as it goes: the next frame steps on at once.
+            ctx.request_repaint();
+        }
         self.drain_engine();
         // Ctrl + / Ctrl − change the zoom inside egui: remember it with the settings.
         self.settings.ui_scale = ctx.zoom_factor();
@@ -772,6 +789,7 @@ impl SeatTwinApp {
         if !unstable && !editing {
             self.last_stable = Some(self.params.controller);
         }
+        self.teach.unstable = unstable;
         // No sine dwell of an unstable loop: it would only diverge.
         let dwell_busy = self
             .dwell
@@ -797,6 +815,7 @@ impl SeatTwinApp {
             self.handle_measured(action, &ctx);
         }
         self.confirm_ui(&ctx);
+        self.teaching_ui(&ctx);
         if self.settings.show_debug {
             self.debug_overlay(&ctx);
         }
@@ -859,6 +878,12 @@ impl eframe::App for SeatTwinApp {
             self.title = title;
         }
         SeatTwinApp::ui(self, ui);
+    }
+
+    /// The web page's API reaches the app through this ([`eframe::WebRunner::app_mut`]).
+    #[cfg(target_arch = "wasm32")]
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        Some(&mut *self)
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {

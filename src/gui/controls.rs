@@ -203,26 +203,64 @@ impl Knob {
         p: &mut Params,
         errors: &mut FieldErrors,
     ) -> bool {
-        let s = self.spec();
-        let changed = response.changed()
-            && shown != before
-            && try_edit(
-                self.label,
-                self.accepted(),
-                s.display.unit,
-                shown,
-                p,
-                errors,
-                |c| {
-                    let v = s.from_display(shown);
-                    s.set_unchecked(c, v);
-                    if let Some(f) = self.follows.and_then(spec) {
-                        f.set_unchecked(c, v);
-                    }
-                },
-            );
+        let changed = response.changed() && shown != before && self.apply(shown, p, errors);
         show_error(ui, errors, self.label);
         changed
+    }
+
+    /// Writes `shown` [display units] to `p` (and to the parameter that follows this one)
+    /// if accepted ([`try_edit`]); true if `p` changed.
+    fn apply(&self, shown: f64, p: &mut Params, errors: &mut FieldErrors) -> bool {
+        let s = self.spec();
+        try_edit(
+            self.label,
+            self.accepted(),
+            s.display.unit,
+            shown,
+            p,
+            errors,
+            |c| {
+                let v = s.from_display(shown);
+                s.set_unchecked(c, v);
+                if let Some(f) = self.follows.and_then(spec) {
+                    f.set_unchecked(c, v);
+                }
+            },
+        )
+    }
+}
+
+/// Sets the slider labelled `label` (`Kp`, `Ki`, `lead`, `τ`, `mass`, …) to `shown` [its
+/// display unit] as dragging it there would: the same span, the same validation, the same
+/// follower. The web page's JavaScript API and the tests go through here. The refusal is
+/// the error (and stays next to the slider, as a dragged one does).
+pub fn edit_slider(
+    label: &str,
+    shown: f64,
+    p: &mut Params,
+    errors: &mut FieldErrors,
+) -> Result<(), String> {
+    let knob = VALVE
+        .iter()
+        .chain(&RIG)
+        .chain(&GAINS)
+        .find(|k| k.label == label)
+        .ok_or_else(|| {
+            let labels: Vec<&str> = VALVE
+                .iter()
+                .chain(&RIG)
+                .chain(&GAINS)
+                .map(|k| k.label)
+                .collect();
+            format!("no slider `{label}` (one of: {})", labels.join(", "))
+        })?;
+    if knob.apply(shown, p, errors) {
+        Ok(())
+    } else {
+        Err(errors
+            .get(knob.label)
+            .cloned()
+            .unwrap_or_else(|| format!("{label} refused")))
     }
 }
 

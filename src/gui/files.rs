@@ -49,6 +49,8 @@ impl Purpose {
         }
     }
 
+    // The web build opens no dialog.
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
     fn saves(self) -> bool {
         matches!(
             self,
@@ -60,6 +62,8 @@ impl Purpose {
         )
     }
 
+    // The web build opens no dialog.
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
     fn filter(self) -> (&'static str, &'static [&'static str]) {
         match self {
             Purpose::OpenPreset | Purpose::SavePreset => ("preset", &["toml"]),
@@ -102,6 +106,12 @@ impl Dialogs {
         }
         let name = suggested_name.to_owned();
         let dir = dir.to_path_buf();
+        #[cfg(target_arch = "wasm32")]
+        let job = Job::spawn("seat-twin-dialog", waker_of(ctx), move |_| {
+            let _ = (name, dir);
+            Ok(Vec::new())
+        });
+        #[cfg(not(target_arch = "wasm32"))]
         let job = Job::spawn("seat-twin-dialog", waker_of(ctx), move |_| {
             let (fname, ext) = purpose.filter();
             let mut dialog = rfd::AsyncFileDialog::new()

@@ -27,7 +27,8 @@ use egui_plot::{Line, LineStyle, MarkerShape, Plot, PlotPoint, PlotPoints, Point
 use num_complex::Complex64;
 use std::collections::BTreeSet;
 use std::f64::consts::PI;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 /// Frequency range of the plots [Hz].
 pub const F_RANGE_HZ: (f64, f64) = (0.1, 100.0);
@@ -280,7 +281,7 @@ impl FreqPanel<'_> {
                     pu.line(
                         Line::new(c.name, PlotPoints::Owned(seg))
                             .color(c.color)
-                            .width(c.width)
+                            .width(plotkit::line_width(pu.ctx(), c.width))
                             .style(c.style),
                     );
                 }

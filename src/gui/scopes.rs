@@ -206,6 +206,7 @@ pub fn scopes_ui(
             .iter()
             .map(|&(name, _, color, m)| {
                 let (w, st) = style_of(m);
+                let w = plotkit::line_width(ui.ctx(), w);
                 LegendItem {
                     name,
                     color,
@@ -241,6 +242,7 @@ pub fn scopes_ui(
                     continue;
                 }
                 let (w, st) = style_of(m);
+                let w = plotkit::line_width(pu.ctx(), w);
                 // Live: the window's points; frozen: all that is kept, to pan over.
                 let pts = if view.live {
                     traces.channel(ch).window(t, span)
