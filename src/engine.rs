@@ -362,10 +362,12 @@ impl Local {
                 return false;
             }
         }
+        // Frames come far less often than the thread's 10 ms ticks (and a slow page draws
+        // fewer of them): step on, a quarter second at a time, while behind the wall clock.
         let t0 = Instant::now();
         while self.l.running && !self.l.failed {
             self.l.step_paced();
-            if self.l.speed != Speed::Max || t0.elapsed() >= budget {
+            if self.l.lag_s() < 1.0 / STREAM_RATE_HZ || t0.elapsed() >= budget {
                 break;
             }
         }
@@ -663,6 +665,17 @@ impl<W: Fn()> Loop<W> {
         let _ = self.events.send(e);
     }
 
+    /// How far the simulation is behind where the pacing wants it [s] (∞ at
+    /// [`Speed::Max`]).
+    #[cfg(target_arch = "wasm32")]
+    fn lag_s(&self) -> f64 {
+        if self.speed == Speed::Max {
+            return f64::INFINITY;
+        }
+        let wall = self.wall_anchor.elapsed().as_secs_f64();
+        self.sim_anchor + wall * self.speed.factor() - self.sims.time()
+    }
+
     fn reanchor(&mut self) {
         self.wall_anchor = Instant::now();
         self.sim_anchor = self.sims.time();
@@ -783,12 +796,19 @@ impl<W: Fn()> Loop<W> {
         let sims = &mut self.sims;
         let t_before = sims.time();
         let fault = std::mem::take(&mut self.fault_armed);
-        let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
-            if fault {
-                panic!("fault injected by Command::InjectFault (test hook)");
-            }
-            sims.advance(t_end, &mut batch)
-        }));
+        // Not a whole sample interval to go (a short tick): nothing to step or send yet. (A
+        // run that has not stepped yet would send its sample at rest twice.)
+        let nothing_new = t_end < t_before + 0.5 * dt_out;
+        let result = if nothing_new && !fault {
+            Ok(Ok(()))
+        } else {
+            std::panic::catch_unwind(AssertUnwindSafe(|| {
+                if fault {
+                    panic!("fault injected by Command::InjectFault (test hook)");
+                }
+                sims.advance(t_end, &mut batch)
+            }))
+        };
         self.stepped += (self.sims.time() - t_before).max(0.0);
         for smp in &batch.twin {
             if let Some(f) = self

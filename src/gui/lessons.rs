@@ -68,13 +68,13 @@ pub static LESSONS: [Lesson; 6] = [
         title: "1 · The passive seat and its resonance",
         preset: "paper",
         text: "Without control the seat is a mass m on a spring k and a damper: \
-               m·ÿ = −k·(y − x) − c·(ẏ − ẋ). Below its natural frequency \
+               m·y'' = −k·(y − x) − c·(y' − x') (x platform, y body). Below its natural frequency \
                fn = √(k/m) / 2π the body follows the platform; near fn it moves MORE than \
                the platform (transmissibility > 1, SEAT > 100 %); well above it, less. \
                Look at the dotted passive curve in the transmissibility plot and at the \
                passive SEAT in the metrics table.",
-        task: "The platform shakes with a sine at 2 Hz. Move its frequency (Excitation ▸ \
-               platform sine ▸ f, Apply) to the passive seat's resonance, within ±20 % of fn, \
+        task: "The platform shakes with a sine at 2 Hz. Move its frequency (Excitation: \
+               platform sine, f, Apply) to the passive seat's resonance, within ±20 % of fn, \
                and watch the passive body's acceleration grow.",
         setup: |_, e| sine(e, 2.0),
         done: |v, _| {
@@ -110,7 +110,7 @@ pub static LESSONS: [Lesson; 6] = [
         title: "3 · The valve delay and where instability comes from",
         preset: "paper",
         text: "The servo valve answers after a pure delay τ (≈ 20 ms here). A delay keeps the \
-               gain and adds a phase lag: e^(−sτ) → −ω·τ rad at ω. The loop Kp·G(s) with \
+               gain and adds a phase lag: e^(−sτ) lags by ω·τ rad at ω. The loop Kp·G(s) with \
                G(s) = e^(−sτ)·Kv/(s·(1 + s/ωv)) is stable while its phase at the gain \
                crossover ωc stays above −180°. Raising |Kp| moves ωc up, where −ωc·τ eats \
                the phase margin: the loop rings, then grows.",
@@ -126,9 +126,9 @@ pub static LESSONS: [Lesson; 6] = [
         title: "4 · Velocity feed-forward: the paper's controller",
         preset: "paper",
         text: "The paper adds the platform's velocity, measured as the integral of its \
-               acceleration: V = Kp·u + Ki·∫ẍ dt. The cylinder then moves against the \
+               acceleration a_p: V = Kp·u + Ki·∫a_p dt = Kp·u + Ki·v_p. The cylinder then moves against the \
                platform before the position loop sees any error, so the body stays still: \
-               ÿ ≈ 0 in the band the valve can follow. SEAT = 100 %·a_w,body / a_w,platform \
+               y'' ≈ 0 in the band the valve can follow. SEAT = 100 %·a_w,body / a_w,platform \
                falls well below the passive seat's.",
         task: "Set Ki to 0 and see the twin's SEAT rise to the passive level or above; set \
                it back near the paper's value until the twin beats the passive seat again \
@@ -170,7 +170,7 @@ pub static LESSONS: [Lesson; 6] = [
         preset: "tuned-predictive",
         text: "The valve's delay τ means the feed-forward always arrives late. The predictive \
                controller feeds the platform velocity predicted `lead` seconds ahead: \
-               V = Kp·u + Ki·(∫ẍ dt + T_lead·LP(ẍ)), since ẋ(t + T) ≈ ẋ(t) + T·ẍ(t). With \
+               V = Kp·u + Ki·(v_p + T_lead·LP(a_p)), since v_p(t + T) ≈ v_p(t) + T·a_p(t). With \
                T_lead ≈ τ plus the spool's lag the cylinder moves in time, and the twin's \
                SEAT drops further than with the paper's controller.",
         task: "Set lead to 0 ms and see the twin's SEAT rise; set it back to about 20 ms and \
@@ -269,8 +269,8 @@ impl LessonsPanel {
         ui.separator();
         for (n, l) in LESSONS.iter().enumerate() {
             ui.horizontal(|ui| {
-                let mark = if self.done[n] { "✔" } else { "○" };
-                ui.label(mark);
+                let mut done = self.done[n];
+                ui.add_enabled(false, egui::Checkbox::without_text(&mut done));
                 let title = RichText::new(l.title);
                 let title = if self.current == Some(n) {
                     title.strong()
@@ -295,11 +295,8 @@ impl LessonsPanel {
             ui.label(RichText::new(format!("Try: {}", l.task)).strong());
             ui.add_space(4.0);
             if self.done[n] {
-                ui.colored_label(
-                    egui::Color32::from_rgb(40, 160, 60),
-                    "✔ Done — well spotted.",
-                );
-                if n + 1 < LESSONS.len() && ui.button("Next step ▸").clicked() {
+                ui.colored_label(egui::Color32::from_rgb(40, 160, 60), "Done — well spotted.");
+                if n + 1 < LESSONS.len() && ui.button("Next step").clicked() {
                     action = LessonAction::Start(n + 1);
                 }
             } else {

@@ -33,6 +33,7 @@ pub mod schematic;
 pub mod scopes;
 pub mod session;
 pub mod share;
+pub mod style;
 pub mod traces;
 pub mod tune;
 pub mod units;

@@ -74,6 +74,7 @@ try {
     const wall = (Date.now() - tRun) / 1000;
     const s = await state(page);
     measured.rtf_max_speed = duration / wall;
+    measured.engine_rtf = s.engine_rtf;
     check(Math.abs(s.t_s - duration) < 1e-6, `the ride ran to its end: t = ${s.t_s} s`);
     for (const m of ["twin", "linear", "passive"]) {
       const rel = Math.abs(s.aw[m] - ref[m].aw) / ref[m].aw;

@@ -28,6 +28,30 @@ pub struct Teaching {
     pub unstable: bool,
     /// Repaints the app after a change from outside a frame (the web page's API).
     pub ctx: Option<egui::Context>,
+    /// Simulated time stepped in the frames [s] and the wall time it took [s] (web only:
+    /// on the desktop the engine steps in its thread and these stay 0).
+    pumped: (f64, f64),
+}
+
+impl Teaching {
+    /// One frame's engine work: `wall` spent in [`crate::engine::EngineHandle::pump`],
+    /// `simulated` seconds gained.
+    pub fn engine_stepped(&mut self, wall: std::time::Duration, simulated: f64) {
+        if cfg!(target_arch = "wasm32") && simulated > 0.0 {
+            self.pumped.0 += simulated;
+            self.pumped.1 += wall.as_secs_f64();
+        }
+    }
+
+    /// Simulated over wall time spent stepping in the frames (the web engine's own
+    /// real-time factor, without the time the page spends drawing); 0 before any step.
+    pub fn engine_rtf(&self) -> f64 {
+        if self.pumped.1 > 0.0 {
+            self.pumped.0 / self.pumped.1
+        } else {
+            0.0
+        }
+    }
 }
 
 impl SeatTwinApp {
@@ -64,7 +88,7 @@ impl SeatTwinApp {
                 Ok(())
             }
             Err(e) => {
-                self.error(format!("{e} — the setup was not changed"));
+                self.error(format!("{e}; the setup was not changed"));
                 Err(e)
             }
         }
@@ -302,6 +326,7 @@ impl SeatTwinApp {
             "lesson_done": lesson.is_some_and(|n| self.teach.lessons.is_done(n)),
             "presentation": self.teach.presentation,
             "rtf": self.engine_view.realtime_factor,
+            "engine_rtf": self.teach.engine_rtf(),
             "ui_ms_mean": stats.mean_ui_ms(),
             "ui_ms_max": stats.max_ui_ms(),
             "cpu_ms": stats.cpu_ms,
