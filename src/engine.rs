@@ -321,17 +321,20 @@ impl EngineHandle {
     /// since the last frame and steps the models, paced to wall-clock time as the thread
     /// does, for at most about `budget` of wall time (at [`Speed::Max`] it steps in chunks
     /// until the budget is spent). On the desktop the thread does this and `pump` returns
-    /// at once.
-    pub fn pump(&mut self, budget: Duration) {
+    /// at once. Returns the wall time spent stepping (not handling commands), zero on the
+    /// desktop.
+    pub fn pump(&mut self, budget: Duration) -> Duration {
         #[cfg(target_arch = "wasm32")]
-        if let Some(local) = self.local.as_mut()
-            && !local.pump(budget)
-        {
-            // Shutdown: the loop and its event sender go, so the app sees it disconnected.
-            self.local = None;
+        if let Some(local) = self.local.as_mut() {
+            match local.pump(budget) {
+                Some(stepping) => return stepping,
+                // Shutdown: the loop and its event sender go, so the app sees it
+                // disconnected.
+                None => self.local = None,
+            }
         }
-        #[cfg(not(target_arch = "wasm32"))]
         let _ = budget;
+        Duration::ZERO
     }
 }
 
@@ -354,12 +357,13 @@ struct Local {
 
 #[cfg(target_arch = "wasm32")]
 impl Local {
-    /// One frame's work; false once a [`Command::Shutdown`] arrived.
-    fn pump(&mut self, budget: Duration) -> bool {
+    /// One frame's work: the wall time spent stepping, `None` once a
+    /// [`Command::Shutdown`] arrived.
+    fn pump(&mut self, budget: Duration) -> Option<Duration> {
         let pending: Vec<Command> = self.commands.try_iter().collect();
         for c in pending {
             if !self.l.handle(c) {
-                return false;
+                return None;
             }
         }
         // Frames come far less often than the thread's 10 ms ticks (and a slow page draws
@@ -371,7 +375,7 @@ impl Local {
                 break;
             }
         }
-        true
+        Some(t0.elapsed())
     }
 }
 

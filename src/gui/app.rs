@@ -614,8 +614,8 @@ impl SeatTwinApp {
         let t0 = Instant::now();
         let ctx = ui.ctx().clone();
         // On the web the engine runs here, in the frame (on the desktop in its thread).
-        let (t_pump, sim_before) = (Instant::now(), self.engine_view.t);
-        self.engine.pump(ENGINE_BUDGET);
+        let sim_before = self.engine_view.t;
+        let stepping = self.engine.pump(ENGINE_BUDGET);
         #[cfg(target_arch = "wasm32")]
         if self.engine_view.running && self.settings.speed == Speed::Max {
             // As fast as it goes: the next frame steps on at once.
@@ -623,7 +623,7 @@ impl SeatTwinApp {
         }
         self.drain_engine();
         self.teach
-            .engine_stepped(t_pump.elapsed(), self.engine_view.t - sim_before);
+            .engine_stepped(stepping, self.engine_view.t - sim_before);
         // Ctrl + / Ctrl − change the zoom inside egui: remember it with the settings.
         self.settings.ui_scale = ctx.zoom_factor();
         self.poll_files(&ctx);

@@ -168,6 +168,26 @@ impl WebHandle {
         self.with_app(|a| a.set_presentation(on))
     }
 
+    /// The twin's real-time factor in this browser, as `seat-twin bench` measures it
+    /// natively: the best of `runs` runs of its 10 s closed-loop random ride, recorded at
+    /// 1 kHz, at the paper preset's step (exponential RK4, 0.5 ms). It blocks the page
+    /// while it runs (about 10 s / factor per run).
+    pub fn bench_twin(&self, runs: u32) -> Result<f64, JsValue> {
+        use crate::bench::{bench_ride, bench_step_s, ride_run};
+        use crate::model::ModelKind;
+        let params = crate::params::Params::paper();
+        let (duration_s, ride) = (10.0, bench_ride(10.0));
+        let step = bench_step_s(&params, ModelKind::Twin);
+        let mut best = f64::INFINITY;
+        for _ in 0..runs.max(1) {
+            let t0 = web_time::Instant::now();
+            ride_run(&params, ModelKind::Twin, &ride, duration_s, step)
+                .map_err(|e| JsValue::from_str(&e.to_string()))?;
+            best = best.min(t0.elapsed().as_secs_f64());
+        }
+        Ok(duration_s / best)
+    }
+
     /// Whether the app has panicked (then the page shows the message).
     pub fn has_panicked(&self) -> bool {
         self.runner.has_panicked()

@@ -81,19 +81,15 @@ impl Font {
 pub(super) fn font() -> Result<&'static Font, PlotError> {
     static FONT: OnceLock<Result<Font, String>> = OnceLock::new();
     let parsed = FONT.get_or_init(|| {
-        let font = Font::parse(FONT_BYTES)?;
         // plotters has no font registry on wasm32 (the web app draws no figure files).
-        #[cfg(target_arch = "wasm32")]
-        {
-            drop(font);
-            Err("figure files are not drawn in the web build".to_string())
+        if cfg!(target_arch = "wasm32") {
+            return Err("figure files are not drawn in the web build".to_string());
         }
+        let font = Font::parse(FONT_BYTES)?;
         #[cfg(not(target_arch = "wasm32"))]
-        {
-            plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES)
-                .map_err(|_| "plotters did not accept the font".to_string())?;
-            Ok(font)
-        }
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES)
+            .map_err(|_| "plotters did not accept the font".to_string())?;
+        Ok(font)
     });
     parsed
         .as_ref()

@@ -34,10 +34,10 @@ pub struct Teaching {
 }
 
 impl Teaching {
-    /// One frame's engine work: `wall` spent in [`crate::engine::EngineHandle::pump`],
-    /// `simulated` seconds gained.
+    /// One frame's engine work: `wall` spent stepping in
+    /// [`crate::engine::EngineHandle::pump`] (zero on the desktop), `simulated` seconds gained.
     pub fn engine_stepped(&mut self, wall: std::time::Duration, simulated: f64) {
-        if cfg!(target_arch = "wasm32") && simulated > 0.0 {
+        if !wall.is_zero() && simulated > 0.0 {
             self.pumped.0 += simulated;
             self.pumped.1 += wall.as_secs_f64();
         }
