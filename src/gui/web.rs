@@ -188,6 +188,21 @@ impl WebHandle {
         Ok(duration_s / best)
     }
 
+    /// File ▸ Open preset: the browser's file picker, then the preset read from the file.
+    pub fn open_preset(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.request_file_by_api(super::files::Purpose::OpenPreset))
+    }
+
+    /// Excitation ▸ CSV record: the browser's file picker, then the platform record.
+    pub fn open_record(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.request_file_by_api(super::files::Purpose::LoadRecord))
+    }
+
+    /// File ▸ Export CSV: the scopes' traces as a download, `traces.csv`.
+    pub fn export_csv(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.request_file_by_api(super::files::Purpose::ExportCsv))
+    }
+
     /// Whether the app has panicked (then the page shows the message).
     pub fn has_panicked(&self) -> bool {
         self.runner.has_panicked()

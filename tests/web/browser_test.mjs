@@ -21,6 +21,7 @@ if (!shotDir) {
   process.exit(2);
 }
 const seed = Number(seedArg);
+const presetFile = new URL("../../presets/tuned-paper.toml", import.meta.url).pathname;
 const duration = Number(durationArg);
 const ref = Object.fromEntries(
   fs.readFileSync(refFile, "utf8").trim().split("\n").map((l) => {
@@ -152,6 +153,31 @@ try {
     const s = await state(page);
     check(s.preset === "paper" && s.kp_v_per_m === -5 && /valve\.cd/.test(s.notice || ""),
       `bad link: defaults and the message "${s.notice}"`);
+    await page.close();
+  }
+
+  // 6 (before 5's fresh profile). Files: a preset through the browser's picker, the
+  // traces' CSV as a download.
+  {
+    const { page } = await open("?speed=fast");
+    // The call counts as a user gesture, so the picker opens at once (no rfd overlay).
+    const [chooser] = await Promise.all([
+      page.waitForEvent("filechooser", { timeout: 30000 }),
+      page.evaluate(() => window.seatTwin.openPreset()),
+    ]);
+    await chooser.setFiles(presetFile);
+    await waitState(page, 's.preset === "tuned-paper"', null, 30000);
+    let s = await state(page);
+    check(s.preset === "tuned-paper", `preset opened through the browser's picker: ${s.preset}`);
+    await page.waitForTimeout(1500);
+    const [download] = await Promise.all([
+      page.waitForEvent("download", { timeout: 30000 }),
+      page.evaluate(() => window.seatTwin.exportCsv()),
+    ]);
+    const text = fs.readFileSync(await download.path(), "utf8");
+    const rows = text.split("\n").filter((l) => /^[0-9-]/.test(l));
+    check(download.suggestedFilename() === "traces.csv" && /^t,/m.test(text) && rows.length > 100,
+      `CSV download ${download.suggestedFilename()}: ${rows.length} rows`);
     await page.close();
   }
 

@@ -146,6 +146,18 @@ impl SeatTwinApp {
         Ok(())
     }
 
+    /// Opens the file dialog for `purpose`, as the File menu does (the web page's API: the
+    /// browser's picker for a preset or a record, a download for the traces' CSV).
+    pub fn request_file_by_api(&mut self, purpose: crate::gui::files::Purpose) {
+        let name = match purpose {
+            crate::gui::files::Purpose::ExportCsv => "traces.csv",
+            _ => "",
+        };
+        if let Some(ctx) = self.teach.ctx.clone() {
+            self.request_file(purpose, name, &ctx);
+        }
+    }
+
     /// Shows an error message under the toolbar (until replaced).
     pub fn show_error(&mut self, text: impl Into<String>) {
         self.error(text);
