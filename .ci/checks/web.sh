@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The web app in a real browser. Builds it (web/build.sh), installs Debian's chromium and the
-# browser driver (playwright-core from npm, pinned in tests/web/package.json), serves
-# web/dist on 127.0.0.1 and runs tests/web/browser_test.mjs: the seeded random ride against
+# The web app in a real browser. Builds it (web/build.sh), installs Debian's chromium (and
+# Node, if missing) and the browser driver (playwright-core from npm, pinned in
+# tests/web/package.json), serves web/dist on 127.0.0.1 and runs tests/web/browser_test.mjs: the seeded random ride against
 # `seat-twin simulate` (a_w to 1e-9), Kp through the sliders' path, unstable and back, a
-# lesson step, a shared link, screenshots (into target/web-shots/). Each step prints its time.
+# lesson step, a shared link, the file picker and a download, screenshots (into
+# target/web-shots/). Each step prints its time.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -20,11 +21,16 @@ step() {
 step "bash web/build.sh"
 bash web/build.sh
 
-if ! command -v chromium >/dev/null; then
-    step "apt-get install chromium"
+# Debian's chromium, and Node with npm for the browser driver, if missing (apt-get, once).
+missing=""
+command -v chromium >/dev/null || missing="$missing chromium"
+command -v npm >/dev/null || missing="$missing nodejs npm"
+if [ -n "$missing" ]; then
+    step "apt-get install$missing"
     if [ "$(id -u)" -eq 0 ]; then sudo=""; else sudo="sudo"; fi
     $sudo apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends chromium
+    # shellcheck disable=SC2086
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends $missing
 fi
 
 if [ ! -d tests/web/node_modules/playwright-core ]; then
