@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # The web app in a real browser. Builds it (web/build.sh), installs Debian's chromium (and
 # Node, if missing) and the browser driver (playwright-core from npm, pinned in
-# tests/web/package.json), serves web/dist on 127.0.0.1 and runs tests/web/browser_test.mjs: the seeded random ride against
-# `seat-twin simulate` (a_w to 1e-9), Kp through the sliders' path, unstable and back, a
-# lesson step, a shared link, the file picker and a download, screenshots (into
-# target/web-shots/). Each step prints its time.
+# tests/web/package.json), serves web/dist on 127.0.0.1 and runs tests/web/browser_test.mjs:
+# the seeded random ride against `seat-twin simulate` (a_w to 1e-9), Kp through the sliders'
+# path, unstable and back, a lesson step, a shared link, the file picker and a download,
+# screenshots (into target/web-shots/). Each step prints its time.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
