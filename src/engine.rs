@@ -8,9 +8,15 @@
 //!
 //! A numerical blow-up or a panic inside a step is caught, reported as
 //! [`Event::Error`] and leaves the thread alive, waiting for [`Command::Reset`].
+//!
+//! In a browser (wasm32) there is no thread: [`spawn`] keeps the same loop inside the
+//! handle, and [`EngineHandle::pump`], called once per frame by the app, handles the
+//! commands and steps it under a time budget. The protocol and the app code are the same on
+//! both (on the desktop `pump` does nothing); a panic there is not caught (wasm aborts).
 
 use crate::analysis::watch::{Finding, Watch};
 use crate::control::ControlLaw;
+use crate::experiments::LTI_MAX_STEP_S;
 use crate::model::linear::LinearModel;
 use crate::model::passive::PassiveModel;
 use crate::model::twin::Twin;
@@ -21,9 +27,9 @@ use crate::scenario::{CommandSignal, Cycloid, PlatformMotion, RandomRide, Sample
 use crate::simulation::{ContactEvent, Drive, Run, Sample, SimError, Simulation, step_for_rate};
 use serde::{Deserialize, Serialize};
 use std::panic::AssertUnwindSafe;
-use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
-use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::time::Duration;
+use web_time::Instant;
 
 /// Rate at which samples are streamed to the UI [Hz].
 pub const STREAM_RATE_HZ: f64 = 500.0;
@@ -227,6 +233,10 @@ pub enum Command {
     Pause,
     /// Back to rest at t = 0 (also clears an error).
     Reset,
+    /// What happens when a finite excitation (random ride, record, class, bump) ends:
+    /// `true` (the default) restarts it from rest (with the next seed); `false` pauses at
+    /// its end, so its whole record can be read (the web page's `?seed=` ride does this).
+    SetRepeat(bool),
     /// End the thread.
     Shutdown,
     /// TEST HOOK, never sent by the app: the next engine step panics inside the
@@ -290,27 +300,86 @@ pub struct EngineHandle {
     pub commands: Sender<Command>,
     /// Receive events here (drain without blocking each frame).
     pub events: Receiver<Event>,
-    join: Option<JoinHandle<()>>,
+    #[cfg(not(target_arch = "wasm32"))]
+    join: Option<std::thread::JoinHandle<()>>,
+    /// The engine stepped in the app's frames (web).
+    #[cfg(target_arch = "wasm32")]
+    local: Option<Local>,
 }
 
 impl EngineHandle {
-    /// Sends a command; returns false if the engine thread is gone.
+    /// Sends a command; returns false if the engine is gone.
     pub fn send(&self, c: Command) -> bool {
         self.commands.send(c).is_ok()
+    }
+
+    /// Lets the engine work for one frame of the app: on the web, handles the commands sent
+    /// since the last frame and steps the models, paced to wall-clock time as the thread
+    /// does, for at most about `budget` of wall time (at [`Speed::Max`] it steps in chunks
+    /// until the budget is spent). On the desktop the thread does this and `pump` returns
+    /// at once. Returns the wall time spent stepping (not handling commands), zero on the
+    /// desktop.
+    pub fn pump(&mut self, budget: Duration) -> Duration {
+        #[cfg(target_arch = "wasm32")]
+        if let Some(local) = self.local.as_mut() {
+            match local.pump(budget) {
+                Some(stepping) => return stepping,
+                // Shutdown: the loop and its event sender go, so the app sees it
+                // disconnected.
+                None => self.local = None,
+            }
+        }
+        let _ = budget;
+        Duration::ZERO
     }
 }
 
 impl Drop for EngineHandle {
     fn drop(&mut self) {
         let _ = self.commands.send(Command::Shutdown);
+        #[cfg(not(target_arch = "wasm32"))]
         if let Some(j) = self.join.take() {
             let _ = j.join();
         }
     }
 }
 
+/// The engine loop kept in the handle and stepped by [`EngineHandle::pump`] (web).
+#[cfg(target_arch = "wasm32")]
+struct Local {
+    l: Loop<Box<dyn Fn()>>,
+    commands: Receiver<Command>,
+}
+
+#[cfg(target_arch = "wasm32")]
+impl Local {
+    /// One frame's work: the wall time spent stepping, `None` once a
+    /// [`Command::Shutdown`] arrived.
+    fn pump(&mut self, budget: Duration) -> Option<Duration> {
+        let pending: Vec<Command> = self.commands.try_iter().collect();
+        for c in pending {
+            if !self.l.handle(c) {
+                return None;
+            }
+        }
+        // Frames come far less often than the thread's 10 ms ticks (and a slow page draws
+        // fewer of them): step on, a quarter second at a time, while behind the wall clock.
+        let t0 = Instant::now();
+        while self.l.running && !self.l.failed {
+            self.l.step_paced();
+            if self.l.lag_s() < 1.0 / STREAM_RATE_HZ || t0.elapsed() >= budget {
+                break;
+            }
+        }
+        Some(t0.elapsed())
+    }
+}
+
 struct Sims {
     twin: Simulation<Twin, 10>,
+    /// The linear models stepped as `seat-twin simulate` steps them: exactly at up to
+    /// [`LTI_MAX_STEP_S`] (new parameters rebuild the exact hold, the state kept), or by RK4
+    /// at the twin's step when the delay is shorter than that.
     linear: Simulation<LinearModel, 3>,
     passive: Simulation<PassiveModel, 2>,
     /// The A/B reference twin and its controller.
@@ -336,6 +405,7 @@ impl Sims {
     ) -> Result<Self, String> {
         let (platform, drive, duration) = excitation.build(params)?;
         let h = step_for_rate(params.numerics.max_step_s, STREAM_RATE_HZ);
+        let h_lti = step_for_rate(LTI_MAX_STEP_S, STREAM_RATE_HZ);
         let every = ((1.0 / STREAM_RATE_HZ) / h).round() as u64;
         let reference = reference.map(|c| {
             let rp = with_controller(params, c);
@@ -348,8 +418,14 @@ impl Sims {
         Ok(Self {
             reference,
             twin: Simulation::twin(params, h, drive.clone(), platform.clone()),
-            linear: Simulation::new(LinearModel::new(params), h, drive.clone(), platform.clone()),
-            passive: Simulation::new(PassiveModel::new(params), h, drive, platform),
+            linear: Simulation::exact_or_rk4(
+                LinearModel::new(params),
+                h_lti,
+                h,
+                drive.clone(),
+                platform.clone(),
+            ),
+            passive: Simulation::exact_or_rk4(PassiveModel::new(params), h_lti, h, drive, platform),
             every,
             duration,
             contacts_seen: 0,
@@ -363,15 +439,11 @@ impl Sims {
             sim.update_gains(&rp);
         }
         self.twin.set_model(Twin::new(*params));
+        self.twin.update_gains(params);
         self.linear.set_model(LinearModel::new(params));
+        self.linear.update_gains(params);
         self.passive.set_model(PassiveModel::new(params));
-        for d in [
-            &mut self.twin as &mut dyn DriveTarget,
-            &mut self.linear,
-            &mut self.passive,
-        ] {
-            d.update_gains(params);
-        }
+        self.passive.update_gains(params);
     }
 
     fn time(&self) -> f64 {
@@ -382,10 +454,13 @@ impl Sims {
     fn advance(&mut self, t_end: f64, batch: &mut Batch) -> Result<(), SimError> {
         let every = self.every;
         self.twin.run_until(t_end, every, |s| batch.twin.push(s))?;
+        let every_of = |h: f64| ((1.0 / STREAM_RATE_HZ) / h).round() as u64;
+        let linear_every = every_of(self.linear.step_size());
         self.linear
-            .run_until(t_end, every, |s| batch.linear.push(s))?;
+            .run_until(t_end, linear_every, |s| batch.linear.push(s))?;
+        let passive_every = every_of(self.passive.step_size());
         self.passive
-            .run_until(t_end, every, |s| batch.passive.push(s))?;
+            .run_until(t_end, passive_every, |s| batch.passive.push(s))?;
         if let Some((sim, _)) = self.reference.as_mut() {
             sim.run_until(t_end, every, |s| batch.reference.push(s))?;
         }
@@ -410,17 +485,34 @@ where
 
 /// Starts the engine thread. `waker` is called after events are sent (the app passes
 /// `ctx.request_repaint()`; tests pass a no-op).
+/// On the web the loop lives in the handle instead and runs in [`EngineHandle::pump`].
 pub fn spawn(params: Params, waker: impl Fn() + Send + 'static) -> EngineHandle {
     let (cmd_tx, cmd_rx) = channel::<Command>();
     let (ev_tx, ev_rx) = channel::<Event>();
-    let join = std::thread::Builder::new()
-        .name("seat-twin-engine".into())
-        .spawn(move || engine_loop(params, cmd_rx, ev_tx, waker))
-        .ok();
-    EngineHandle {
-        commands: cmd_tx,
-        events: ev_rx,
-        join,
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let join = std::thread::Builder::new()
+            .name("seat-twin-engine".into())
+            .spawn(move || engine_loop(params, cmd_rx, ev_tx, waker))
+            .ok();
+        EngineHandle {
+            commands: cmd_tx,
+            events: ev_rx,
+            join,
+        }
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let waker: Box<dyn Fn()> = Box::new(waker);
+        let local = Loop::start(params, ev_tx, waker).map(|l| Local {
+            l,
+            commands: cmd_rx,
+        });
+        EngineHandle {
+            commands: cmd_tx,
+            events: ev_rx,
+            local,
+        }
     }
 }
 
@@ -431,6 +523,8 @@ struct Loop<W: Fn()> {
     speed: Speed,
     running: bool,
     failed: bool,
+    /// Restart a finite excitation when it ends ([`Command::SetRepeat`]).
+    repeat: bool,
     sims: Sims,
     events: Sender<Event>,
     waker: W,
@@ -450,36 +544,16 @@ struct Loop<W: Fn()> {
     watch: Watch,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn engine_loop<W: Fn()>(
     params: Params,
     commands: Receiver<Command>,
     events: Sender<Event>,
     waker: W,
 ) {
-    let excitation = Excitation::default();
-    // The default random ride always builds.
-    let Ok(sims) = Sims::new(&params, &excitation, None) else {
+    use std::sync::mpsc::RecvTimeoutError;
+    let Some(mut l) = Loop::start(params, events, waker) else {
         return;
-    };
-    let mut l = Loop {
-        params,
-        excitation,
-        reference: None,
-        speed: Speed::RealTime,
-        running: true,
-        failed: false,
-        sims,
-        events,
-        waker,
-        wall_anchor: Instant::now(),
-        sim_anchor: 0.0,
-        rtf_window: (Instant::now(), 0.0),
-        rtf: 0.0,
-        seed_bump: 0,
-        epoch: 0.0,
-        stepped: 0.0,
-        fault_armed: false,
-        watch: Watch::new(1.0 / STREAM_RATE_HZ),
     };
     let tick = Duration::from_millis(10);
     loop {
@@ -512,8 +586,47 @@ fn engine_loop<W: Fn()>(
 }
 
 impl<W: Fn()> Loop<W> {
+    /// The loop at rest on the default excitation, running at real time (`None` only if
+    /// the default random ride could not be built, which it always can).
+    fn start(params: Params, events: Sender<Event>, waker: W) -> Option<Self> {
+        let excitation = Excitation::default();
+        let sims = Sims::new(&params, &excitation, None).ok()?;
+        Some(Loop {
+            params,
+            excitation,
+            reference: None,
+            speed: Speed::RealTime,
+            running: true,
+            failed: false,
+            repeat: true,
+            sims,
+            events,
+            waker,
+            wall_anchor: Instant::now(),
+            sim_anchor: 0.0,
+            rtf_window: (Instant::now(), 0.0),
+            rtf: 0.0,
+            seed_bump: 0,
+            epoch: 0.0,
+            stepped: 0.0,
+            fault_armed: false,
+            watch: Watch::new(1.0 / STREAM_RATE_HZ),
+        })
+    }
+
     fn send(&self, e: Event) {
         let _ = self.events.send(e);
+    }
+
+    /// How far the simulation is behind where the pacing wants it [s] (∞ at
+    /// [`Speed::Max`]).
+    #[cfg(target_arch = "wasm32")]
+    fn lag_s(&self) -> f64 {
+        if self.speed == Speed::Max {
+            return f64::INFINITY;
+        }
+        let wall = self.wall_anchor.elapsed().as_secs_f64();
+        self.sim_anchor + wall * self.speed.factor() - self.sims.time()
     }
 
     fn reanchor(&mut self) {
@@ -590,6 +703,7 @@ impl<W: Fn()> Loop<W> {
                 self.rtf = 0.0;
                 self.restart();
             }
+            Command::SetRepeat(r) => self.repeat = r,
             Command::Shutdown => return false,
             Command::InjectFault => self.fault_armed = true,
         }
@@ -626,17 +740,28 @@ impl<W: Fn()> Loop<W> {
             // Never try to catch up more than 0.25 s of simulated time in one tick.
             t.min(self.sims.time() + 0.25)
         };
-        let t_end = target.min(self.sims.duration);
+        // On the stream's sample grid, where the twin's and the linear models' steps meet,
+        // so that every batch holds the same instants of all three.
+        let dt_out = 1.0 / STREAM_RATE_HZ;
+        let end = (self.sims.duration / dt_out - 1e-9).ceil() * dt_out;
+        let t_end = ((target / dt_out + 1e-9).floor() * dt_out).min(end);
         let mut batch = Batch::default();
         let sims = &mut self.sims;
         let t_before = sims.time();
         let fault = std::mem::take(&mut self.fault_armed);
-        let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
-            if fault {
-                panic!("fault injected by Command::InjectFault (test hook)");
-            }
-            sims.advance(t_end, &mut batch)
-        }));
+        // Not a whole sample interval to go (a short tick): nothing to step or send yet. (A
+        // run that has not stepped yet would send its sample at rest twice.)
+        let nothing_new = t_end < t_before + 0.5 * dt_out;
+        let result = if nothing_new && !fault {
+            Ok(Ok(()))
+        } else {
+            std::panic::catch_unwind(AssertUnwindSafe(|| {
+                if fault {
+                    panic!("fault injected by Command::InjectFault (test hook)");
+                }
+                sims.advance(t_end, &mut batch)
+            }))
+        };
         self.stepped += (self.sims.time() - t_before).max(0.0);
         for smp in &batch.twin {
             if let Some(f) = self
@@ -679,7 +804,11 @@ impl<W: Fn()> Loop<W> {
             self.rtf = (self.stepped - s0) / dt_wall;
             self.rtf_window = (now, self.stepped);
         }
-        if self.sims.time() >= self.sims.duration - 1e-9 && self.sims.duration.is_finite() {
+        let ended = self.sims.time() >= self.sims.duration - 1e-9 && self.sims.duration.is_finite();
+        if ended && !self.repeat {
+            self.running = false;
+            self.rtf = 0.0;
+        } else if ended {
             self.seed_bump += 1;
             self.epoch += self.sims.time();
             self.restart();

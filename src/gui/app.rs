@@ -8,9 +8,15 @@ mod accessors;
 mod export;
 mod file_ops;
 mod panels;
+mod state;
+mod teaching;
+
+pub use state::{EngineView, FrameStats, Notice, PresetInfo, Settings, Theme};
+
+pub use teaching::{PRESENTATION_SCALE, Teaching};
 
 use super::ab::{self, AbAction, AbView};
-use super::controls::{self, ExcitationAction, ExcitationEditor, ExcitationKind, LoadedRecord};
+use super::controls::{self, ExcitationAction, ExcitationKind, LoadedRecord};
 use super::files::{self, CsvTable, Dialogs, Purpose, Writer};
 use super::frequency::{self, Analytic, Curves, Dwell, FreqAction, FreqView};
 use super::job::Waker;
@@ -26,111 +32,11 @@ use crate::params::{ControllerParams, Params};
 use crate::plot::{Figure, Panel, Rgb, Scale, Series};
 use crate::preset::{self, Preset, PresetMeta};
 use egui::{Color32, Key, RichText};
-use serde::{Deserialize, Serialize};
-use std::collections::{BTreeSet, VecDeque};
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
-
-/// Theme choice (persisted).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-pub enum Theme {
-    /// Follow the desktop.
-    #[default]
-    System,
-    /// Light.
-    Light,
-    /// Dark.
-    Dark,
-}
-
-impl Theme {
-    fn preference(self) -> egui::ThemePreference {
-        match self {
-            Theme::System => egui::ThemePreference::System,
-            Theme::Light => egui::ThemePreference::Light,
-            Theme::Dark => egui::ThemePreference::Dark,
-        }
-    }
-}
-
-/// What persists between runs (eframe storage; the window layout persists through egui).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Settings {
-    /// Theme.
-    pub theme: Theme,
-    /// The preset file last opened or saved.
-    pub last_preset: Option<PathBuf>,
-    /// Simulation speed.
-    pub speed: Speed,
-    /// Frame-time overlay.
-    pub show_debug: bool,
-    /// Schematic panel.
-    pub show_schematic: bool,
-    /// Recompute the simulated dwell points automatically after slider changes.
-    pub dwell_auto: bool,
-    /// The excitation editor.
-    pub excitation: ExcitationEditor,
-    /// Unwrapped phase in the frequency plots (default: wrapped into ±180°).
-    pub phase_unwrapped: bool,
-    /// UI scale (egui's zoom factor: 1 = 100 %), also changed with Ctrl + / Ctrl −.
-    pub ui_scale: f32,
-    /// Length of the scopes' time window [s], 1 … 60.
-    pub scope_window_s: f64,
-    /// The folder of the last file opened or saved (dialogs and typed paths start there).
-    pub last_dir: Option<PathBuf>,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Self {
-            theme: Theme::System,
-            last_preset: None,
-            speed: Speed::RealTime,
-            show_debug: false,
-            show_schematic: true,
-            dwell_auto: true,
-            excitation: ExcitationEditor::default(),
-            phase_unwrapped: false,
-            last_dir: None,
-            ui_scale: 1.0,
-            scope_window_s: super::traces::WINDOW_S,
-        }
-    }
-}
-
-/// The preset the current parameters came from.
-#[derive(Debug, Clone)]
-pub struct PresetInfo {
-    /// Name shown in the title.
-    pub name: String,
-    /// Its description.
-    pub description: String,
-    /// The file, if any.
-    pub path: Option<PathBuf>,
-    /// Whether "Save" may overwrite `path` (the user chose it; shipped presets are not).
-    pub user_file: bool,
-    /// Parameters as loaded or last saved: the "modified" marker compares against these.
-    pub baseline: Params,
-}
-
-/// What the engine last reported.
-#[derive(Debug, Clone, Default)]
-pub struct EngineView {
-    /// Simulated time [s].
-    pub t: f64,
-    /// Real-time factor.
-    pub realtime_factor: f64,
-    /// Running (not paused, not failed).
-    pub running: bool,
-    /// Parameters the engine runs with (echo).
-    pub params: Option<Params>,
-    /// The A/B reference controller the engine runs (`None`: A/B off).
-    pub reference: Option<ControllerParams>,
-    /// End-stop contacts since the last restart: live twin, reference twin.
-    pub contacts: (usize, usize),
-}
+use std::time::Duration;
+use web_time::Instant;
 
 /// An action waiting for "discard unsaved changes?".
 #[derive(Debug, Clone, PartialEq)]
@@ -140,6 +46,10 @@ enum Pending {
     OpenSessionDialog,
     Quit,
 }
+
+/// Wall time the engine may step in one frame on the web, where it has no thread of its own
+/// (at 60 frames a second this leaves about 4 ms for the UI).
+const ENGINE_BUDGET: Duration = Duration::from_millis(12);
 
 /// Longest wait between a wake from a worker (engine, jobs) and the frame that shows it.
 const REPAINT_PERIOD: Duration = Duration::from_millis(33);
@@ -156,60 +66,6 @@ pub const UI_SCALES: [f32; 6] = [0.8, 1.0, 1.25, 1.5, 1.75, 2.0];
 
 /// How long an information notice stays (errors stay until replaced).
 const NOTICE_LIFETIME: Duration = Duration::from_secs(8);
-
-/// A message line under the toolbar.
-#[derive(Debug, Clone)]
-pub struct Notice {
-    /// Text.
-    pub text: String,
-    /// An error (red) or information.
-    pub error: bool,
-    at: Instant,
-}
-
-/// Per-frame timing, for the debug overlay.
-#[derive(Debug, Clone, Default)]
-pub struct FrameStats {
-    ui_ms: VecDeque<f64>,
-    frame_at: VecDeque<Instant>,
-    /// Whole-frame CPU time reported by eframe (UI + tessellation) [ms].
-    pub cpu_ms: Option<f64>,
-    /// Time of the scopes in the last frame [ms].
-    pub scopes_ms: f64,
-    /// Time of the frequency plots in the last frame [ms].
-    pub freq_ms: f64,
-}
-
-impl FrameStats {
-    fn record(&mut self, ui_ms: f64) {
-        if self.ui_ms.len() >= 120 {
-            self.ui_ms.pop_front();
-            self.frame_at.pop_front();
-        }
-        self.ui_ms.push_back(ui_ms);
-        self.frame_at.push_back(Instant::now());
-    }
-
-    /// Mean time of `SeatTwinApp::ui` over the last 120 frames [ms].
-    pub fn mean_ui_ms(&self) -> f64 {
-        self.ui_ms.iter().sum::<f64>() / self.ui_ms.len().max(1) as f64
-    }
-
-    /// Largest time of `SeatTwinApp::ui` over the last 120 frames [ms].
-    pub fn max_ui_ms(&self) -> f64 {
-        self.ui_ms.iter().copied().fold(0.0, f64::max)
-    }
-
-    /// Frames per second over the last 120 frames.
-    pub fn fps(&self) -> f64 {
-        match (self.frame_at.front(), self.frame_at.back()) {
-            (Some(a), Some(b)) if self.frame_at.len() > 1 => {
-                (self.frame_at.len() - 1) as f64 / b.duration_since(*a).as_secs_f64().max(1e-9)
-            }
-            _ => 0.0,
-        }
-    }
-}
 
 /// The seat-twin desktop app.
 pub struct SeatTwinApp {
@@ -248,6 +104,7 @@ pub struct SeatTwinApp {
     tune: super::tune::TunePanel,
     scopes_frozen: bool,
     window_checked: bool,
+    teach: Teaching,
 }
 
 impl SeatTwinApp {
@@ -321,6 +178,7 @@ impl SeatTwinApp {
             tune: super::tune::TunePanel::default(),
             scopes_frozen: false,
             window_checked: false,
+            teach: Teaching::default(),
         };
         if app.settings.excitation.kind == ExcitationKind::Record {
             // The record itself is not persisted.
@@ -432,6 +290,41 @@ impl SeatTwinApp {
         self.traces.clear();
         self.engine_error = None;
         self.twin_watch = None;
+    }
+
+    /// The text of the toolbar clock (simulated time and real-time factor).
+    pub fn clock_text(&self) -> String {
+        let v = &self.engine_view;
+        if self.engine_error.is_some() {
+            format!("t = {:8.2} s   stopped", v.t)
+        } else if !v.running {
+            format!("t = {:8.2} s   paused", v.t)
+        } else {
+            format!(
+                "t = {:8.2} s   ×{:.2} real time",
+                v.t,
+                v.realtime_factor.max(0.0)
+            )
+        }
+    }
+
+    /// TEST HOOK: makes the engine's next step panic (see `Command::InjectFault`). The UI
+    /// never calls it.
+    #[doc(hidden)]
+    pub fn inject_engine_fault(&mut self) {
+        self.send(Command::InjectFault);
+    }
+
+    /// Puts back the last gains with which both loops were stable and restarts the
+    /// simulation from rest with them.
+    pub fn reset_to_last_stable_gains(&mut self) {
+        if let Some(g) = self.last_stable {
+            self.params.controller = g;
+            self.field_errors.remove("Kp");
+            self.field_errors.remove("Ki");
+            self.apply_params();
+        }
+        self.reset();
     }
 
     /// The Tune panel.
@@ -720,7 +613,17 @@ impl SeatTwinApp {
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let t0 = Instant::now();
         let ctx = ui.ctx().clone();
+        // On the web the engine runs here, in the frame (on the desktop in its thread).
+        let sim_before = self.engine_view.t;
+        let stepping = self.engine.pump(ENGINE_BUDGET);
+        #[cfg(target_arch = "wasm32")]
+        if self.engine_view.running && self.settings.speed == Speed::Max {
+            // As fast as it goes: the next frame steps on at once.
+            ctx.request_repaint();
+        }
         self.drain_engine();
+        self.teach
+            .engine_stepped(stepping, self.engine_view.t - sim_before);
         // Ctrl + / Ctrl − change the zoom inside egui: remember it with the settings.
         self.settings.ui_scale = ctx.zoom_factor();
         self.poll_files(&ctx);
@@ -772,6 +675,7 @@ impl SeatTwinApp {
         if !unstable && !editing {
             self.last_stable = Some(self.params.controller);
         }
+        self.teach.unstable = unstable;
         // No sine dwell of an unstable loop: it would only diverge.
         let dwell_busy = self
             .dwell
@@ -797,6 +701,7 @@ impl SeatTwinApp {
             self.handle_measured(action, &ctx);
         }
         self.confirm_ui(&ctx);
+        self.teaching_ui(&ctx);
         if self.settings.show_debug {
             self.debug_overlay(&ctx);
         }
@@ -859,6 +764,12 @@ impl eframe::App for SeatTwinApp {
             self.title = title;
         }
         SeatTwinApp::ui(self, ui);
+    }
+
+    /// The web page's API reaches the app through this ([`eframe::WebRunner::app_mut`]).
+    #[cfg(target_arch = "wasm32")]
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        Some(&mut *self)
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 /// One parameter slider. What it shows (display unit and scale), what it accepts (valid range)
 /// and its description come from the parameter table [`crate::params::PARAMS`]; the app adds
 /// only its label, the slider's span, the scale type and the decimals.
-struct Knob {
+struct ParamSlider {
     /// Dotted preset key of the parameter.
     key: &'static str,
     /// Short label beside the slider.
@@ -32,14 +32,14 @@ struct Knob {
     steer: Option<f64>,
 }
 
-const fn knob(
+const fn param(
     key: &'static str,
     label: &'static str,
     span: RangeInclusive<f64>,
     logarithmic: bool,
     decimals: usize,
-) -> Knob {
-    Knob {
+) -> ParamSlider {
+    ParamSlider {
         key,
         label,
         span,
@@ -58,63 +58,63 @@ const fn gain(
     span: RangeInclusive<f64>,
     decimals: usize,
     resolution: f64,
-) -> Knob {
-    Knob {
+) -> ParamSlider {
+    ParamSlider {
         steer: Some(resolution),
-        ..knob(key, label, span, true, decimals)
+        ..param(key, label, span, true, decimals)
     }
 }
 
 /// The valve group.
-const VALVE: [Knob; 2] = [
-    knob("valve.cd", "Cd", 0.01..=0.5, false, 4),
-    Knob {
+const VALVE: [ParamSlider; 2] = [
+    param("valve.cd", "Cd", 0.01..=0.5, false, 4),
+    ParamSlider {
         follows: Some("linear.tau_s"),
         note: "The linear model G(s) follows it: one τ, as in the paper.",
-        ..knob("valve.tau_s", "τ", 0.0..=60.0, false, 1)
+        ..param("valve.tau_s", "τ", 0.0..=60.0, false, 1)
     },
 ];
 
 /// The rig group.
-const RIG: [Knob; 4] = [
-    knob("body.mass_kg", "mass", 1.0..=200.0, true, 1),
-    knob("body.stiffness_n_per_m", "stiffness", 0.1..=100.0, true, 2),
-    knob(
+const RIG: [ParamSlider; 4] = [
+    param("body.mass_kg", "mass", 1.0..=200.0, true, 1),
+    param("body.stiffness_n_per_m", "stiffness", 0.1..=100.0, true, 2),
+    param(
         "supply.supply_pressure_pa",
         "supply",
         15.0..=250.0,
         false,
         0,
     ),
-    knob("passive.zeta", "passive ζ", 0.0..=2.0, false, 2),
+    param("passive.zeta", "passive ζ", 0.0..=2.0, false, 2),
 ];
 
 /// Every controller gain; the panel shows those of the chosen structure. The spans keep the
 /// sliders where loops can be stable (a Kp of +5000 V/m is valid in a preset but only ever
 /// unstable).
-const GAINS: [Knob; 7] = [
-    Knob {
+const GAINS: [ParamSlider; 7] = [
+    ParamSlider {
         note: "Negative is negative feedback.",
         ..gain("controller.kp_v_per_m", "Kp", -2000.0..=200.0, 2, 1.0)
     },
     gain("controller.ki_v_s_per_m", "Ki", -200.0..=200.0, 2, 0.1),
-    Knob {
+    ParamSlider {
         note: "Default 20.7 ms: the valve's delay plus the spool's lag.",
-        ..knob("controller.lead_s", "lead", 0.0..=100.0, false, 1)
+        ..param("controller.lead_s", "lead", 0.0..=100.0, false, 1)
     },
     gain("controller.lead_cutoff_hz", "lead fc", 0.5..=200.0, 1, 0.1),
-    Knob {
+    ParamSlider {
         note: "Negative opposes the body's motion.",
         ..gain("controller.sky_v_s_per_m", "Ksky", -200.0..=200.0, 2, 0.1)
     },
     gain("controller.leak_hz", "leak", 0.01..=10.0, 2, 0.001),
-    Knob {
+    ParamSlider {
         note: "Keeps the feedback off the valve's 80 Hz resonance.",
         ..gain("controller.sky_cutoff_hz", "sky fc", 0.5..=200.0, 1, 0.1)
     },
 ];
 
-impl Knob {
+impl ParamSlider {
     fn spec(&self) -> &'static ParamSpec {
         spec(self.key).expect("every slider's key is in the parameter table")
     }
@@ -203,26 +203,64 @@ impl Knob {
         p: &mut Params,
         errors: &mut FieldErrors,
     ) -> bool {
-        let s = self.spec();
-        let changed = response.changed()
-            && shown != before
-            && try_edit(
-                self.label,
-                self.accepted(),
-                s.display.unit,
-                shown,
-                p,
-                errors,
-                |c| {
-                    let v = s.from_display(shown);
-                    s.set_unchecked(c, v);
-                    if let Some(f) = self.follows.and_then(spec) {
-                        f.set_unchecked(c, v);
-                    }
-                },
-            );
+        let changed = response.changed() && shown != before && self.apply(shown, p, errors);
         show_error(ui, errors, self.label);
         changed
+    }
+
+    /// Writes `shown` [display units] to `p` (and to the parameter that follows this one)
+    /// if accepted ([`try_edit`]); true if `p` changed.
+    fn apply(&self, shown: f64, p: &mut Params, errors: &mut FieldErrors) -> bool {
+        let s = self.spec();
+        try_edit(
+            self.label,
+            self.accepted(),
+            s.display.unit,
+            shown,
+            p,
+            errors,
+            |c| {
+                let v = s.from_display(shown);
+                s.set_unchecked(c, v);
+                if let Some(f) = self.follows.and_then(spec) {
+                    f.set_unchecked(c, v);
+                }
+            },
+        )
+    }
+}
+
+/// Sets the slider labelled `label` (`Kp`, `Ki`, `lead`, `τ`, `mass`, …) to `shown` [its
+/// display unit] as dragging it there would: the same span, the same validation, the same
+/// follower. The web page's JavaScript API and the tests go through here. The refusal is
+/// the error (and stays next to the slider, as a dragged one does).
+pub fn edit_slider(
+    label: &str,
+    shown: f64,
+    p: &mut Params,
+    errors: &mut FieldErrors,
+) -> Result<(), String> {
+    let slider = VALVE
+        .iter()
+        .chain(&RIG)
+        .chain(&GAINS)
+        .find(|k| k.label == label)
+        .ok_or_else(|| {
+            let labels: Vec<&str> = VALVE
+                .iter()
+                .chain(&RIG)
+                .chain(&GAINS)
+                .map(|k| k.label)
+                .collect();
+            format!("no slider `{label}` (one of: {})", labels.join(", "))
+        })?;
+    if slider.apply(shown, p, errors) {
+        Ok(())
+    } else {
+        Err(errors
+            .get(slider.label)
+            .cloned()
+            .unwrap_or_else(|| format!("{label} refused")))
     }
 }
 

@@ -49,6 +49,8 @@ impl Purpose {
         }
     }
 
+    // The web build opens no dialog.
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
     fn saves(self) -> bool {
         matches!(
             self,
@@ -81,6 +83,33 @@ fn waker_of(ctx: &egui::Context) -> Waker {
 #[derive(Default)]
 pub struct Dialogs {
     open: Option<(Purpose, Job<Vec<PathBuf>>)>,
+    /// The browser's file picker in flight (web): what the file is for, and its answer
+    /// (`None`: cancelled).
+    #[cfg(target_arch = "wasm32")]
+    web: Option<(Purpose, std::sync::mpsc::Receiver<Option<PickedFile>>)>,
+}
+
+/// What the web build says where a desktop file dialog would open (saving, exports,
+/// measured campaigns, sessions).
+pub const NOT_ON_THE_WEB: &str = "not in the web build yet: the browser opens presets and \
+     platform records and downloads the traces' CSV (File menu); the other files need the \
+     desktop app";
+
+/// A file the browser's picker read (web): its name and bytes.
+#[derive(Debug, Clone)]
+pub struct PickedFile {
+    /// The file's name (no folder: a browser does not tell it).
+    pub name: String,
+    /// Its contents.
+    pub bytes: Vec<u8>,
+}
+
+impl Purpose {
+    /// The browser's picker can serve it (web): opening a preset or a platform record. The
+    /// rest (saving, exports, measured campaigns, sessions) is not in the web build yet.
+    pub fn picked_on_the_web(self) -> bool {
+        matches!(self, Purpose::OpenPreset | Purpose::LoadRecord)
+    }
 }
 
 impl Dialogs {
@@ -100,8 +129,19 @@ impl Dialogs {
         if self.open.is_some() {
             return;
         }
+        #[cfg(target_arch = "wasm32")]
+        if purpose.picked_on_the_web() {
+            self.web = Some((purpose, pick_in_the_browser(purpose, ctx)));
+            return;
+        }
         let name = suggested_name.to_owned();
         let dir = dir.to_path_buf();
+        #[cfg(target_arch = "wasm32")]
+        let job = Job::spawn("seat-twin-dialog", waker_of(ctx), move |_| {
+            let _ = (name, dir);
+            Ok(Vec::new())
+        });
+        #[cfg(not(target_arch = "wasm32"))]
         let job = Job::spawn("seat-twin-dialog", waker_of(ctx), move |_| {
             let (fname, ext) = purpose.filter();
             let mut dialog = rfd::AsyncFileDialog::new()
@@ -138,6 +178,25 @@ impl Dialogs {
         self.open = Some((purpose, job));
     }
 
+    /// A file the browser's picker read (web): its purpose and the file, `None` inside
+    /// when cancelled. Always `None` on the desktop.
+    pub fn poll_picked(&mut self) -> Option<(Purpose, Option<PickedFile>)> {
+        #[cfg(target_arch = "wasm32")]
+        {
+            let (purpose, rx) = self.web.as_ref()?;
+            let purpose = *purpose;
+            let picked = match rx.try_recv() {
+                Ok(p) => p,
+                Err(std::sync::mpsc::TryRecvError::Empty) => return None,
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => None,
+            };
+            self.web = None;
+            Some((purpose, picked))
+        }
+        #[cfg(not(target_arch = "wasm32"))]
+        None
+    }
+
     /// A finished dialog: its purpose and the chosen files (empty: cancelled, no dialog
     /// available on this desktop, or the dialog's thread failed).
     pub fn poll(&mut self) -> Option<(Purpose, Vec<PathBuf>)> {
@@ -147,6 +206,59 @@ impl Dialogs {
         self.open = None;
         Some((purpose, picked))
     }
+}
+
+/// Opens the browser's file picker for `purpose` and reads the chosen file; the answer
+/// arrives on the receiver (and asks for a frame).
+#[cfg(target_arch = "wasm32")]
+fn pick_in_the_browser(
+    purpose: Purpose,
+    ctx: &egui::Context,
+) -> std::sync::mpsc::Receiver<Option<PickedFile>> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let ctx = ctx.clone();
+    wasm_bindgen_futures::spawn_local(async move {
+        let (fname, ext) = purpose.filter();
+        let mut dialog = rfd::AsyncFileDialog::new().set_title(purpose.title());
+        if !ext.is_empty() {
+            dialog = dialog.add_filter(fname, ext);
+        }
+        let picked = match dialog.pick_file().await {
+            Some(h) => Some(PickedFile {
+                name: h.file_name(),
+                bytes: h.read().await,
+            }),
+            None => None,
+        };
+        let _ = tx.send(picked);
+        ctx.request_repaint();
+    });
+    rx
+}
+
+/// Hands `bytes` to the browser as a download named `name` (web): the export's "save".
+#[cfg(target_arch = "wasm32")]
+pub fn download(name: &str, bytes: &[u8], mime: &str) -> Result<(), String> {
+    use wasm_bindgen::JsCast;
+    let fail = |e: wasm_bindgen::JsValue| format!("the download of {name} failed: {e:?}");
+    let parts = js_sys::Array::of1(&js_sys::Uint8Array::from(bytes));
+    let options = web_sys::BlobPropertyBag::new();
+    options.set_type(mime);
+    let blob =
+        web_sys::Blob::new_with_u8_array_sequence_and_options(&parts, &options).map_err(fail)?;
+    let url = web_sys::Url::create_object_url_with_blob(&blob).map_err(fail)?;
+    let document = web_sys::window()
+        .and_then(|w| w.document())
+        .ok_or("no document")?;
+    let a: web_sys::HtmlAnchorElement = document
+        .create_element("a")
+        .map_err(fail)?
+        .dyn_into()
+        .map_err(|_| "no anchor element".to_string())?;
+    a.set_href(&url);
+    a.set_download(name);
+    a.click();
+    web_sys::Url::revoke_object_url(&url).map_err(fail)
 }
 
 /// The folder files are saved to and opened from when the user has not chosen one yet: the

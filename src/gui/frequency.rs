@@ -27,7 +27,8 @@ use egui_plot::{Line, LineStyle, MarkerShape, Plot, PlotPoint, PlotPoints, Point
 use num_complex::Complex64;
 use std::collections::BTreeSet;
 use std::f64::consts::PI;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 /// Frequency range of the plots [Hz].
 pub const F_RANGE_HZ: (f64, f64) = (0.1, 100.0);
@@ -60,14 +61,9 @@ pub fn bode_dwell_amplitude_v(freq_hz: f64) -> f64 {
 /// Pause after the last parameter change before the dwell restarts.
 pub const DWELL_DEBOUNCE: Duration = Duration::from_millis(400);
 
-/// Colours of the three models, shared by scopes and frequency plots.
-pub const TWIN: Color32 = Color32::from_rgb(31, 119, 180);
-/// Linear model colour.
-pub const LINEAR: Color32 = Color32::from_rgb(255, 127, 14);
-/// Passive model colour.
-pub const PASSIVE: Color32 = Color32::from_rgb(44, 160, 44);
-/// Platform colour.
-pub const PLATFORM: Color32 = Color32::from_rgb(127, 127, 127);
+/// The models' colours (defined in [`super::style`], re-exported for the views that draw
+/// beside the frequency plots).
+pub use super::style::{LINEAR, PASSIVE, PLATFORM, TWIN};
 
 /// Formats a log10-frequency axis mark as Hz.
 fn hz_axis(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
@@ -280,7 +276,7 @@ impl FreqPanel<'_> {
                     pu.line(
                         Line::new(c.name, PlotPoints::Owned(seg))
                             .color(c.color)
-                            .width(c.width)
+                            .width(plotkit::line_width(pu.ctx(), c.width))
                             .style(c.style),
                     );
                 }
@@ -465,10 +461,10 @@ pub(crate) fn freq_panels<'a>(
             style: LineStyle::dotted_dense(),
         },
     ];
-    let (ref_w, ref_style) = super::scopes::style_of(super::scopes::Model::Reference);
+    let (ref_w, ref_style) = super::style::style_of(super::style::CurveKind::Reference);
     let reference_style = CurveStyle {
         name: REFERENCE_NAME,
-        color: super::scopes::REFERENCE,
+        color: super::style::REFERENCE,
         width: ref_w,
         style: ref_style,
     };

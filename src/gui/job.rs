@@ -67,6 +67,11 @@ impl<P> JobCtx<P> {
     }
 }
 
+/// The error of every background job in the web build (sine dwells, Tune, calibration,
+/// file dialogs): they need a thread, which a browser tab does not have.
+pub const NO_THREADS_ON_THE_WEB: &str = "not available in the web build (a browser tab has no background threads): use the \
+     desktop app";
+
 /// A job running (or finished) on its own thread, producing partial results `P` and then a
 /// `T`. Dropping it cancels the work (nobody will read its result).
 pub struct Job<T, P = ()> {
@@ -100,6 +105,13 @@ impl<T: Send + 'static, P: Send + 'static> Job<T, P> {
         };
         let (tx, rx) = channel();
         let worker = ctx.clone();
+        #[cfg(target_arch = "wasm32")]
+        let spawned: std::io::Result<()> = {
+            // A browser tab has no threads: the job says so instead of freezing the page.
+            let _ = (work, worker, tx, name);
+            Err(std::io::Error::other(NO_THREADS_ON_THE_WEB))
+        };
+        #[cfg(not(target_arch = "wasm32"))]
         let spawned = std::thread::Builder::new()
             .name(name.to_string())
             .spawn(move || {
@@ -117,6 +129,13 @@ impl<T: Send + 'static, P: Send + 'static> Job<T, P> {
             });
         let result = match spawned {
             Ok(_) => rx,
+            #[cfg(target_arch = "wasm32")]
+            Err(e) => {
+                let (tx, rx) = channel();
+                let _ = tx.send(Err(e.to_string()));
+                rx
+            }
+            #[cfg(not(target_arch = "wasm32"))]
             Err(e) => {
                 let (tx, rx) = channel();
                 let _ = tx.send(Err(format!("could not start a thread: {e}")));

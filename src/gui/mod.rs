@@ -12,6 +12,8 @@
 //! * [`frequency`] — analytic responses, margins, the background dwell job.
 //! * [`measured`] — measured records: replay overlay, residual diagnosis, calibration in
 //!   the background.
+//! * [`lessons`] — the guided steps for a lecture; [`share`] — setup links (`#s=…`) and
+//!   the presets compiled in; `web` — the browser entry (wasm32 only).
 //! * [`scopes`], [`schematic`], [`controls`] — widgets; [`files`] — dialogs and exports
 //!   off the UI thread; [`units`] — display units; [`format`] — numbers for people;
 //!   [`plotkit`] — y axes, clickable legends, wrapped phase.
@@ -24,18 +26,24 @@ pub mod format;
 pub mod frequency;
 pub mod gain;
 pub mod job;
+pub mod lessons;
 pub mod measured;
 pub mod plotkit;
 pub mod schematic;
 pub mod scopes;
 pub mod session;
+pub mod share;
+pub mod style;
 pub mod traces;
 pub mod tune;
 pub mod units;
+#[cfg(target_arch = "wasm32")]
+pub mod web;
 
 pub use app::SeatTwinApp;
 
 /// Opens the app window and runs until it is closed.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn run_native() -> Result<(), eframe::Error> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()

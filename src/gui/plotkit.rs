@@ -271,6 +271,29 @@ fn paint_swatch(ui: &egui::Ui, rect: egui::Rect, c: Color32, s: Swatch) {
     }
 }
 
+/// The key of presentation mode in egui's memory (read by every plot line).
+fn presentation_id() -> egui::Id {
+    egui::Id::unique("seat_twin_presentation")
+}
+
+/// Presentation mode on or off for the plots: their lines are drawn [`PRESENTATION_LINE`]
+/// times as thick.
+pub fn set_presentation(ctx: &egui::Context, on: bool) {
+    ctx.data_mut(|d| d.insert_temp(presentation_id(), on));
+}
+
+/// How much thicker plot lines are in presentation mode.
+pub const PRESENTATION_LINE: f32 = 2.0;
+
+/// A plot line's width [points] in the current mode: `width`, or thicker in presentation
+/// mode.
+pub fn line_width(ctx: &egui::Context, width: f32) -> f32 {
+    let on = ctx
+        .data(|d| d.get_temp::<bool>(presentation_id()))
+        .unwrap_or(false);
+    if on { width * PRESENTATION_LINE } else { width }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,8 +2,8 @@
 //! (with the end stops and contacts), pressures, flows, command and spool. The lines borrow
 //! the trace buffers; nothing is copied per frame.
 
-use super::frequency::{LINEAR, PASSIVE, PLATFORM, TWIN};
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, y_axis, y_marks};
+use super::style::{CurveKind, LINEAR, P1, P2, PASSIVE, PLATFORM, REFERENCE, TWIN, style_of};
 use super::traces::{Ch, MAX_WINDOW_S, Traces};
 use super::units::MM_PER_M;
 use crate::params::Params;
@@ -11,14 +11,7 @@ use egui::Color32;
 use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoint, PlotPoints, PlotUi, Span, VLine};
 use std::collections::BTreeSet;
 
-/// Upper chamber colour.
-const P1_COLOR: Color32 = Color32::from_rgb(214, 39, 40);
-/// Lower chamber colour.
-const P2_COLOR: Color32 = Color32::from_rgb(148, 103, 189);
 /// End-stop contact highlight.
-/// Colour of the A/B reference twin (B) wherever it is drawn.
-pub const REFERENCE: Color32 = Color32::from_rgb(220, 0, 150);
-
 const CONTACT: Color32 = Color32::from_rgba_premultiplied(200, 30, 30, 60);
 
 /// Number of scopes stacked in [`scopes_ui`].
@@ -29,36 +22,6 @@ const X_TITLE_H: f32 = 18.0;
 
 /// Height of a legend row above a scope [px].
 const LEGEND_H: f32 = 18.0;
-
-/// How each kind of curve is drawn wherever curves overlap: the twin solid and wider, the
-/// linear model dashed on top of it, the passive reference dotted, the platform thin.
-pub fn style_of(model: Model) -> (f32, LineStyle) {
-    match model {
-        Model::Twin => (2.2, LineStyle::Solid),
-        Model::Linear => (1.6, LineStyle::dashed_dense()),
-        Model::Passive => (1.6, LineStyle::dotted_dense()),
-        Model::Platform => (1.0, LineStyle::Solid),
-        Model::Second => (1.6, LineStyle::dashed_dense()),
-        Model::Reference => (1.8, LineStyle::dashed_loose()),
-    }
-}
-
-/// The kinds of curve, for their styles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Model {
-    /// The twin (solid, wide).
-    Twin,
-    /// The linear model (dashed).
-    Linear,
-    /// The passive reference (dotted).
-    Passive,
-    /// The platform (thin).
-    Platform,
-    /// The second of two twin channels in one scope (Q2 under Q1, p2 under p1): dashed.
-    Second,
-    /// The A/B reference twin (B): loosely dashed, magenta.
-    Reference,
-}
 
 fn scope<'a>(
     id: &str,
@@ -180,9 +143,9 @@ pub fn scopes_ui(
 ) -> ScopeFrames {
     let span = view.window_s.clamp(1.0, MAX_WINDOW_S);
     // With A/B on, the reference twin (B) is overlaid on the twin (A) where they differ most.
-    let with_b = |mut v: Vec<(&'static str, Ch, Color32, Model)>, b: (&'static str, Ch)| {
+    let with_b = |mut v: Vec<(&'static str, Ch, Color32, CurveKind)>, b: (&'static str, Ch)| {
         if ab {
-            v.push((b.0, b.1, REFERENCE, Model::Reference));
+            v.push((b.0, b.1, REFERENCE, CurveKind::Reference));
         }
         v
     };
@@ -200,12 +163,13 @@ pub fn scopes_ui(
                     y_label: &str,
                     unit: &'static str,
                     last: bool,
-                    curves: &[(&str, Ch, Color32, Model)],
+                    curves: &[(&str, Ch, Color32, CurveKind)],
                     extra: &dyn Fn(&mut PlotUi<'_>, &BTreeSet<String>)| {
         let mut items: Vec<LegendItem<'_>> = curves
             .iter()
             .map(|&(name, _, color, m)| {
                 let (w, st) = style_of(m);
+                let w = plotkit::line_width(ui.ctx(), w);
                 LegendItem {
                     name,
                     color,
@@ -241,6 +205,7 @@ pub fn scopes_ui(
                     continue;
                 }
                 let (w, st) = style_of(m);
+                let w = plotkit::line_width(pu.ctx(), w);
                 // Live: the window's points; frozen: all that is kept, to pan over.
                 let pts = if view.live {
                     traces.channel(ch).window(t, span)
@@ -271,10 +236,10 @@ pub fn scopes_ui(
         false,
         &with_b(
             vec![
-                ("platform", Ch::PlatformAcc, PLATFORM, Model::Platform),
-                ("passive", Ch::PassiveAcc, PASSIVE, Model::Passive),
-                ("twin", Ch::TwinAcc, TWIN, Model::Twin),
-                ("linear", Ch::LinearAcc, LINEAR, Model::Linear),
+                ("platform", Ch::PlatformAcc, PLATFORM, CurveKind::Platform),
+                ("passive", Ch::PassiveAcc, PASSIVE, CurveKind::Passive),
+                ("twin", Ch::TwinAcc, TWIN, CurveKind::Twin),
+                ("linear", Ch::LinearAcc, LINEAR, CurveKind::Linear),
             ],
             ("B: reference", Ch::RefAcc),
         ),
@@ -291,9 +256,9 @@ pub fn scopes_ui(
         false,
         &with_b(
             vec![
-                ("passive u", Ch::PassiveU, PASSIVE, Model::Passive),
-                ("twin u", Ch::TwinU, TWIN, Model::Twin),
-                ("linear u", Ch::LinearU, LINEAR, Model::Linear),
+                ("passive u", Ch::PassiveU, PASSIVE, CurveKind::Passive),
+                ("twin u", Ch::TwinU, TWIN, CurveKind::Twin),
+                ("linear u", Ch::LinearU, LINEAR, CurveKind::Linear),
             ],
             ("B: reference u", Ch::RefU),
         ),
@@ -325,8 +290,8 @@ pub fn scopes_ui(
         "bar",
         false,
         &[
-            ("p1 (upper)", Ch::P1, P1_COLOR, Model::Twin),
-            ("p2 (lower)", Ch::P2, P2_COLOR, Model::Second),
+            ("p1 (upper)", Ch::P1, P1, CurveKind::Twin),
+            ("p2 (lower)", Ch::P2, P2, CurveKind::Second),
         ],
         &|_, _| {},
     );
@@ -338,8 +303,8 @@ pub fn scopes_ui(
         "L/min",
         false,
         &[
-            ("Q1", Ch::Q1, P1_COLOR, Model::Twin),
-            ("Q2", Ch::Q2, P2_COLOR, Model::Second),
+            ("Q1", Ch::Q1, P1, CurveKind::Twin),
+            ("Q2", Ch::Q2, P2, CurveKind::Second),
         ],
         &|_, _| {},
     );
@@ -352,8 +317,8 @@ pub fn scopes_ui(
         false,
         &with_b(
             vec![
-                ("twin V_in", Ch::TwinVin, TWIN, Model::Twin),
-                ("linear V_in", Ch::LinearVin, LINEAR, Model::Linear),
+                ("twin V_in", Ch::TwinVin, TWIN, CurveKind::Twin),
+                ("linear V_in", Ch::LinearVin, LINEAR, CurveKind::Linear),
             ],
             ("B: reference V_in", Ch::RefVin),
         ),
@@ -366,7 +331,7 @@ pub fn scopes_ui(
         "spool x_v [mm]",
         "mm",
         true,
-        &[("twin x_v", Ch::TwinXv, TWIN, Model::Twin)],
+        &[("twin x_v", Ch::TwinXv, TWIN, CurveKind::Twin)],
         &|_, _| {},
     );
     frames

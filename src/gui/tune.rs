@@ -310,7 +310,7 @@ fn pareto_plot(ui: &mut egui::Ui, front: &[Evaluation], selected: Option<usize>)
         .show(ui, |pu| {
             pu.points(
                 Points::new("Pareto front", pts.as_slice())
-                    .color(super::frequency::TWIN)
+                    .color(super::style::TWIN)
                     .shape(MarkerShape::Circle)
                     .radius(4.0)
                     .filled(true),

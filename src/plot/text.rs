@@ -6,6 +6,7 @@
 //! glyph at a time (`canvas::draw_text`). Characters the font lacks fall back to what it has.
 
 use super::PlotError;
+#[cfg(not(target_arch = "wasm32"))]
 use plotters::style::FontStyle;
 use std::sync::OnceLock;
 use ttf_parser::{Face, GlyphId};
@@ -80,7 +81,12 @@ impl Font {
 pub(super) fn font() -> Result<&'static Font, PlotError> {
     static FONT: OnceLock<Result<Font, String>> = OnceLock::new();
     let parsed = FONT.get_or_init(|| {
+        // plotters has no font registry on wasm32 (the web app draws no figure files).
+        if cfg!(target_arch = "wasm32") {
+            return Err("figure files are not drawn in the web build".to_string());
+        }
         let font = Font::parse(FONT_BYTES)?;
+        #[cfg(not(target_arch = "wasm32"))]
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES)
             .map_err(|_| "plotters did not accept the font".to_string())?;
         Ok(font)

@@ -255,14 +255,28 @@ impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> Simulation
     /// `None` when the command delay is shorter than the step (then the delayed command at a
     /// step's end is not yet known at its start; use [`Self::new`], RK4).
     pub fn exact_hold(model: M, h: f64, drive: Drive, platform: PlatformMotion) -> Option<Self> {
-        if !hold_fits(&model, h) {
-            return None;
+        hold_fits(&model, h).then(|| Self::exact_or_rk4(model, h, h, drive, platform))
+    }
+
+    /// The linear model stepped as `seat-twin simulate` steps it: exactly at `h_exact` [s]
+    /// ([`Self::exact_hold`]), or by RK4 at `h_rk4` [s] when the delay is shorter than
+    /// `h_exact`.
+    pub fn exact_or_rk4(
+        model: M,
+        h_exact: f64,
+        h_rk4: f64,
+        drive: Drive,
+        platform: PlatformMotion,
+    ) -> Self {
+        if hold_fits(&model, h_exact) {
+            let hold = ExactHold::new(&model, h_exact);
+            let mut sim = Self::new(model, h_exact, drive, platform);
+            sim.method = Method::ExactHold(Box::new(hold));
+            sim.refresh_valve_now();
+            sim
+        } else {
+            Self::new(model, h_rk4, drive, platform)
         }
-        let hold = ExactHold::new(&model, h);
-        let mut sim = Self::new(model, h, drive, platform);
-        sim.method = Method::ExactHold(Box::new(hold));
-        sim.refresh_valve_now();
-        Some(sim)
     }
 }
 

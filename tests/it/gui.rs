@@ -306,11 +306,37 @@ fn full_scopes_paint_the_whole_window_and_sliders_recompute_in_frame() {
     let ppp = h.output().pixels_per_point;
     assert!(!h.ctx.tessellate(shapes, ppp).is_empty());
     // A slider move: the analytic curves (and margins) are recomputed within that frame.
+    // The curves themselves, not only the parameters they were computed for: the linear
+    // model's |T| against the closed form G(s) gives at the new gain, point for point.
+    let mut before = h.state().curves().t_mag[0].clone();
     for kp in [-6.0, -7.0, -8.0] {
         h.get_by_role_and_label(Role::Slider, "Kp")
             .set_value_accesskit(kp);
         h.step();
-        assert_eq!(h.state().curves().params.unwrap().controller.kp_v_per_m, kp);
+        let curves = h.state().curves();
+        assert_eq!(curves.params.unwrap().controller.kp_v_per_m, kp);
+        let p = *h.state().params();
+        let t_lin = &curves.t_mag[0];
+        assert!(t_lin.len() > 100);
+        for pt in t_lin {
+            // The plot's x is log10 of the frequency.
+            let f_hz = 10f64.powf(pt.x);
+            let t = seat_twin::analysis::frequency_response::linear_transmissibility(&p, f_hz);
+            let want = 20.0 * t.norm().log10();
+            assert!(
+                (pt.y - want).abs() < 1e-6,
+                "|T| at {f_hz} Hz: {} dB, want {want} dB",
+                pt.y
+            );
+        }
+        assert!(
+            t_lin
+                .iter()
+                .zip(&before)
+                .any(|(a, b)| (a.y - b.y).abs() > 1e-3),
+            "Kp = {kp}: the curve did not change"
+        );
+        before = t_lin.clone();
     }
     // A plant parameter: the twin is re-linearised and its responses re-evaluated in-frame.
     for cd in [0.14, 0.15] {

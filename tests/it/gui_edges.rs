@@ -303,6 +303,10 @@ fn unstable_state_shows_no_stale_results_and_resets_to_stable_gains() {
         "−1.03·{limit} should be unstable"
     );
 
+    // A bounded limit cycle at −1500 V/m (the valve saturates) may never diverge: back to
+    // the positive gain, whose run-away does, whatever the timing of the frames.
+    h.get_by_role_and_label(Role::Slider, "Kp")
+        .set_value_accesskit(200.0);
     step_until(&mut h, "the divergence", |a| a.engine_error().is_some());
     h.step();
     h.get_all_by_label("Reset to last stable gains")
@@ -322,9 +326,9 @@ fn unstable_state_shows_no_stale_results_and_resets_to_stable_gains() {
 /// the data) and a click hides and shows a curve.
 #[test]
 fn legend_entries_hide_curves_and_sit_off_the_data() {
-    use seat_twin::gui::scopes::{Model, style_of};
-    assert_ne!(style_of(Model::Twin), style_of(Model::Linear));
-    assert_ne!(style_of(Model::Twin), style_of(Model::Second));
+    use seat_twin::gui::style::{CurveKind, style_of};
+    assert_ne!(style_of(CurveKind::Twin), style_of(CurveKind::Linear));
+    assert_ne!(style_of(CurveKind::Twin), style_of(CurveKind::Second));
     let mut h = harness();
     h.run_steps(2);
     let q1 = h.get_by_label("Q1").rect();

@@ -17,6 +17,7 @@ mod gui_lab;
 mod gui_measured;
 mod gui_session;
 mod gui_use;
+mod gui_web;
 mod identify;
 mod integrator;
 mod paper;

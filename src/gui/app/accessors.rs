@@ -88,41 +88,6 @@ impl SeatTwinApp {
         self.path_prompt.as_ref()
     }
 
-    /// The text of the toolbar clock (simulated time and real-time factor).
-    pub fn clock_text(&self) -> String {
-        let v = &self.engine_view;
-        if self.engine_error.is_some() {
-            format!("t = {:8.2} s   stopped", v.t)
-        } else if !v.running {
-            format!("t = {:8.2} s   paused", v.t)
-        } else {
-            format!(
-                "t = {:8.2} s   ×{:.2} real time",
-                v.t,
-                v.realtime_factor.max(0.0)
-            )
-        }
-    }
-
-    /// TEST HOOK: makes the engine's next step panic (see `Command::InjectFault`). The UI
-    /// never calls it.
-    #[doc(hidden)]
-    pub fn inject_engine_fault(&mut self) {
-        self.send(Command::InjectFault);
-    }
-
-    /// Puts back the last gains with which both loops were stable and restarts the
-    /// simulation from rest with them.
-    pub fn reset_to_last_stable_gains(&mut self) {
-        if let Some(g) = self.last_stable {
-            self.params.controller = g;
-            self.field_errors.remove("Kp");
-            self.field_errors.remove("Ki");
-            self.apply_params();
-        }
-        self.reset();
-    }
-
     /// The shipped presets `(name, file)` in the Presets menu.
     pub fn shipped_presets(&self) -> &[(String, PathBuf)] {
         &self.shipped

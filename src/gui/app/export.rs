@@ -160,7 +160,10 @@ impl SeatTwinApp {
                 // for the linear model and the twin, and the margins in the title; neither
                 // for an unstable loop, where they mean nothing.
                 if !unstable {
-                    let who = [("linear", Rgb(255, 127, 14)), ("twin", Rgb(31, 119, 180))];
+                    let who = [
+                        ("linear", rgb(crate::gui::style::LINEAR)),
+                        ("twin", rgb(crate::gui::style::TWIN)),
+                    ];
                     for ((name, color), cs) in who.into_iter().zip(&c.crossings) {
                         if let Some(x) = cs.iter().find(|x| x.rising) {
                             p.series.push(Series::markers(
@@ -214,30 +217,31 @@ impl SeatTwinApp {
     pub fn plot_figures(&self) -> Vec<(&'static str, Figure)> {
         use crate::gui::frequency::REFERENCE_NAME;
         let freq = self.frequency_figure();
-        let (lin_c, twin_c, pas_c) = (Rgb(255, 127, 14), Rgb(31, 119, 180), Rgb(44, 160, 44));
+        use crate::gui::style::{self, CurveKind};
+        let rgb = |c: Color32| Rgb(c.r(), c.g(), c.b());
+        let (lin_c, twin_c, pas_c) = (rgb(style::LINEAR), rgb(style::TWIN), rgb(style::PASSIVE));
         let tr = &self.traces;
         // Each curve in the view's line style (dashed linear model and B, dotted passive),
         // so the figure still tells them apart where they overlap and in black and white.
-        let ch_as = |label: &str, chan: Ch, color: Rgb, model: scopes::Model| {
+        let ch_as = |label: &str, chan: Ch, color: Rgb, model: CurveKind| {
             let (x, y) = tr.channel(chan).points().iter().map(|p| (p.x, p.y)).unzip();
-            let (w, st) = scopes::style_of(model);
+            let (w, st) = style::style_of(model);
             styled(Series::line(label, x, y, color), w, st)
         };
-        use scopes::Model;
         let ch = |label: &str, chan: Ch, color: Rgb| {
             let model = match label {
-                "linear" => Model::Linear,
-                "passive" => Model::Passive,
-                "platform" => Model::Platform,
-                "p2" | "Q2" => Model::Second,
-                l if l.starts_with("B") => Model::Reference,
-                _ => Model::Twin,
+                "linear" => CurveKind::Linear,
+                "passive" => CurveKind::Passive,
+                "platform" => CurveKind::Platform,
+                "p2" | "Q2" => CurveKind::Second,
+                l if l.starts_with("B") => CurveKind::Reference,
+                _ => CurveKind::Twin,
             };
             ch_as(label, chan, color, model)
         };
         let mut acc = Panel::new("Live traces", "time [s]", "acceleration [m/s²]");
         acc.series = vec![
-            ch("platform", Ch::PlatformAcc, Rgb(127, 127, 127)),
+            ch("platform", Ch::PlatformAcc, rgb(style::PLATFORM)),
             ch("passive", Ch::PassiveAcc, pas_c),
             ch("linear", Ch::LinearAcc, lin_c),
             ch("twin", Ch::TwinAcc, twin_c),
@@ -253,13 +257,13 @@ impl SeatTwinApp {
         stroke.vspans = tr.contacts().to_vec();
         let mut pr = Panel::new("", "time [s]", "pressure [bar]");
         pr.series = vec![
-            ch("p1", Ch::P1, Rgb(214, 39, 40)),
-            ch("p2", Ch::P2, Rgb(148, 103, 189)),
+            ch("p1", Ch::P1, rgb(style::P1)),
+            ch("p2", Ch::P2, rgb(style::P2)),
         ];
         let mut q = Panel::new("", "time [s]", "flow [L/min]");
         q.series = vec![
-            ch("Q1", Ch::Q1, Rgb(214, 39, 40)),
-            ch("Q2", Ch::Q2, Rgb(148, 103, 189)),
+            ch("Q1", Ch::Q1, rgb(style::P1)),
+            ch("Q2", Ch::Q2, rgb(style::P2)),
         ];
         let mut v = Panel::new("", "time [s]", "V_in [V]");
         v.series = vec![
@@ -268,7 +272,7 @@ impl SeatTwinApp {
         ];
         if self.ab.is_on() {
             // The A/B reference twin (B), as the view overlays it.
-            let b = Rgb(220, 0, 150);
+            let b = rgb(style::REFERENCE);
             acc.series.push(ch(REFERENCE_NAME, Ch::RefAcc, b));
             stroke.series.push(ch("B: reference u", Ch::RefU, b));
             v.series.push(ch("B: reference V_in", Ch::RefVin, b));

@@ -150,6 +150,12 @@ impl SeatTwinApp {
 
     /// Opens the file dialog for `purpose` in [`Self::file_dir`], suggesting `name`.
     pub(super) fn request_file(&mut self, purpose: Purpose, name: &str, ctx: &egui::Context) {
+        #[cfg(target_arch = "wasm32")]
+        if purpose == Purpose::ExportCsv {
+            // The browser saves it: a download.
+            self.download_traces_csv(name);
+            return;
+        }
         let dir = self.file_dir();
         self.dialogs.request(purpose, name, &dir, ctx);
     }
@@ -174,8 +180,84 @@ impl SeatTwinApp {
         }
     }
 
+    /// The scopes' traces as a CSV download (web).
+    #[cfg(target_arch = "wasm32")]
+    fn download_traces_csv(&mut self, name: &str) {
+        let table = self.traces_table();
+        if table.rows.is_empty() {
+            self.error("nothing to export yet: run the simulation first");
+            return;
+        }
+        let mut bytes = Vec::new();
+        let n = table.rows.len();
+        let written = crate::dataset::write_csv(
+            &mut bytes,
+            &table.header,
+            &table.comments,
+            table.rows.into_iter(),
+        )
+        .map_err(|e| e.to_string())
+        .and_then(|()| files::download(name, &bytes, "text/csv"));
+        match written {
+            Ok(()) => self.info(format!("{n} rows downloaded as {name}")),
+            Err(e) => self.error(format!("export failed: {e}")),
+        }
+    }
+
+    /// A file the browser's picker read (web): a preset or a platform record, parsed from
+    /// its bytes as the desktop parses a file.
+    fn use_picked(&mut self, purpose: Purpose, picked: files::PickedFile) {
+        let path = PathBuf::from(&picked.name);
+        match purpose {
+            Purpose::OpenPreset => match Preset::from_bytes(&picked.bytes, &path) {
+                Ok(p) => {
+                    self.set_preset(p, None, false);
+                    self.info(format!("preset loaded from {}", picked.name));
+                }
+                Err(e) => self.error(format!("preset not loaded: {e}")),
+            },
+            Purpose::LoadRecord => {
+                let record = crate::dataset::parse_record_bytes(
+                    &picked.bytes,
+                    &path,
+                    crate::dataset::RecordKind::Excitation,
+                )
+                .map_err(anyhow::Error::from)
+                .and_then(|rec| {
+                    crate::scenario::SampledMotion::from_record(&rec)
+                        .ok_or_else(|| anyhow::anyhow!("{}: no `x` or `xdd` column", picked.name))
+                });
+                match record {
+                    Ok(motion) => {
+                        self.settings.excitation.record = Some(LoadedRecord {
+                            name: picked.name.clone(),
+                            path,
+                            motion,
+                        });
+                        self.settings.excitation.kind = ExcitationKind::Record;
+                        self.apply_excitation();
+                        self.info(format!("record loaded from {}", picked.name));
+                    }
+                    Err(e) => self.error(format!("record not loaded: {e:#}")),
+                }
+            }
+            _ => self.error(files::NOT_ON_THE_WEB),
+        }
+    }
+
     pub(super) fn poll_files(&mut self, ctx: &egui::Context) {
+        while let Some((purpose, picked)) = self.dialogs.poll_picked() {
+            match picked {
+                Some(p) => self.use_picked(purpose, p),
+                None => self.info("no file chosen"),
+            }
+        }
         while let Some((purpose, paths)) = self.dialogs.poll() {
+            if cfg!(target_arch = "wasm32") {
+                // No file system in a browser: a typed path cannot help.
+                self.error(files::NOT_ON_THE_WEB);
+                continue;
+            }
             if paths.is_empty() {
                 // Cancelled, or no dialog on this desktop: offer a typed path instead.
                 self.path_prompt = Some((purpose, self.suggested_path(purpose)));

@@ -52,7 +52,16 @@ impl SeatTwinApp {
         });
         ui.menu_button("Presets", |ui| {
             if self.shipped.is_empty() {
-                ui.weak("no presets/ directory found");
+                // The web build (or a binary without its presets/ folder): the presets
+                // compiled into the app.
+                for (name, _) in crate::gui::share::SHIPPED {
+                    if ui.button(name).clicked() {
+                        match crate::gui::share::shipped_preset(name) {
+                            Ok(p) => self.set_preset(p, None, false),
+                            Err(e) => self.error(format!("preset not loaded: {e}")),
+                        }
+                    }
+                }
             }
             for (name, path) in self.shipped.clone() {
                 if ui
@@ -89,6 +98,8 @@ impl SeatTwinApp {
             ui.checkbox(&mut self.settings.show_schematic, "Schematic");
             ui.checkbox(&mut self.settings.dwell_auto, "Auto-recompute dwell points");
             ui.checkbox(&mut self.settings.show_debug, "Frame-time overlay");
+            ui.separator();
+            self.teaching_menu_ui(ui);
         });
     }
 

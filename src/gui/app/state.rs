@@ -1,0 +1,164 @@
+//! The app's plain state types: the persisted settings, the preset in use, what the engine
+//! last reported, the notice line and the frame timings.
+
+use super::super::controls::ExcitationEditor;
+use crate::engine::Speed;
+use crate::params::{ControllerParams, Params};
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use web_time::Instant;
+
+/// Theme choice (persisted).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Theme {
+    /// Follow the desktop.
+    #[default]
+    System,
+    /// Light.
+    Light,
+    /// Dark.
+    Dark,
+}
+
+impl Theme {
+    pub(super) fn preference(self) -> egui::ThemePreference {
+        match self {
+            Theme::System => egui::ThemePreference::System,
+            Theme::Light => egui::ThemePreference::Light,
+            Theme::Dark => egui::ThemePreference::Dark,
+        }
+    }
+}
+
+/// What persists between runs (eframe storage; the window layout persists through egui).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Settings {
+    /// Theme.
+    pub theme: Theme,
+    /// The preset file last opened or saved.
+    pub last_preset: Option<PathBuf>,
+    /// Simulation speed.
+    pub speed: Speed,
+    /// Frame-time overlay.
+    pub show_debug: bool,
+    /// Schematic panel.
+    pub show_schematic: bool,
+    /// Recompute the simulated dwell points automatically after slider changes.
+    pub dwell_auto: bool,
+    /// The excitation editor.
+    pub excitation: ExcitationEditor,
+    /// Unwrapped phase in the frequency plots (default: wrapped into ±180°).
+    pub phase_unwrapped: bool,
+    /// UI scale (egui's zoom factor: 1 = 100 %), also changed with Ctrl + / Ctrl −.
+    pub ui_scale: f32,
+    /// Length of the scopes' time window [s], 1 … 60.
+    pub scope_window_s: f64,
+    /// The folder of the last file opened or saved (dialogs and typed paths start there).
+    pub last_dir: Option<PathBuf>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            theme: Theme::System,
+            last_preset: None,
+            speed: Speed::RealTime,
+            show_debug: false,
+            show_schematic: true,
+            dwell_auto: true,
+            excitation: ExcitationEditor::default(),
+            phase_unwrapped: false,
+            last_dir: None,
+            ui_scale: 1.0,
+            scope_window_s: crate::gui::traces::WINDOW_S,
+        }
+    }
+}
+
+/// The preset the current parameters came from.
+#[derive(Debug, Clone)]
+pub struct PresetInfo {
+    /// Name shown in the title.
+    pub name: String,
+    /// Its description.
+    pub description: String,
+    /// The file, if any.
+    pub path: Option<PathBuf>,
+    /// Whether "Save" may overwrite `path` (the user chose it; shipped presets are not).
+    pub user_file: bool,
+    /// Parameters as loaded or last saved: the "modified" marker compares against these.
+    pub baseline: Params,
+}
+
+/// What the engine last reported.
+#[derive(Debug, Clone, Default)]
+pub struct EngineView {
+    /// Simulated time [s].
+    pub t: f64,
+    /// Real-time factor.
+    pub realtime_factor: f64,
+    /// Running (not paused, not failed).
+    pub running: bool,
+    /// Parameters the engine runs with (echo).
+    pub params: Option<Params>,
+    /// The A/B reference controller the engine runs (`None`: A/B off).
+    pub reference: Option<ControllerParams>,
+    /// End-stop contacts since the last restart: live twin, reference twin.
+    pub contacts: (usize, usize),
+}
+
+/// A message line under the toolbar.
+#[derive(Debug, Clone)]
+pub struct Notice {
+    /// Text.
+    pub text: String,
+    /// An error (red) or information.
+    pub error: bool,
+    pub(super) at: Instant,
+}
+
+/// Per-frame timing, for the debug overlay.
+#[derive(Debug, Clone, Default)]
+pub struct FrameStats {
+    ui_ms: VecDeque<f64>,
+    frame_at: VecDeque<Instant>,
+    /// Whole-frame CPU time reported by eframe (UI + tessellation) [ms].
+    pub cpu_ms: Option<f64>,
+    /// Time of the scopes in the last frame [ms].
+    pub scopes_ms: f64,
+    /// Time of the frequency plots in the last frame [ms].
+    pub freq_ms: f64,
+}
+
+impl FrameStats {
+    pub(super) fn record(&mut self, ui_ms: f64) {
+        if self.ui_ms.len() >= 120 {
+            self.ui_ms.pop_front();
+            self.frame_at.pop_front();
+        }
+        self.ui_ms.push_back(ui_ms);
+        self.frame_at.push_back(Instant::now());
+    }
+
+    /// Mean time of `SeatTwinApp::ui` over the last 120 frames [ms].
+    pub fn mean_ui_ms(&self) -> f64 {
+        self.ui_ms.iter().sum::<f64>() / self.ui_ms.len().max(1) as f64
+    }
+
+    /// Largest time of `SeatTwinApp::ui` over the last 120 frames [ms].
+    pub fn max_ui_ms(&self) -> f64 {
+        self.ui_ms.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// Frames per second over the last 120 frames.
+    pub fn fps(&self) -> f64 {
+        match (self.frame_at.front(), self.frame_at.back()) {
+            (Some(a), Some(b)) if self.frame_at.len() > 1 => {
+                (self.frame_at.len() - 1) as f64 / b.duration_since(*a).as_secs_f64().max(1e-9)
+            }
+            _ => 0.0,
+        }
+    }
+}
