@@ -84,6 +84,3 @@ pub mod scenario;
 pub mod seat_test;
 pub mod simulation;
 pub mod tune;
-
-// transitional re-export, removed at merge
-pub use simulation::{delay, integrate, lti};

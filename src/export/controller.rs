@@ -111,7 +111,7 @@ pub fn hex_f32(v: f64) -> String {
 }
 
 /// The Smith model's read of its history `τm` back: whole steps back, fraction, cubic
-/// Lagrange weights, and the ring's length — the numbers [`crate::delay::DelayLine`] uses
+/// Lagrange weights, and the ring's length — the numbers [`crate::simulation::delay::DelayLine`] uses
 /// for a delay line of step `h` with room for [`MAX_DELAY_S`] + `h`.
 fn smith_tap(tau_s: f64, h: f64) -> (i64, f64, [f64; 4], usize) {
     let inv_h = 1.0 / h;

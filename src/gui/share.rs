@@ -345,7 +345,7 @@ fn excitation(value: &str) -> Result<ExcitationEditor, String> {
             if crate::seat_test::find(name).is_none() {
                 return Err(format!(
                     "unknown seat-test class `{name}` ({})",
-                    crate::seat_test::classes::names()
+                    crate::scenario::classes::names()
                 ));
             }
             e.class_name = (*name).to_string();

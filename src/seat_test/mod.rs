@@ -19,10 +19,5 @@
 pub mod report;
 pub mod run;
 
-// transitional re-export, removed at merge
-pub use crate::scenario::class_motion as signal;
-// transitional re-export, removed at merge
-pub use crate::scenario::class_motion::ClassMotion;
-pub use crate::scenario::classes;
 pub use crate::scenario::classes::{CLASSES, InputClass, find};
 pub use run::{SeatTestOptions, SeatTestResult, run_seat_test};

@@ -235,7 +235,7 @@ pub fn markdown(r: &SeatTestResult, class: &InputClass, preset: &str) -> String 
         s,
         "Source: the HVLab HRV Toolbox (ISVR, University of Southampton), `hvtestspectrum.m` \
          and `hvtestsignal.m`; the standard's own table could not be read. The class mapping \
-         and what else is uncertain are listed in the engine's `seat_test::classes` docs.{}\n",
+         and what else is uncertain are listed in the engine's `scenario::classes` docs.{}\n",
         if class.note.is_empty() {
             String::new()
         } else {
