@@ -50,7 +50,7 @@ use num_complex::Complex64;
 use std::f64::consts::PI;
 
 /// What the controller measures at a grid time (SI).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Measurement {
     /// Relative displacement `u = y − x` [m].
     pub u: f64,
@@ -308,6 +308,74 @@ impl Controller {
                 (phi, [m.gamma[0], m.gamma[1], m.gamma[2]])
             }),
         }
+    }
+}
+
+/// A controller's signal states ([`Controller::snapshot`]); its gains and discretisation are
+/// rebuilt from the parameters.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ControllerState {
+    /// `∫ẍ dt` since the start [m/s].
+    pub xd: f64,
+    /// The predictive kind's low-passed ẍ [m/s²].
+    pub lead: f64,
+    /// The skyhook kind's body-velocity estimate [m/s].
+    pub sky: f64,
+    /// The skyhook kind's low-passed estimate [m/s].
+    pub sky_lp: f64,
+    /// The previous measurement.
+    pub last: Measurement,
+    /// The command last sent [V].
+    pub sent: f64,
+    /// The Smith model's state `[ũ, w, ẇ]`, its history of ũ and the grid index of the
+    /// newest sample.
+    pub smith: Option<([f64; 3], crate::simulation::delay::DelayLineState, u64)>,
+}
+
+impl Controller {
+    /// Its signal states.
+    pub fn snapshot(&self) -> ControllerState {
+        ControllerState {
+            xd: self.xd,
+            lead: self.lead.w,
+            sky: self.sky.w,
+            sky_lp: self.sky_lp.w,
+            last: self.last,
+            sent: self.sent,
+            smith: self
+                .smith
+                .as_ref()
+                .map(|m| ([m.z[0], m.z[1], m.z[2]], m.history.snapshot(), m.n)),
+        }
+    }
+
+    /// Takes the signal states of a controller of the same structure and step; refused,
+    /// leaving `self` unchanged, for another structure or history size.
+    pub fn restore(&mut self, s: &ControllerState) -> Result<(), crate::simulation::RestoreError> {
+        let mut smith = self.smith.clone();
+        match (smith.as_mut(), &s.smith) {
+            (Some(m), Some((z, history, n))) => {
+                m.history.restore(history)?;
+                m.z = Vector3::from(*z);
+                m.n = *n;
+            }
+            (None, None) => {}
+            (mine, theirs) => {
+                return Err(crate::simulation::RestoreError::Mismatch {
+                    what: "number of Smith models",
+                    expected: mine.is_some() as usize,
+                    found: theirs.is_some() as usize,
+                });
+            }
+        }
+        self.smith = smith;
+        self.xd = s.xd;
+        self.lead.w = s.lead;
+        self.sky.w = s.sky;
+        self.sky_lp.w = s.sky_lp;
+        self.last = s.last;
+        self.sent = s.sent;
+        Ok(())
     }
 }
 

@@ -352,7 +352,7 @@ pub enum PlatformMotion {
 /// A platform acceleration known at `t0` with its first three time derivatives, read at
 /// `t ≥ t0` as `ẍ(t) = Σ dᵢ·(t − t0)ⁱ/i!` (a held value when the derivatives are zero). The
 /// position is reported as given; the velocity is not known (NaN).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct InputSegment {
     /// Time the values are given at [s].
     pub t0: f64,
@@ -555,7 +555,7 @@ pub enum CommandSignal {
 
 /// The recent samples of a command received as it goes, oldest first (see
 /// [`CommandSignal::Streamed`]).
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct CommandStream {
     samples: std::collections::VecDeque<(f64, f64)>,
 }

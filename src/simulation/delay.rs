@@ -131,6 +131,40 @@ impl DelayLine {
     }
 }
 
+/// The contents of a [`DelayLine`] ([`DelayLine::snapshot`]): everything but its step and
+/// size, which the line is rebuilt with.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DelayLineState {
+    /// Samples pushed so far.
+    pub len: u64,
+    /// The ring buffer as stored (its length is the line's size).
+    pub ring: Vec<f64>,
+}
+
+impl DelayLine {
+    /// The line's contents.
+    pub fn snapshot(&self) -> DelayLineState {
+        DelayLineState {
+            len: self.len,
+            ring: self.ring.clone(),
+        }
+    }
+
+    /// Takes the contents of a line of the same step and size; refused for another size.
+    pub fn restore(&mut self, state: &DelayLineState) -> Result<(), super::RestoreError> {
+        if state.ring.len() != self.ring.len() {
+            return Err(super::RestoreError::Mismatch {
+                what: "delay line size",
+                expected: self.ring.len(),
+                found: state.ring.len(),
+            });
+        }
+        self.len = state.len;
+        self.ring.copy_from_slice(&state.ring);
+        Ok(())
+    }
+}
+
 /// A read of a [`DelayLine`] a fixed delay behind its grid: `value(n·h − delay)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tap {

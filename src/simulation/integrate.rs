@@ -11,7 +11,7 @@
 //! by `seat-twin bench`.
 
 /// Counters of integrator work, so that a regression shows as work before it shows as time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub struct StepStats {
     /// Steps taken.
     pub steps: u64,

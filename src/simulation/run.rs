@@ -77,6 +77,34 @@ impl RunState {
     }
 }
 
+/// What of a [`RunState`] changes while stepping, without the closed contacts (the run's
+/// record, not its state): the steps taken and the contact still open, which the next steps
+/// may extend ([`RunState::snapshot`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RunStateSnapshot {
+    /// Steps taken.
+    pub steps: u64,
+    /// The end-stop contact the body is in, if any.
+    pub open_contact: Option<ContactEvent>,
+}
+
+impl RunState {
+    /// The steps taken and the open contact.
+    pub fn snapshot(&self) -> RunStateSnapshot {
+        RunStateSnapshot {
+            steps: self.steps,
+            open_contact: self.contacts.last().copied().filter(|_| self.in_contact),
+        }
+    }
+
+    /// Takes the steps and open contact of a snapshot (the closed contacts are forgotten).
+    pub(crate) fn restore(&mut self, s: &RunStateSnapshot) {
+        self.steps = s.steps;
+        self.in_contact = s.open_contact.is_some();
+        self.contacts = s.open_contact.into_iter().collect();
+    }
+}
+
 /// The first state of `y` that is not finite or beyond its bound `bound(i)`, as the divergence
 /// of model `M` at time `t`.
 #[inline(always)]

@@ -246,13 +246,13 @@ pub unsafe extern "C" fn fmi2Instantiate(
             }
             let guid = cstr(fmu_guid).ok_or("fmuGUID is null")?;
             let uri = cstr(fmu_resource_location).ok_or("fmuResourceLocation is null")?;
-            read_resources(&uri, &guid)
+            read_resources(&uri, &guid).map(|(params, placement)| (params, placement, guid))
         })();
         match checked {
-            Ok((params, placement)) => {
+            Ok((params, placement, guid)) => {
                 inst.placement = placement;
                 inst.preset = params;
-                inst.slave = Slave::new(params, placement);
+                inst.slave = Slave::new(params, placement).with_guid(&guid);
                 Box::into_raw(Box::new(inst)) as *mut c_void
             }
             Err(e) => {
@@ -610,7 +610,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
         if state.is_null() {
             return inst.status("fmi2DeSerializeFMUstate", Err("FMUstate is null".into()));
         }
-        match Slave::deserialize(inst.preset, inst.placement, data) {
+        match inst.slave.deserialize(data) {
             Ok(s) => {
                 // SAFETY: checked for null.
                 let slot = unsafe { &mut *state };
