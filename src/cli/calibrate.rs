@@ -2,10 +2,10 @@
 
 use super::{Outcome, RowCost, Run, announce, check_record_memory, estimate_wall_s, load_params};
 use crate::dataset::{self, RecordKind};
+use crate::format::general as fmt_value;
 use crate::fsutil::OutputDir;
 use crate::identify;
 use crate::model::ModelKind;
-use crate::params::fmt_value;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 

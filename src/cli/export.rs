@@ -76,7 +76,7 @@ impl Run for ExportControllerArgs {
             "wrote {}: {} controller at {} Hz ({})",
             self.out.display(),
             preset.params.controller.kind.name(),
-            crate::params::fmt_value(self.rate),
+            crate::format::general(self.rate),
             crate::export::controller::FILES.join(", ")
         );
         Ok(Outcome::Done)
@@ -160,7 +160,7 @@ impl Run for ExportFmuArgs {
             summary.bytes / 1000,
             placement.name(),
             summary.variables,
-            crate::params::fmt_value(preset.params.numerics.max_step_s),
+            crate::format::general(preset.params.numerics.max_step_s),
             summary.guid
         );
         Ok(Outcome::Done)

@@ -314,7 +314,7 @@ pub(super) fn parse_with_row_limit(
                 reason: match reason {
                     CellError::Beyond => format!(
                         "is beyond ±{} {}, the bound of column \"{}\" (SI units)",
-                        crate::params::fmt_value(limits[slot]),
+                        crate::format::general(limits[slot]),
                         column_unit(COLUMNS[slot]),
                         COLUMNS[slot]
                     ),

@@ -98,7 +98,7 @@ impl CsvWriter {
                     "row {r}, column {:?}: {} is beyond the column's bound ±{}",
                     self.header[i],
                     fmt_num(v),
-                    crate::params::fmt_value(self.limits[i])
+                    crate::format::general(self.limits[i])
                 )));
             }
             if i > 0 {

@@ -22,7 +22,8 @@
 //! (`tests/it/export.rs`). `seat_controller.json` holds the discretised transfer functions.
 
 use crate::control::{ControlLaw, Controller, Measurement};
-use crate::params::{ControllerKind, MAX_DELAY_S, Params, fmt_value};
+use crate::format::general as fmt_value;
+use crate::params::{ControllerKind, MAX_DELAY_S, Params};
 use crate::preset::Preset;
 use std::fmt::Write as _;
 use std::path::Path;

@@ -325,7 +325,7 @@ pub fn model_description(preset: &Preset, placement: ControllerPlacement) -> Str
         xml_escape(&format!(
             "Digital twin of a hydraulic active seat suspension (10-state nonlinear model), \
              preset {name}, {controller}; internal step {} s",
-            crate::params::fmt_value(params.numerics.max_step_s)
+            crate::format::general(params.numerics.max_step_s)
         )),
         env!("CARGO_PKG_VERSION"),
     );

@@ -57,9 +57,6 @@ pub enum ParamError {
     Inconsistent(String),
 }
 
-// transitional re-export, removed at merge (the number formatter is `crate::format`)
-pub use crate::format::general as fmt_value;
-
 /// Checks `min <= value <= max` and finiteness.
 pub(crate) fn check(
     name: &str,

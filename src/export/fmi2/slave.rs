@@ -39,8 +39,9 @@ use super::super::fmu::{
     ControllerPlacement, OUTPUTS, V_IN_EXT_RANGE, VR_OUTPUTS, VR_PARAMS, VR_V_IN_EXT, VR_X, VR_XDD,
     X_RANGE, XDD_RANGE, exposes,
 };
+use crate::format::general as fmt_value;
 use crate::model::twin::Twin;
-use crate::params::{MAX_DELAY_S, PARAMS, Params, fmt_value};
+use crate::params::{MAX_DELAY_S, PARAMS, Params};
 use crate::scenario::{CommandSignal, CommandStream, InputSegment, PlatformMotion};
 use crate::simulation::{Drive, Run, Simulation, SimulationState};
 use serde::{Deserialize, Serialize};
