@@ -62,7 +62,8 @@ port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0));
 python3 -m http.server --bind 127.0.0.1 --directory web/dist "$port" >"$work/server.log" 2>&1 &
 server=$!
 for _ in $(seq 50); do
-    curl -sf "http://127.0.0.1:$port/index.html" >/dev/null && break
+    python3 -c 'import sys, urllib.request; urllib.request.urlopen(sys.argv[1], timeout=1)' \
+        "http://127.0.0.1:$port/index.html" 2>/dev/null && break
     sleep 0.1
 done
 node tests/web/browser_test.mjs "http://127.0.0.1:$port/" "$work/reference.jsonl" \
