@@ -1,7 +1,7 @@
 //! Why a record could not be read, and the pieces of its messages (quoted cells, numbers).
 
 use super::columns::RecordKind;
-use std::fmt::{self, Write as _};
+use std::fmt::Write as _;
 use std::io;
 use std::path::{Path, PathBuf};
 
@@ -247,19 +247,5 @@ pub(super) fn sig(x: f64) -> String {
     fmt_num(rounded)
 }
 
-/// Shortest round-trip text of a finite `f64`: plain for 1e-5 <= |x| < 1e15 (and 0),
-/// scientific otherwise.
-pub(super) fn fmt_num(x: f64) -> String {
-    let mut s = String::new();
-    let _ = write_num(&mut s, x);
-    s
-}
-
-pub(super) fn write_num<W: fmt::Write>(w: &mut W, x: f64) -> fmt::Result {
-    let a = x.abs();
-    if a == 0.0 || (1e-5..1e15).contains(&a) {
-        write!(w, "{x}")
-    } else {
-        write!(w, "{x:e}")
-    }
-}
+/// Shortest round-trip text of a finite `f64` (the one formatter's [`crate::format::exact`]).
+pub(super) use crate::format::{exact as fmt_num, write_exact as write_num};

@@ -31,7 +31,16 @@ pub enum Purpose {
     /// Export the calibration report (a folder: report.md, report.json, calibrated.toml,
     /// plots), as `seat-twin calibrate --out` writes it.
     ExportReport,
+    /// Export the twin as an FMI 2.0 co-simulation FMU, with the controller inside
+    /// (`internal`) or its command as an input (`external`), as `seat-twin export fmu` does.
+    ExportFmu(crate::export::fmu::ControllerPlacement),
+    /// Export the controller as C99 (a folder: seat_controller.h/.c/.json), as
+    /// `seat-twin export controller --rate 1000 --lang c` does.
+    ExportController,
 }
+
+/// The rate of the controller code the app exports [Hz] (the CLI's `--rate` takes others).
+pub const CONTROLLER_EXPORT_RATE_HZ: f64 = 1000.0;
 
 impl Purpose {
     /// What the dialog is for, as its title.
@@ -46,6 +55,13 @@ impl Purpose {
             Purpose::ExportCsv => "Export traces (CSV)",
             Purpose::ExportPng => "Export plots (PNG)",
             Purpose::ExportReport => "Export the calibration report (folder)",
+            Purpose::ExportFmu(crate::export::fmu::ControllerPlacement::Internal) => {
+                "Export FMU (FMI 2.0 co-simulation, controller inside)"
+            }
+            Purpose::ExportFmu(crate::export::fmu::ControllerPlacement::External) => {
+                "Export FMU (FMI 2.0 co-simulation, command as input)"
+            }
+            Purpose::ExportController => "Export controller code (C99, folder)",
         }
     }
 
@@ -59,6 +75,8 @@ impl Purpose {
                 | Purpose::ExportCsv
                 | Purpose::ExportPng
                 | Purpose::ExportReport
+                | Purpose::ExportFmu(_)
+                | Purpose::ExportController
         )
     }
 
@@ -68,7 +86,8 @@ impl Purpose {
             Purpose::OpenSession | Purpose::SaveSession => ("session", &["toml"]),
             Purpose::LoadRecord | Purpose::LoadMeasured | Purpose::ExportCsv => ("CSV", &["csv"]),
             Purpose::ExportPng => ("PNG", &["png"]),
-            Purpose::ExportReport => ("folder", &[]),
+            Purpose::ExportReport | Purpose::ExportController => ("folder", &[]),
+            Purpose::ExportFmu(_) => ("FMU", &["fmu"]),
         }
     }
 }
@@ -151,28 +170,29 @@ impl Dialogs {
                 dialog = dialog.add_filter(fname, ext);
             }
             let path = |h: rfd::FileHandle| h.path().to_path_buf();
-            let picked: Vec<PathBuf> = if purpose == Purpose::ExportReport {
-                pollster::block_on(dialog.pick_folder())
-                    .map(|d| path(d).join(&name))
-                    .into_iter()
-                    .collect()
-            } else if purpose.saves() {
-                pollster::block_on(dialog.set_file_name(name).save_file())
-                    .map(path)
-                    .into_iter()
-                    .collect()
-            } else if purpose == Purpose::LoadMeasured {
-                pollster::block_on(dialog.pick_files())
-                    .unwrap_or_default()
-                    .into_iter()
-                    .map(path)
-                    .collect()
-            } else {
-                pollster::block_on(dialog.pick_file())
-                    .map(path)
-                    .into_iter()
-                    .collect()
-            };
+            let picked: Vec<PathBuf> =
+                if matches!(purpose, Purpose::ExportReport | Purpose::ExportController) {
+                    pollster::block_on(dialog.pick_folder())
+                        .map(|d| path(d).join(&name))
+                        .into_iter()
+                        .collect()
+                } else if purpose.saves() {
+                    pollster::block_on(dialog.set_file_name(name).save_file())
+                        .map(path)
+                        .into_iter()
+                        .collect()
+                } else if purpose == Purpose::LoadMeasured {
+                    pollster::block_on(dialog.pick_files())
+                        .unwrap_or_default()
+                        .into_iter()
+                        .map(path)
+                        .collect()
+                } else {
+                    pollster::block_on(dialog.pick_file())
+                        .map(path)
+                        .into_iter()
+                        .collect()
+                };
             Ok(picked)
         });
         self.open = Some((purpose, job));
@@ -484,6 +504,51 @@ impl Writer {
                 "calibration report written to {} (report.md, report.json, calibrated.toml, plots)",
                 dir.display()
             ))
+        });
+    }
+
+    /// Exports the twin of `preset` as an FMU to `path` (`seat-twin export fmu`), with the
+    /// shared library built beside the app's executable.
+    pub fn write_fmu(
+        &mut self,
+        ctx: &egui::Context,
+        path: PathBuf,
+        preset: crate::preset::Preset,
+        placement: crate::export::fmu::ControllerPlacement,
+    ) {
+        self.spawn(ctx, move || {
+            let library = crate::export::fmu::library_beside_executable();
+            crate::export::fmu::write(&preset, placement, &library, &path, &mut |_, _| {})
+                .map(|_| format!("FMU written to {}", path.display()))
+                .map_err(|e| format!("FMU not written: {e}"))
+        });
+    }
+
+    /// Exports the controller of `preset` as C99 into the folder `dir`
+    /// (`seat-twin export controller --rate 1000 --lang c`).
+    pub fn write_controller(
+        &mut self,
+        ctx: &egui::Context,
+        dir: PathBuf,
+        preset: crate::preset::Preset,
+    ) {
+        self.spawn(ctx, move || {
+            let name = preset.meta.name.clone();
+            crate::export::controller::write(
+                &preset,
+                &name,
+                CONTROLLER_EXPORT_RATE_HZ,
+                &dir,
+                &mut |_, _| {},
+            )
+            .map(|()| {
+                format!(
+                    "controller code at {} Hz written to {} (seat_controller.h, .c, .json)",
+                    CONTROLLER_EXPORT_RATE_HZ,
+                    dir.display()
+                )
+            })
+            .map_err(|e| format!("controller code not written: {e}"))
         });
     }
 

@@ -2,6 +2,7 @@
 //! digits ("τ = 17.50 ± 0.01 ms", "β = 0.59 GPa"), the active model effects, and the
 //! optimiser's stop reason in words.
 
+pub use crate::format::{compact, value_pm};
 use crate::params::Params;
 
 /// Symbol, display scale (display = SI × scale), unit of a fitted parameter by its report
@@ -10,33 +11,6 @@ pub fn display_of(name: &str) -> (&str, f64, &'static str) {
     match crate::identify::report::display_unit(name) {
         ("", _, _) => (name, 1.0, ""),
         known => known,
-    }
-}
-
-/// Decimals that show a value to about four significant digits (0 ..= 6).
-fn decimals_for(v: f64) -> usize {
-    if !(v.is_finite() && v != 0.0) {
-        return 2;
-    }
-    (3.0 - v.abs().log10().floor()).clamp(0.0, 6.0) as usize
-}
-
-/// Formats `value ± std` (display units) with the decimals of about four significant digits
-/// of the value; the uncertainty is left out when it is unknown (NaN).
-pub fn value_pm(value: f64, std: f64) -> String {
-    let d = decimals_for(value);
-    let v = minus(format!("{value:.d$}"));
-    if std.is_finite() && std > 0.0 {
-        let shown = format!("{std:.d$}");
-        if shown.trim_start_matches(['0', '.']).is_empty() {
-            // Smaller than the last shown digit.
-            let unit = 10f64.powi(-(d as i32));
-            format!("{v} ± <{unit:.d$}")
-        } else {
-            format!("{v} ± {shown}")
-        }
-    } else {
-        v
     }
 }
 
@@ -76,18 +50,6 @@ pub fn controller_text(c: &crate::params::ControllerParams) -> String {
         })
         .collect();
     format!("{} ({})", c.kind, gains.join(", "))
-}
-
-/// A number with at most four significant digits and no trailing zeros ("1", "200",
-/// "0.1506", "−5").
-pub fn compact(v: f64) -> String {
-    let s = format!("{v:.prec$}", prec = decimals_for(v));
-    let s = if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    };
-    minus(s)
 }
 
 /// Rewrites every number in `text` that carries more than six significant digits
@@ -139,10 +101,6 @@ pub fn shorten_numbers(text: &str) -> String {
         i = j;
     }
     out
-}
-
-fn minus(s: String) -> String {
-    s.replacen('-', "−", 1)
 }
 
 /// An effect for [`active_effects`]: whether it is on, its name, and its main values by

@@ -438,3 +438,62 @@ fn a_small_window_stacks_and_scrolls_instead_of_squeezing() {
         "the scopes run below the window (the centre scrolls): {last:?}"
     );
 }
+
+/// Issue 25, item 4: File ▸ Export FMU… and Export controller code… write what the CLI's
+/// `export` commands write, from the parameters on screen, on the writer's background job.
+#[test]
+fn the_file_menu_exports_the_fmu_and_the_controller_code() {
+    use seat_twin::export::fmu::ControllerPlacement;
+    use seat_twin::gui::files::Purpose;
+    let mut h = harness();
+    h.step();
+    type_kp(&mut h, -7.5);
+    let dir = tempfile::tempdir().unwrap();
+    let ctx = h.ctx.clone();
+
+    let fmu = dir.path().join("seat.fmu");
+    h.state_mut().use_paths(
+        Purpose::ExportFmu(ControllerPlacement::Internal),
+        vec![fmu.clone()],
+        &ctx,
+    );
+    let code = dir.path().join("ctl");
+    h.state_mut()
+        .use_paths(Purpose::ExportController, vec![code.clone()], &ctx);
+    step_until(&mut h, "both exports written", |_| {
+        fmu.is_file() && code.join("seat_controller.c").is_file()
+    });
+    // The notices name where the files went (no error).
+    step_until(&mut h, "the exports' notices", |a| {
+        a.notice().is_some_and(|n| n.text.contains("written to"))
+    });
+
+    // The FMU: a ZIP with the model description and the shared library; the on-screen Kp is
+    // its start value.
+    let bytes = std::fs::read(&fmu).unwrap();
+    assert_eq!(&bytes[..2], b"PK");
+    let text = String::from_utf8_lossy(&bytes);
+    assert!(text.contains("binaries/linux64/seat_twin.so"));
+    let md_start = text
+        .find("<fmiModelDescription")
+        .expect("modelDescription.xml");
+    let md = &text[md_start..];
+    let kp = md
+        .find("name=\"controller.kp_v_per_m\"")
+        .expect("Kp is a parameter");
+    let start = md[kp..].find("start=\"").unwrap() + kp + 7;
+    let value: f64 = md[start..start + md[start..].find('"').unwrap()]
+        .parse()
+        .unwrap();
+    assert_eq!(value, -7.5, "the FMU carries the gain on screen");
+
+    // The controller code: header, source and coefficients, with the gain on screen.
+    let header = std::fs::read_to_string(code.join("seat_controller.h")).unwrap();
+    let source = std::fs::read_to_string(code.join("seat_controller.c")).unwrap();
+    assert!(header.contains("seat_ctrl_step"));
+    assert!(
+        header.contains("-7.5") || source.contains("-7.5"),
+        "the comment header names the gain on screen"
+    );
+    assert!(code.join("seat_controller.json").is_file());
+}

@@ -40,6 +40,18 @@ impl SeatTwinApp {
         self.apply_params();
     }
 
+    /// The parameters on screen as a preset, under the current preset's name.
+    fn preset_now(&self) -> Preset {
+        Preset {
+            meta: PresetMeta {
+                name: self.preset.name.clone(),
+                description: self.preset.description.clone(),
+                ..Default::default()
+            },
+            params: self.params,
+        }
+    }
+
     /// Saves the parameters as a preset file.
     pub fn save_preset_file(&mut self, path: &Path) {
         let name = path
@@ -168,6 +180,8 @@ impl SeatTwinApp {
             Purpose::SavePreset => "preset.toml",
             Purpose::SaveSession => "session.toml",
             Purpose::ExportReport => "calibration",
+            Purpose::ExportFmu(_) => "seat_twin.fmu",
+            Purpose::ExportController => "seat_controller",
             Purpose::OpenPreset
             | Purpose::OpenSession
             | Purpose::LoadRecord
@@ -360,6 +374,14 @@ impl SeatTwinApp {
                     Some(r) => self.writer.write_report(ctx, path, r.clone()),
                     None => self.error("no calibration report yet: calibrate first"),
                 },
+                Purpose::ExportFmu(placement) => {
+                    let preset = self.preset_now();
+                    self.writer.write_fmu(ctx, path, preset, placement);
+                }
+                Purpose::ExportController => {
+                    let preset = self.preset_now();
+                    self.writer.write_controller(ctx, path, preset);
+                }
                 Purpose::ExportPng => {
                     let stem = path.with_extension("");
                     let figs = self.plot_figures();

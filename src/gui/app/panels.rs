@@ -33,6 +33,33 @@ impl SeatTwinApp {
                 self.request_file(Purpose::ExportPng, "plots.png", ctx);
             }
             ui.separator();
+            use crate::export::fmu::ControllerPlacement;
+            if ui
+                .button("Export FMU…")
+                .on_hover_text("FMI 2.0 co-simulation FMU of the twin with this controller inside")
+                .clicked()
+            {
+                let purpose = Purpose::ExportFmu(ControllerPlacement::Internal);
+                self.request_file(purpose, "seat_twin.fmu", ctx);
+            }
+            if ui
+                .button("Export FMU, command as input…")
+                .on_hover_text(
+                    "the FMU without its controller: the valve command v_in_ext is an input",
+                )
+                .clicked()
+            {
+                let purpose = Purpose::ExportFmu(ControllerPlacement::External);
+                self.request_file(purpose, "seat_twin.fmu", ctx);
+            }
+            if ui
+                .button("Export controller code…")
+                .on_hover_text("this controller as C99 at 1 kHz (double and float), in a folder")
+                .clicked()
+            {
+                self.request_file(Purpose::ExportController, "seat_controller", ctx);
+            }
+            ui.separator();
             if ui.button("Quit").clicked() {
                 ctx.send_viewport_cmd(egui::ViewportCommand::Close);
             }
