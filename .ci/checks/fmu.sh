@@ -9,7 +9,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
-target="${CARGO_TARGET_DIR:-target}"
+# Absolute: FMPy makes a file URI of the unpacked FMU's folder.
+target=$(realpath -m "${CARGO_TARGET_DIR:-target}")
 venv="$target/fmu-venv"
 # Pinned: the versions the checks were written against.
 packages=(fmpy==0.3.32 control==0.10.2)
