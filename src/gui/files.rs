@@ -80,6 +80,11 @@ impl Purpose {
         )
     }
 
+    /// The answer is a folder (the calibration report, the controller code), not a file.
+    pub fn picks_folder(self) -> bool {
+        matches!(self, Purpose::ExportReport | Purpose::ExportController)
+    }
+
     fn filter(self) -> (&'static str, &'static [&'static str]) {
         match self {
             Purpose::OpenPreset | Purpose::SavePreset => ("preset", &["toml"]),
@@ -170,29 +175,28 @@ impl Dialogs {
                 dialog = dialog.add_filter(fname, ext);
             }
             let path = |h: rfd::FileHandle| h.path().to_path_buf();
-            let picked: Vec<PathBuf> =
-                if matches!(purpose, Purpose::ExportReport | Purpose::ExportController) {
-                    pollster::block_on(dialog.pick_folder())
-                        .map(|d| path(d).join(&name))
-                        .into_iter()
-                        .collect()
-                } else if purpose.saves() {
-                    pollster::block_on(dialog.set_file_name(name).save_file())
-                        .map(path)
-                        .into_iter()
-                        .collect()
-                } else if purpose == Purpose::LoadMeasured {
-                    pollster::block_on(dialog.pick_files())
-                        .unwrap_or_default()
-                        .into_iter()
-                        .map(path)
-                        .collect()
-                } else {
-                    pollster::block_on(dialog.pick_file())
-                        .map(path)
-                        .into_iter()
-                        .collect()
-                };
+            let picked: Vec<PathBuf> = if purpose.picks_folder() {
+                pollster::block_on(dialog.pick_folder())
+                    .map(|d| path(d).join(&name))
+                    .into_iter()
+                    .collect()
+            } else if purpose.saves() {
+                pollster::block_on(dialog.set_file_name(name).save_file())
+                    .map(path)
+                    .into_iter()
+                    .collect()
+            } else if purpose == Purpose::LoadMeasured {
+                pollster::block_on(dialog.pick_files())
+                    .unwrap_or_default()
+                    .into_iter()
+                    .map(path)
+                    .collect()
+            } else {
+                pollster::block_on(dialog.pick_file())
+                    .map(path)
+                    .into_iter()
+                    .collect()
+            };
             Ok(picked)
         });
         self.open = Some((purpose, job));

@@ -299,7 +299,12 @@ impl SeatTwinApp {
         };
         let mut done: Option<bool> = None;
         ui.horizontal(|ui| {
-            ui.label(format!("{} — file path:", purpose.title()));
+            let what = if purpose.picks_folder() {
+                "folder"
+            } else {
+                "file"
+            };
+            ui.label(format!("{} — {what} path:", purpose.title()));
             let r = ui.add(
                 egui::TextEdit::singleline(&mut text)
                     .id(egui::Id::unique("path_prompt"))
