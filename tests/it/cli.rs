@@ -1,68 +1,17 @@
 //! The headless CLI on real files: the stable interface of issue 2 (column names, units,
 //! errors that name the file/line/column, exit codes, no partial output files).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-pub(crate) fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_seat-twin"))
-}
-
-pub(crate) fn run(args: &[&str]) -> Output {
-    bin().args(args).output().expect("the binary runs")
-}
-
-pub(crate) fn tmp() -> tempfile::TempDir {
-    tempfile::tempdir().expect("a temporary directory")
-}
-
-/// Header and rows of a CSV written by the CLI (comment lines skipped).
-pub(crate) fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).expect("the output exists");
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
-    let header: Vec<String> = lines
-        .next()
-        .expect("a header")
-        .split(',')
-        .map(str::to_owned)
-        .collect();
-    let rows = lines
-        .map(|l| {
-            l.split(',')
-                .map(|c| c.parse::<f64>().expect("a number"))
-                .collect()
-        })
-        .collect();
-    (header, rows)
-}
-
-fn column(header: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
-    let i = header
-        .iter()
-        .position(|h| h == name)
-        .unwrap_or_else(|| panic!("column {name} in {header:?}"));
-    rows.iter().map(|r| r[i]).collect()
-}
-
-pub(crate) fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::support::{bin, cli, column, read_csv, stderr, tmp};
+use std::path::PathBuf;
 
 #[test]
 fn simulate_twin_cycloid_writes_the_documented_columns() {
     let dir = tmp();
     let out = dir.path().join("c.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "twin",
-        "--scenario",
-        "cycloid",
-        "--duration",
-        "2",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli(
+        "simulate --model twin --scenario cycloid --duration 2 --out {}",
+        &[&out],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let (header, rows) = read_csv(&out);
     assert_eq!(
@@ -116,21 +65,10 @@ fn the_avx_and_the_portable_stepping_loops_write_the_same_bytes() {
 fn simulate_passive_leaves_out_the_columns_it_lacks() {
     let dir = tmp();
     let out = dir.path().join("p.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "passive",
-        "--scenario",
-        "random",
-        "--duration",
-        "3",
-        "--seed",
-        "4",
-        "--rate",
-        "200",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli(
+        "simulate --model passive --scenario random --duration 3 --seed 4 --rate 200 --out {}",
+        &[&out],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let (header, rows) = read_csv(&out);
     assert_eq!(header, ["t", "x", "xdd", "u", "ydd"]);
@@ -153,15 +91,10 @@ fn simulate_with_an_excitation_file_runs_the_controller_on_it() {
     }
     std::fs::write(&exc, text).unwrap();
     let out = dir.path().join("r.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "linear",
-        "--excitation",
-        exc.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli(
+        "simulate --model linear --excitation {} --out {}",
+        &[&exc, &out],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let (header, rows) = read_csv(&out);
     let xdd = column(&header, &rows, "xdd");
@@ -182,15 +115,10 @@ fn a_bad_excitation_file_names_file_line_and_column_and_writes_nothing() {
     let exc = dir.path().join("bad.csv");
     std::fs::write(&exc, "t,xdd\n0,0\n0.001,0.1\n0.002,abc\n").unwrap();
     let out = dir.path().join("never.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "twin",
-        "--excitation",
-        exc.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli(
+        "simulate --model twin --excitation {} --out {}",
+        &[&exc, &out],
+    );
     assert!(!o.status.success());
     let err = stderr(&o);
     assert!(err.contains("bad.csv"), "{err}");
@@ -204,15 +132,7 @@ fn a_bad_excitation_file_names_file_line_and_column_and_writes_nothing() {
 fn bode_of_g_at_low_frequency_is_the_paper_gain() {
     let dir = tmp();
     let out = dir.path().join("b.csv");
-    let o = run(&[
-        "bode",
-        "--model",
-        "linear",
-        "--freqs",
-        "0.1,1,10",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli("bode --model linear --freqs 0.1,1,10 --out {}", &[&out]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (header, rows) = read_csv(&out);
     assert_eq!(header, ["freq_hz", "mag_mm_per_s_v", "phase_deg"]);
@@ -229,17 +149,7 @@ fn bode_of_g_at_low_frequency_is_the_paper_gain() {
 fn simulated_twin_bode_is_close_to_g_at_1_hz() {
     let dir = tmp();
     let out = dir.path().join("tb.csv");
-    let o = run(&[
-        "bode",
-        "--model",
-        "twin",
-        "--amp",
-        "0.72",
-        "--freqs",
-        "1",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli("bode --model twin --amp 0.72 --freqs 1 --out {}", &[&out]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (_, rows) = read_csv(&out);
     // Section 4: the adjusted twin matches Kg within a few % at low frequency.
@@ -252,15 +162,10 @@ fn passive_transmissibility_crosses_one_at_sqrt2_fn() {
     let out = dir.path().join("t.csv");
     // fn = √(k/m)/2π = 2.822 Hz for the paper's 3680 N/m and 11.7 kg.
     let fc = (3680.0f64 / 11.7).sqrt() / (2.0 * std::f64::consts::PI) * 2f64.sqrt();
-    let o = run(&[
-        "transmissibility",
-        "--model",
-        "passive",
-        "--freqs",
-        &format!("0.1,{fc}"),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli(
+        &format!("transmissibility --model passive --freqs 0.1,{fc} --out {{}}"),
+        &[&out],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let (header, rows) = read_csv(&out);
     assert_eq!(header, ["freq_hz", "mag", "phase_deg"]);
@@ -274,17 +179,10 @@ fn a_preset_with_an_out_of_range_value_is_refused_by_name() {
     let preset = dir.path().join("heavy.toml");
     std::fs::write(&preset, "[body]\nmass_kg = -3.0\n").unwrap();
     let out = dir.path().join("x.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "twin",
-        "--preset",
-        preset.to_str().unwrap(),
-        "--scenario",
-        "cycloid",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = cli(
+        "simulate --model twin --preset {} --scenario cycloid --out {}",
+        &[&preset, &out],
+    );
     assert!(!o.status.success());
     let err = stderr(&o);
     assert!(err.contains("heavy.toml"), "{err}");
@@ -297,17 +195,11 @@ fn a_typo_in_a_preset_is_an_error_with_its_line() {
     let dir = tmp();
     let preset = dir.path().join("typo.toml");
     std::fs::write(&preset, "[valve]\ncd = 0.15\ntau_ss = 0.0175\n").unwrap();
-    let o = run(&[
-        "transmissibility",
-        "--model",
-        "linear",
-        "--preset",
-        preset.to_str().unwrap(),
-        "--freqs",
-        "1",
-        "--out",
-        dir.path().join("t.csv").to_str().unwrap(),
-    ]);
+    let out = dir.path().join("t.csv");
+    let o = cli(
+        "transmissibility --model linear --preset {} --freqs 1 --out {}",
+        &[&preset, &out],
+    );
     assert!(!o.status.success());
     let err = stderr(&o);
     assert!(err.contains("tau_ss"), "{err}");
@@ -316,15 +208,10 @@ fn a_typo_in_a_preset_is_an_error_with_its_line() {
 
 #[test]
 fn an_unknown_model_is_refused() {
-    let o = run(&[
-        "simulate",
-        "--model",
-        "quantum",
-        "--scenario",
-        "cycloid",
-        "--out",
-        "/tmp/never.csv",
-    ]);
+    let o = cli(
+        "simulate --model quantum --scenario cycloid --out /tmp/never.csv",
+        &[],
+    );
     assert!(!o.status.success());
     assert!(stderr(&o).contains("quantum"));
 }
@@ -333,7 +220,7 @@ fn an_unknown_model_is_refused() {
 fn report_writes_markdown_numbers_and_plots() {
     let dir = tmp();
     let out: PathBuf = dir.path().join("report");
-    let o = run(&["report", "--out", out.to_str().unwrap()]);
+    let o = cli("report --out {}", &[&out]);
     assert!(o.status.success(), "{}", stderr(&o));
     for f in [
         "report.md",

@@ -1,108 +1,15 @@
 //! Issue 12, CLI part: bad input never gets in, nothing wrong is shown. One test (or more) per
 //! item; each failed on the code before the issue was worked on (the reason is in its doc).
-//! This module: items 1–3 (resources: sample limits, preset sizes, slow runs and signals) and
-//! the helpers; items 4–9 (bad values, messages, smaller items) are in `cli_input.rs`.
+//! This module: items 1–3 (resources: sample limits, preset sizes, slow runs and signals); items
+//! 4–9 (bad values, messages, smaller items) are in `cli_input.rs`.
 
-use crate::cli::{bin, read_csv, run, stderr, tmp};
-use std::io::Read;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use crate::support::{
+    bin, cli, cli_within, entries_starting, entry_count, measured_record, read_csv, s, signal,
+    stderr, stderr_reader, tmp, wait_for,
+};
 
-pub(crate) fn s(p: &Path) -> &str {
-    p.to_str().expect("a UTF-8 path")
-}
-
-/// Polls `f` every 20 ms until it returns `Some`, at most `limit`.
-fn wait_for<T>(limit: Duration, mut f: impl FnMut() -> Option<T>) -> Option<T> {
-    let start = Instant::now();
-    loop {
-        if let Some(v) = f() {
-            return Some(v);
-        }
-        if start.elapsed() > limit {
-            return None;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-/// Runs the binary and kills it if it has not finished within `limit` (then `None`).
-pub(crate) fn run_within(args: &[&str], limit: Duration) -> Option<Output> {
-    let mut child = bin()
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the binary starts");
-    let done = wait_for(limit, || child.try_wait().ok().flatten());
-    if done.is_none() {
-        let _ = child.kill();
-        let _ = child.wait();
-        return None;
-    }
-    child.wait_with_output().ok()
-}
-
-/// Entries of `dir` whose name starts with `prefix`.
-pub(crate) fn entries_starting(dir: &Path, prefix: &str) -> Vec<PathBuf> {
-    std::fs::read_dir(dir)
-        .map(|rd| {
-            rd.filter_map(|e| e.ok())
-                .filter(|e| e.file_name().to_string_lossy().starts_with(prefix))
-                .map(|e| e.path())
-                .collect()
-        })
-        .unwrap_or_default()
-}
-
-pub(crate) fn entry_count(dir: &Path) -> usize {
-    std::fs::read_dir(dir).map(|rd| rd.count()).unwrap_or(0)
-}
-
-#[cfg(unix)]
-fn signal(child: &Child, name: &str) {
-    let ok = Command::new("kill")
-        .args([&format!("-{name}"), &child.id().to_string()])
-        .status()
-        .expect("kill runs")
-        .success();
-    assert!(ok, "kill -{name} {}", child.id());
-}
-
-/// Collects a child's stderr on a thread (so that a full pipe never blocks it).
-fn stderr_reader(child: &mut Child) -> std::thread::JoinHandle<String> {
-    let mut err = child.stderr.take().expect("stderr is piped");
-    std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = err.read_to_string(&mut s);
-        s
-    })
-}
-
-/// The `error: …` line, split at ": " into its messages.
-pub(crate) fn error_segments(err: &str) -> Vec<String> {
-    let line = err
-        .lines()
-        .find(|l| l.starts_with("error: "))
-        .unwrap_or_else(|| panic!("no error line in {err:?}"));
-    line["error: ".len()..]
-        .split(": ")
-        .map(|s| s.trim().to_string())
-        .collect()
-}
-
-/// Writes a measured record (`t, v_in, u`) at 1 kHz for `secs` s.
-pub(crate) fn measured_record(path: &Path, secs: f64, v_amp: f64, u_amp: f64) {
-    let mut text = String::from("t,v_in,u\n");
-    let n = (secs * 1000.0) as usize;
-    for i in 0..=n {
-        let t = i as f64 / 1000.0;
-        let w = 2.0 * std::f64::consts::PI * 2.0 * t;
-        text.push_str(&format!("{t:.3},{},{}\n", v_amp * w.cos(), u_amp * w.sin()));
-    }
-    std::fs::write(path, text).unwrap();
-}
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
 // ---------------------------------------------------------------------------------------------
 // 1. Allocation abort on allowed values.
@@ -117,20 +24,12 @@ fn a_run_over_the_sample_limit_is_refused_up_front_with_the_count_and_the_limit(
         ("twin", "random", "3600"),
         ("linear", "sine", "36000"),
     ] {
-        let o = run_within(
-            &[
-                "simulate",
-                "--model",
-                model,
-                "--scenario",
-                scenario,
-                "--duration",
-                duration,
-                "--rate",
-                "100000",
-                "--out",
-                s(&out),
-            ],
+        let o = cli_within(
+            &format!(
+                "simulate --model {model} --scenario {scenario} --duration {duration} \
+                 --rate 100000 --out {{}}"
+            ),
+            &[&out],
             Duration::from_secs(60),
         )
         .expect("refused at once, not after a long run");
@@ -220,19 +119,10 @@ fn simulate_streams_to_disk_in_bounded_memory_and_sigterm_removes_its_temporary_
 fn a_streamed_trace_has_every_sample() {
     let dir = tmp();
     let out = dir.path().join("t.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "linear",
-        "--scenario",
-        "sine",
-        "--duration",
-        "1.5",
-        "--rate",
-        "200",
-        "--out",
-        s(&out),
-    ]);
+    let o = cli(
+        "simulate --model linear --scenario sine --duration 1.5 --rate 200 --out {}",
+        &[&out],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let (header, rows) = read_csv(&out);
     assert_eq!(header, ["t", "x", "xdd", "u", "ydd", "v_in"]);
@@ -256,18 +146,9 @@ fn presets_from_devices_and_oversized_files_are_refused_at_once() {
     let dir = tmp();
     let out = dir.path().join("x.csv");
     for dev in ["/dev/zero", "/dev/urandom"] {
-        let o = run_within(
-            &[
-                "transmissibility",
-                "--model",
-                "linear",
-                "--preset",
-                dev,
-                "--freqs",
-                "1",
-                "--out",
-                s(&out),
-            ],
+        let o = cli_within(
+            "transmissibility --model linear --preset {} --freqs 1 --out {}",
+            &[std::path::Path::new(dev), &out],
             Duration::from_secs(30),
         )
         .unwrap_or_else(|| panic!("--preset {dev} did not fail within 30 s"));
@@ -282,17 +163,10 @@ fn presets_from_devices_and_oversized_files_are_refused_at_once() {
         .unwrap()
         .set_len(2 << 20)
         .unwrap();
-    let o = run(&[
-        "transmissibility",
-        "--model",
-        "linear",
-        "--preset",
-        s(&big),
-        "--freqs",
-        "1",
-        "--out",
-        s(&out),
-    ]);
+    let o = cli(
+        "transmissibility --model linear --preset {} --freqs 1 --out {}",
+        &[&big, &out],
+    );
     let err = stderr(&o);
     assert!(
         err.contains("2097152 bytes is over the limit of 1048576 bytes"),

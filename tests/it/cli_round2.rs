@@ -2,34 +2,14 @@
 //! the code before the issue was worked on (the reason is in its doc). Item 3 (unstable gains)
 //! is not here.
 
-use crate::cli::{bin, run, stderr, tmp};
-use crate::cli_hardening::{entry_count, measured_record, run_within, s};
+use crate::support::{
+    bin, cli, entry_count, excitation_record, measured_record, refused, run, run_within, s, stderr,
+    tmp,
+};
 use std::io::Read;
 use std::path::Path;
-use std::process::{Output, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
-
-/// Checks that a run failed with exit code `code` and that its stderr says each of `said`;
-/// returns the stderr.
-fn refused(o: &Output, code: i32, said: &[&str]) -> String {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(code), "{err}");
-    for s in said {
-        assert!(err.contains(s), "{s:?} not in {err}");
-    }
-    err
-}
-
-/// A short excitation record (`t, x`) of `secs` s at 1 kHz, a 2 Hz sine of 5 mm.
-fn excitation_record(path: &Path, secs: f64) {
-    let mut text = String::from("t,x\n");
-    for i in 0..=(secs * 1000.0) as usize {
-        let t = i as f64 / 1000.0;
-        let x = 0.005 * (2.0 * std::f64::consts::PI * 2.0 * t).sin();
-        text.push_str(&format!("{t:.3},{x:.9}\n"));
-    }
-    std::fs::write(path, text).unwrap();
-}
 
 // ---------------------------------------------------------------------------------------------
 // 1. Special files.
@@ -173,15 +153,10 @@ fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
 fn tune_on_a_class_too_short_fails_before_creating_out() {
     let dir = tmp();
     let out = dir.path().join("tuned");
-    let o = run(&[
-        "tune",
-        "--excitation",
-        "class:AG1",
-        "--duration",
-        "10",
-        "--out",
-        s(&out),
-    ]);
+    let o = cli(
+        "tune --excitation class:AG1 --duration 10 --out {}",
+        &[&out],
+    );
     refused(
         &o,
         1,
@@ -250,7 +225,7 @@ fn a_seat_test_that_cannot_be_written_leaves_out_as_it_was() {
     let dir = tmp();
     let out = dir.path().join("st");
     std::fs::create_dir_all(out.join("report.md")).unwrap();
-    let o = run(&["seat-test", "--class", "EM6", "--out", s(&out)]);
+    let o = cli("seat-test --class EM6 --out {}", &[&out]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     let names: Vec<String> = std::fs::read_dir(&out)
@@ -324,15 +299,10 @@ fn a_run_leaving_the_bounds_names_the_excitation_not_the_output() {
     }
     std::fs::write(&exc, text).unwrap();
     let out = dir.path().join("o.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "linear",
-        "--excitation",
-        s(&exc),
-        "--out",
-        s(&out),
-    ]);
+    let o = cli(
+        "simulate --model linear --excitation {} --out {}",
+        &[&exc, &out],
+    );
     let err = refused(
         &o,
         1,
@@ -359,17 +329,10 @@ fn a_step_limit_below_the_smallest_step_is_not_an_empty_range() {
     )
     .unwrap();
     let out = dir.path().join("o.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "twin",
-        "--scenario",
-        "cycloid",
-        "--preset",
-        s(&preset),
-        "--out",
-        s(&out),
-    ]);
+    let o = cli(
+        "simulate --model twin --scenario cycloid --preset {} --out {}",
+        &[&preset, &out],
+    );
     let err = refused(&o, 1, &[s(&preset)]);
     assert!(
         err.contains("`numerics.max_step_s` has no allowed value with these parameters"),
@@ -388,30 +351,14 @@ fn a_step_limit_below_the_smallest_step_is_not_an_empty_range() {
 fn the_seat_test_duration_range_is_the_one_that_runs() {
     let dir = tmp();
     let out = dir.path().join("st");
-    let o = run(&[
-        "seat-test",
-        "--class",
-        "EM6",
-        "--duration",
-        "20",
-        "--out",
-        s(&out),
-    ]);
+    let o = cli("seat-test --class EM6 --duration 20 --out {}", &[&out]);
     refused(
         &o,
         1,
         &["--duration 20 is outside the allowed range [20.384, 3600] s"],
     );
     assert!(!out.exists());
-    let o = run(&[
-        "seat-test",
-        "--class",
-        "EM6",
-        "--duration",
-        "20.384",
-        "--out",
-        s(&out),
-    ]);
+    let o = cli("seat-test --class EM6 --duration 20.384 --out {}", &[&out]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
@@ -478,17 +425,11 @@ fn a_link_loop_or_an_empty_preset_is_named_for_what_it_is() {
     std::os::unix::fs::symlink(&a, &b).unwrap();
     let out = dir.path().join("o.csv");
     let sim = |preset: &str| {
-        run(&[
-            "simulate",
-            "--model",
-            "linear",
-            "--scenario",
-            "cycloid",
-            "--preset",
-            preset,
-            "--out",
-            s(&out),
-        ])
+        let preset = std::path::Path::new(preset);
+        cli(
+            "simulate --model linear --scenario cycloid --preset {} --out {}",
+            &[preset, &out],
+        )
     };
     let o = sim(s(&a));
     let err = refused(&o, 1, &[s(&a)]);
@@ -538,15 +479,10 @@ fn cr_only_line_ends_are_named() {
     let exc = dir.path().join("mac.csv");
     std::fs::write(&exc, "# exported\rt,x\r0,0\r0.001,0\r0.002,0\r").unwrap();
     let out = dir.path().join("o.csv");
-    let o = run(&[
-        "simulate",
-        "--model",
-        "linear",
-        "--excitation",
-        s(&exc),
-        "--out",
-        s(&out),
-    ]);
+    let o = cli(
+        "simulate --model linear --excitation {} --out {}",
+        &[&exc, &out],
+    );
     let err = refused(&o, 1, &[s(&exc)]);
     assert!(
         err.contains("line 1: a carriage return (CR) with no line feed after it"),
@@ -598,7 +534,7 @@ fn an_option_the_scenario_does_not_use_is_refused() {
 fn a_million_row_record_under_a_memory_limit_replays_or_is_refused_up_front() {
     let dir = tmp();
     let rec = dir.path().join("long.csv");
-    crate::cli_hardening::measured_record(&rec, 1000.0, 0.5, 0.001);
+    measured_record(&rec, 1000.0, 0.5, 0.001);
     let limited = |args: &[&str]| {
         std::process::Command::new("sh")
             .arg("-c")
@@ -612,7 +548,7 @@ fn a_million_row_record_under_a_memory_limit_replays_or_is_refused_up_front() {
     let o = limited(&["replay", "--data", s(&rec), "--out", s(&out)]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let free = dir.path().join("free.csv");
-    let o = run(&["replay", "--data", s(&rec), "--out", s(&free)]);
+    let o = cli("replay --data {} --out {}", &[&rec, &free]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(std::fs::read(&out).unwrap() == std::fs::read(&free).unwrap());
     let cal = dir.path().join("cal");

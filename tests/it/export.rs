@@ -3,7 +3,7 @@
 //! it mirrors (double variant bit for bit, float variant within a stated bound). The FMU's
 //! behaviour under an independent importer is checked by FMPy (`.ci/checks/fmu.sh`).
 
-use crate::cli::bin;
+use crate::support::bin;
 use seat_twin::export::controller::{self, SampledController};
 use seat_twin::params::{ControllerKind, Params};
 use seat_twin::preset::Preset;

@@ -25,4 +25,5 @@ mod physics;
 mod presets;
 mod seat_test;
 mod stability;
+mod support;
 mod tune;
