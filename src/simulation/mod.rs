@@ -22,9 +22,11 @@ pub mod delay;
 pub mod integrate;
 pub mod lti;
 mod run;
+mod specialised;
 pub use csv::{CsvRunError, SAMPLE_UNITS, SampleColumns, write_csv_streamed};
 pub use run::{Run, RunState, RunStateSnapshot, wide_simd};
 pub(crate) use run::{check_bounds, trace_buffer};
+use specialised::{Advance, StepMethod};
 
 /// Where the valve command comes from.
 #[derive(Debug, Clone, PartialEq)]
@@ -605,7 +607,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     /// the platform's acceleration at the step's end [m/s²] and the controller's `∫ẍ dt` over
     /// the step [m/s] (Simpson's rule, as the stages see ẍ).
     #[inline(always)]
-    fn stages_step<S: Stepper<N>>(&self, method: &S) -> ([f64; N], f64, f64) {
+    fn stages_step<S: Stepper<N>>(&self, method: &S) -> Advance<N> {
         let (t, h, n) = (self.time(), self.run.h, self.run.steps);
         let xdd0 = self.xdd_now;
         let xdd_mid = self.platform.xdd_at(t + 0.5 * h);
@@ -637,13 +639,19 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             self.model.derivatives(ts, ys, &inputs)
         };
         method.step(t, &mut y, rhs);
-        (y, xdd1, h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1))
+        Advance {
+            y,
+            xdd1,
+            dxd: h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1),
+            valve_end: None,
+            evals: 4,
+        }
     }
 
     /// One exact-hold step (see [`Self::stages_step`]), and the command at the valve at its
     /// end [V]; the controller's `∫ẍ dt` is the trapezoid, the same hold as the plant's input.
     #[inline(always)]
-    fn hold_step(&self, hold: &ExactHold<N>) -> (([f64; N], f64, f64), f64) {
+    fn hold_step(&self, hold: &ExactHold<N>) -> Advance<N> {
         let (h, n) = (self.run.h, self.run.steps);
         let xdd0 = self.xdd_now;
         let xdd1 = self.platform.xdd_at_grid(n + 1, h, self.stride);
@@ -651,7 +659,13 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         let v1 = self.valve_at_grid(n + 1, -1.0);
         let mut y = self.y;
         hold.step(&mut y, [v0, xdd0], [v1, xdd1]);
-        ((y, xdd1, 0.5 * h * (xdd0 + xdd1)), v1)
+        Advance {
+            y,
+            xdd1,
+            dxd: 0.5 * h * (xdd0 + xdd1),
+            valve_end: Some(v1),
+            evals: 0,
+        }
     }
 
     /// Whether the command at the valve read for a step's end is, bit for bit, the one read
@@ -706,6 +720,57 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     }
 }
 
+impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
+    /// The sample now, the platform's motion now being `platform`.
+    #[inline(always)]
+    fn sample_with(&self, platform: PlatformSample) -> Sample {
+        let v_in = if M::KIND.has_command() {
+            self.history.last_value()
+        } else {
+            f64::NAN
+        };
+        Sample::assemble(
+            self.time(),
+            platform,
+            &self.outputs(),
+            v_in,
+            self.model.half_stroke(),
+        )
+    }
+
+    /// Takes a step's result: the new state, the clock, the divergence check, the controller
+    /// and the command it sends, the end-stop contacts.
+    #[inline(always)]
+    fn finish_step(&mut self, advance: Advance<N>) -> Result<(), SimError> {
+        let Advance {
+            y,
+            xdd1,
+            dxd,
+            valve_end,
+            evals,
+        } = advance;
+        if let (Some(_), Some(v1)) = (self.valve_now, valve_end) {
+            self.valve_now = Some(v1);
+        }
+        self.y = y;
+        self.model.project(&mut self.y);
+        self.stats.steps += 1;
+        self.stats.rhs_evals += evals;
+        self.run.steps += 1;
+        self.xdd_now = xdd1;
+        self.check_state()?;
+        // A model without a valve (the passive seat) takes no command: its controller and
+        // delay line would compute what nothing reads (its valve input is 0, its `v_in` NaN).
+        if M::KIND.has_command() {
+            self.advance_controller(dxd);
+            let v = self.command_now();
+            send_command(&mut self.controller, &mut self.history, v);
+        }
+        self.track_contact();
+        Ok(())
+    }
+}
+
 impl<M: Model<N> + CommandPath, const N: usize> Run for Simulation<M, N> {
     const KIND: ModelKind = M::KIND;
 
@@ -715,47 +780,34 @@ impl<M: Model<N> + CommandPath, const N: usize> Run for Simulation<M, N> {
 
     #[inline(always)]
     fn step(&mut self) -> Result<(), SimError> {
-        // Right-hand-side evaluations: four per step for the stage methods, none for the hold.
-        let ((y, xdd1, dxd), evals) = match &self.method {
-            Method::Rk4(m) => (self.stages_step(m), 4),
-            Method::Exponential(m) => (self.stages_step(&**m), 4),
-            Method::ExactHold(m) => {
-                let (step, v1) = self.hold_step(m);
-                if self.valve_now.is_some() {
-                    self.valve_now = Some(v1);
-                }
-                (step, 0)
-            }
+        let advance = match &self.method {
+            Method::Rk4(m) => m.advance(self),
+            Method::Exponential(m) => (**m).advance(self),
+            Method::ExactHold(m) => (**m).advance(self),
         };
-        self.y = y;
-        self.model.project(&mut self.y);
-        self.stats.steps += 1;
-        self.stats.rhs_evals += evals;
-        self.run.steps += 1;
-        self.xdd_now = xdd1;
-        self.check_state()?;
-        self.advance_controller(dxd);
-        let v = self.command_now();
-        send_command(&mut self.controller, &mut self.history, v);
-        self.track_contact();
-        Ok(())
+        self.finish_step(advance)
+    }
+
+    fn stream_steps(
+        &mut self,
+        t_end: f64,
+        every: u64,
+        record: impl FnMut(Sample) -> bool,
+    ) -> Result<(u64, bool), SimError> {
+        self.stream_specialised(t_end, every, record)
     }
 
     #[inline(always)]
     fn sample(&self) -> Sample {
-        let v_in = if M::KIND.has_command() {
-            self.history.last_value()
-        } else {
-            f64::NAN
-        };
-        Sample::assemble(
-            self.time(),
-            self.platform
-                .at_grid(self.run.steps, self.run.h, self.stride),
-            &self.outputs(),
-            v_in,
-            self.model.half_stroke(),
-        )
+        let n = self.run.steps;
+        // A record on the grid is read in place, and the sample assembled in that branch: with
+        // one assembly after both branches, the platform's values went through a stack slot
+        // (the interpolating branch is a call), and reading them back as a pair stalled on
+        // the store of each (a quarter of the linear model's run). Same values either way.
+        match (&self.platform, self.stride) {
+            (PlatformMotion::Sampled(s), Some(k)) => self.sample_with(s.at_sample(n as usize * k)),
+            _ => self.sample_with(self.platform.at_grid(n, self.run.h, self.stride)),
+        }
     }
 
     fn stats(&self) -> StepStats {
