@@ -413,15 +413,17 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             _ => None,
         };
         let rhs = |ts: f64, ys: &[f64; N]| {
-            let (xdds, side) = if ts == t {
-                (xdd0, 1.0)
+            // The stage's place in the step: its start, its middle or its end (the index of
+            // its read in `pre`: an integer, not converted from `side` at every stage).
+            let (xdds, side, read) = if ts == t {
+                (xdd0, 1.0, 0)
             } else if ts == t + h {
-                (xdd1, -1.0)
+                (xdd1, -1.0, 2)
             } else {
-                (xdd_mid, 0.0)
+                (xdd_mid, 0.0, 1)
             };
             let v_valve = match pre {
-                Some(v) => v[(1.0 - side) as usize],
+                Some(v) => v[read],
                 None => self.valve_command(ts, side, ys, xdd0, xdds),
             };
             let inputs = Inputs { v_valve, xdd: xdds };
