@@ -163,7 +163,7 @@ mod tests {
         let n_end = (t_end / sim.step_size() - 1e-9).ceil() as u64;
         while sim.run_state().steps() < n_end {
             sim.step().expect("no divergence");
-            if sim.run_state().steps() % every == 0 {
+            if sim.run_state().steps().is_multiple_of(every) {
                 out.push(sim.sample());
             }
         }
