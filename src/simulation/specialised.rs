@@ -5,7 +5,7 @@
 //!
 //! [`Run::step`] of a [`Simulation`] (one step at a time, as an FMU steps) and this loop share
 //! [`StepMethod::advance`] and [`Simulation::finish_step`], so both give the same results bit
-//! for bit (`tests/it/engine.rs` checks it on every model).
+//! for bit (this module's test checks it on every model and stepper).
 
 use super::run::{RunState, stream};
 use super::{Method, Run, Sample, SimError, Simulation};
