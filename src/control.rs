@@ -232,7 +232,11 @@ impl Controller {
 
     /// Advances the controller's states by one step to the measurement `m` at the step's end
     /// (call it once per step, after the plant; at t = 0 use [`Self::start`]).
-    #[inline]
+    ///
+    /// Inlined into the stepping loop: called out of line, the measurement the loop had just
+    /// stored went through memory, and reading it back stalled (a third of the exact hold's
+    /// step for the linear models).
+    #[inline(always)]
     pub fn advance(&mut self, m: &Measurement) {
         self.xd += m.dxd;
         match self.params.kind {

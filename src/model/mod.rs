@@ -85,12 +85,12 @@ impl ModelKind {
     }
 
     /// Whether the model has a valve and hydraulics (spool, pressures, flows).
-    pub fn has_hydraulics(self) -> bool {
+    pub const fn has_hydraulics(self) -> bool {
         matches!(self, ModelKind::Twin)
     }
 
     /// Whether the model takes a valve command (the passive one does not).
-    pub fn has_command(self) -> bool {
+    pub const fn has_command(self) -> bool {
         !matches!(self, ModelKind::Passive)
     }
 }

@@ -22,9 +22,15 @@ pub mod delay;
 pub mod integrate;
 pub mod lti;
 mod run;
+mod sample;
+mod specialised;
+mod state;
 pub use csv::{CsvRunError, SAMPLE_UNITS, SampleColumns, write_csv_streamed};
 pub use run::{Run, RunState, RunStateSnapshot, wide_simd};
 pub(crate) use run::{check_bounds, trace_buffer};
+pub use sample::{ContactEvent, RunSummary, Sample, Trace, record_every, sample_count};
+use specialised::{Advance, StepMethod};
+pub use state::{RestoreError, SimulationState};
 
 /// Where the valve command comes from.
 #[derive(Debug, Clone, PartialEq)]
@@ -64,221 +70,6 @@ pub enum SimError {
         /// Its bound.
         bound: f64,
     },
-}
-
-/// A state that does not fit the simulation (or controller) it is restored into.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum RestoreError {
-    /// A part's size differs from the one rebuilt from the parameters.
-    #[error("the saved {what} is {found}, this simulation's is {expected}")]
-    Mismatch {
-        /// Which part.
-        what: &'static str,
-        /// This simulation's.
-        expected: usize,
-        /// The saved state's.
-        found: usize,
-    },
-}
-
-/// What of a [`Simulation`] changes while it steps ([`Simulation::snapshot`]): the model's
-/// state, the steps taken, the command history, the controller's signal states, the
-/// platform acceleration now and the work counters. The problem (model, drive, platform,
-/// step, stepper) is not in it: a simulation built for the same problem takes it with
-/// [`Simulation::restore`] and then steps bit for bit as the original.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SimulationState {
-    /// The model's state vector (SI, the model's order).
-    pub y: Vec<f64>,
-    /// Steps taken and the open end-stop contact.
-    pub run: RunStateSnapshot,
-    /// The commands sent (the delay line).
-    pub history: delay::DelayLineState,
-    /// The controller's states, in closed loop.
-    pub controller: Option<crate::control::ControllerState>,
-    /// Platform acceleration at the current time [m/s²].
-    pub xdd_now: f64,
-    /// Integrator work so far.
-    pub stats: StepStats,
-}
-
-impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
-    /// Its dynamic state (bounded: its size does not grow with the steps taken).
-    pub fn snapshot(&self) -> SimulationState {
-        SimulationState {
-            y: self.y.to_vec(),
-            run: self.run.snapshot(),
-            history: self.history.snapshot(),
-            controller: self.controller.as_ref().map(Controller::snapshot),
-            xdd_now: self.xdd_now,
-            stats: self.stats,
-        }
-    }
-
-    /// Takes the dynamic state of a simulation of the same problem (same model, drive kind,
-    /// step and platform; the platform is set before, with [`Self::set_platform`], since it
-    /// resets the acceleration now). Refused, leaving `self` unchanged, when a part's size
-    /// differs.
-    pub fn restore(&mut self, s: &SimulationState) -> Result<(), RestoreError> {
-        let y: [f64; N] =
-            s.y.as_slice()
-                .try_into()
-                .map_err(|_| RestoreError::Mismatch {
-                    what: "state vector length",
-                    expected: N,
-                    found: s.y.len(),
-                })?;
-        let mut history = self.history.clone();
-        history.restore(&s.history)?;
-        let mut controller = self.controller.clone();
-        match (controller.as_mut(), &s.controller) {
-            (Some(c), Some(cs)) => c.restore(cs)?,
-            (None, None) => {}
-            (mine, theirs) => {
-                return Err(RestoreError::Mismatch {
-                    what: "number of controllers",
-                    expected: mine.is_some() as usize,
-                    found: theirs.is_some() as usize,
-                });
-            }
-        }
-        self.y = y;
-        self.run.restore(&s.run);
-        self.history = history;
-        self.controller = controller;
-        self.xdd_now = s.xdd_now;
-        self.stats = s.stats;
-        Ok(())
-    }
-}
-
-/// One recorded instant (SI). Fields a model lacks are NaN.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sample {
-    /// Time [s].
-    pub t: f64,
-    /// Platform position [m].
-    pub x: f64,
-    /// Platform velocity [m/s].
-    pub xd: f64,
-    /// Platform acceleration [m/s²].
-    pub xdd: f64,
-    /// Relative displacement [m].
-    pub u: f64,
-    /// Relative velocity [m/s].
-    pub du: f64,
-    /// Body acceleration [m/s²].
-    pub ydd: f64,
-    /// Command as sent (before the delay), saturated [V]. NaN for the passive model.
-    pub v_in: f64,
-    /// Spool position [m].
-    pub xv: f64,
-    /// Upper chamber pressure [Pa].
-    pub p1: f64,
-    /// Lower chamber pressure [Pa].
-    pub p2: f64,
-    /// Hose-1 flow [m³/s].
-    pub q1: f64,
-    /// Hose-2 flow [m³/s].
-    pub q2: f64,
-    /// Body beyond ±Lc/2 (end-stop contact for the twin, stroke overrun for the others).
-    pub contact: bool,
-}
-
-impl Sample {
-    /// The sample at `t` from the platform's motion, the model's outputs and the command as
-    /// sent (NaN without a valve); `half_stroke` [m] decides `contact`.
-    pub fn assemble(t: f64, p: PlatformSample, o: &Outputs, v_in: f64, half_stroke: f64) -> Self {
-        Sample {
-            t,
-            x: p.x,
-            xd: p.xd,
-            xdd: p.xdd,
-            u: o.u,
-            du: o.du,
-            ydd: o.ydd,
-            v_in,
-            xv: o.xv,
-            p1: o.p1,
-            p2: o.p2,
-            q1: o.q1,
-            q2: o.q2,
-            contact: o.u.abs() > half_stroke,
-        }
-    }
-}
-
-/// One end-stop contact (twin) or stroke overrun (linear, passive models).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ContactEvent {
-    /// Start [s].
-    pub t_start: f64,
-    /// End [s] (the run's end if still in contact).
-    pub t_end: f64,
-    /// +1 upper stop (u > 0), −1 lower stop.
-    pub side: i8,
-    /// Largest penetration beyond ±Lc/2 [m].
-    pub max_penetration_m: f64,
-}
-
-/// A recorded run.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Trace {
-    /// Which model produced it.
-    pub model: ModelKind,
-    /// Samples at the output rate.
-    pub samples: Vec<Sample>,
-    /// End-stop contacts / stroke overruns.
-    pub contacts: Vec<ContactEvent>,
-    /// Integrator work.
-    pub stats: StepStats,
-}
-
-/// What a streamed run leaves besides its samples ([`Run::run_streaming`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunSummary {
-    /// Which model produced it.
-    pub model: ModelKind,
-    /// Samples passed to the recorder.
-    pub samples: u64,
-    /// Whether the recorder stopped the run before its end.
-    pub stopped: bool,
-    /// End-stop contacts / stroke overruns.
-    pub contacts: Vec<ContactEvent>,
-    /// Integrator work.
-    pub stats: StepStats,
-}
-
-impl RunSummary {
-    /// The trace of these samples.
-    pub fn into_trace(self, samples: Vec<Sample>) -> Trace {
-        Trace {
-            model: self.model,
-            samples,
-            contacts: self.contacts,
-            stats: self.stats,
-        }
-    }
-}
-
-/// Steps between recorded samples at `rate_hz` for an internal step `h` [s] (at least 1).
-pub fn record_every(h: f64, rate_hz: f64) -> u64 {
-    ((1.0 / rate_hz) / h).round().max(1.0) as u64
-}
-
-/// Samples a run to `t_end` [s] recorded at `rate_hz` with internal step `h` gives, both
-/// ends included (what [`Run::run_trace`] returns); saturates for absurd inputs.
-pub fn sample_count(t_end: f64, rate_hz: f64, h: f64) -> u64 {
-    let every = record_every(h, rate_hz);
-    let n_end = (t_end / h - 1e-9).ceil().max(0.0) as u64;
-    (n_end / every).saturating_add(1)
-}
-
-impl Trace {
-    /// One channel as a vector.
-    pub fn channel(&self, f: impl Fn(&Sample) -> f64) -> Vec<f64> {
-        self.samples.iter().map(f).collect()
-    }
 }
 
 /// A model stepped with its command path and excitation.
@@ -605,7 +396,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     /// the platform's acceleration at the step's end [m/s²] and the controller's `∫ẍ dt` over
     /// the step [m/s] (Simpson's rule, as the stages see ẍ).
     #[inline(always)]
-    fn stages_step<S: Stepper<N>>(&self, method: &S) -> ([f64; N], f64, f64) {
+    fn stages_step<S: Stepper<N>>(&self, method: &S) -> Advance<N> {
         let (t, h, n) = (self.time(), self.run.h, self.run.steps);
         let xdd0 = self.xdd_now;
         let xdd_mid = self.platform.xdd_at(t + 0.5 * h);
@@ -622,28 +413,36 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             _ => None,
         };
         let rhs = |ts: f64, ys: &[f64; N]| {
-            let (xdds, side) = if ts == t {
-                (xdd0, 1.0)
+            // The stage's place in the step: its start, its middle or its end (the index of
+            // its read in `pre`: an integer, not converted from `side` at every stage).
+            let (xdds, side, read) = if ts == t {
+                (xdd0, 1.0, 0)
             } else if ts == t + h {
-                (xdd1, -1.0)
+                (xdd1, -1.0, 2)
             } else {
-                (xdd_mid, 0.0)
+                (xdd_mid, 0.0, 1)
             };
             let v_valve = match pre {
-                Some(v) => v[(1.0 - side) as usize],
+                Some(v) => v[read],
                 None => self.valve_command(ts, side, ys, xdd0, xdds),
             };
             let inputs = Inputs { v_valve, xdd: xdds };
             self.model.derivatives(ts, ys, &inputs)
         };
         method.step(t, &mut y, rhs);
-        (y, xdd1, h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1))
+        Advance {
+            y,
+            xdd1,
+            dxd: h / 6.0 * (xdd0 + 4.0 * xdd_mid + xdd1),
+            valve_end: None,
+            evals: 4,
+        }
     }
 
     /// One exact-hold step (see [`Self::stages_step`]), and the command at the valve at its
     /// end [V]; the controller's `∫ẍ dt` is the trapezoid, the same hold as the plant's input.
     #[inline(always)]
-    fn hold_step(&self, hold: &ExactHold<N>) -> (([f64; N], f64, f64), f64) {
+    fn hold_step(&self, hold: &ExactHold<N>) -> Advance<N> {
         let (h, n) = (self.run.h, self.run.steps);
         let xdd0 = self.xdd_now;
         let xdd1 = self.platform.xdd_at_grid(n + 1, h, self.stride);
@@ -651,7 +450,13 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         let v1 = self.valve_at_grid(n + 1, -1.0);
         let mut y = self.y;
         hold.step(&mut y, [v0, xdd0], [v1, xdd1]);
-        ((y, xdd1, 0.5 * h * (xdd0 + xdd1)), v1)
+        Advance {
+            y,
+            xdd1,
+            dxd: 0.5 * h * (xdd0 + xdd1),
+            valve_end: Some(v1),
+            evals: 0,
+        }
     }
 
     /// Whether the command at the valve read for a step's end is, bit for bit, the one read
@@ -706,6 +511,57 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
     }
 }
 
+impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
+    /// The sample now, the platform's motion now being `platform`.
+    #[inline(always)]
+    fn sample_with(&self, platform: PlatformSample) -> Sample {
+        let v_in = if M::KIND.has_command() {
+            self.history.last_value()
+        } else {
+            f64::NAN
+        };
+        Sample::assemble(
+            self.time(),
+            platform,
+            &self.outputs(),
+            v_in,
+            self.model.half_stroke(),
+        )
+    }
+
+    /// Takes a step's result: the new state, the clock, the divergence check, the controller
+    /// and the command it sends, the end-stop contacts.
+    #[inline(always)]
+    fn finish_step(&mut self, advance: Advance<N>) -> Result<(), SimError> {
+        let Advance {
+            y,
+            xdd1,
+            dxd,
+            valve_end,
+            evals,
+        } = advance;
+        if let (Some(_), Some(v1)) = (self.valve_now, valve_end) {
+            self.valve_now = Some(v1);
+        }
+        self.y = y;
+        self.model.project(&mut self.y);
+        self.stats.steps += 1;
+        self.stats.rhs_evals += evals;
+        self.run.steps += 1;
+        self.xdd_now = xdd1;
+        self.check_state()?;
+        // A model without a valve (the passive seat) takes no command: its controller and
+        // delay line would compute what nothing reads (its valve input is 0, its `v_in` NaN).
+        if M::KIND.has_command() {
+            self.advance_controller(dxd);
+            let v = self.command_now();
+            send_command(&mut self.controller, &mut self.history, v);
+        }
+        self.track_contact();
+        Ok(())
+    }
+}
+
 impl<M: Model<N> + CommandPath, const N: usize> Run for Simulation<M, N> {
     const KIND: ModelKind = M::KIND;
 
@@ -715,47 +571,34 @@ impl<M: Model<N> + CommandPath, const N: usize> Run for Simulation<M, N> {
 
     #[inline(always)]
     fn step(&mut self) -> Result<(), SimError> {
-        // Right-hand-side evaluations: four per step for the stage methods, none for the hold.
-        let ((y, xdd1, dxd), evals) = match &self.method {
-            Method::Rk4(m) => (self.stages_step(m), 4),
-            Method::Exponential(m) => (self.stages_step(&**m), 4),
-            Method::ExactHold(m) => {
-                let (step, v1) = self.hold_step(m);
-                if self.valve_now.is_some() {
-                    self.valve_now = Some(v1);
-                }
-                (step, 0)
-            }
+        let advance = match &self.method {
+            Method::Rk4(m) => m.advance(self),
+            Method::Exponential(m) => (**m).advance(self),
+            Method::ExactHold(m) => (**m).advance(self),
         };
-        self.y = y;
-        self.model.project(&mut self.y);
-        self.stats.steps += 1;
-        self.stats.rhs_evals += evals;
-        self.run.steps += 1;
-        self.xdd_now = xdd1;
-        self.check_state()?;
-        self.advance_controller(dxd);
-        let v = self.command_now();
-        send_command(&mut self.controller, &mut self.history, v);
-        self.track_contact();
-        Ok(())
+        self.finish_step(advance)
+    }
+
+    fn stream_steps(
+        &mut self,
+        t_end: f64,
+        every: u64,
+        record: impl FnMut(Sample) -> bool,
+    ) -> Result<(u64, bool), SimError> {
+        self.stream_specialised(t_end, every, record)
     }
 
     #[inline(always)]
     fn sample(&self) -> Sample {
-        let v_in = if M::KIND.has_command() {
-            self.history.last_value()
-        } else {
-            f64::NAN
-        };
-        Sample::assemble(
-            self.time(),
-            self.platform
-                .at_grid(self.run.steps, self.run.h, self.stride),
-            &self.outputs(),
-            v_in,
-            self.model.half_stroke(),
-        )
+        let n = self.run.steps;
+        // A record on the grid is read in place, and the sample assembled in that branch: with
+        // one assembly after both branches, the platform's values went through a stack slot
+        // (the interpolating branch is a call), and reading them back as a pair stalled on
+        // the store of each (a quarter of the linear model's run). Same values either way.
+        match (&self.platform, self.stride) {
+            (PlatformMotion::Sampled(s), Some(k)) => self.sample_with(s.at_sample(n as usize * k)),
+            _ => self.sample_with(self.platform.at_grid(n, self.run.h, self.stride)),
+        }
     }
 
     fn stats(&self) -> StepStats {

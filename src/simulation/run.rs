@@ -170,6 +170,21 @@ pub trait Run {
         self.run_state().contacts()
     }
 
+    /// The stepping loop: steps until `t_end` [s], passing a sample to `record` every `every`
+    /// steps (and at the start when no step has been taken yet), and stops early when `record`
+    /// returns `false`; returns the samples passed and whether it stopped. A run may override
+    /// it with a loop of its own (a [`Simulation`](super::Simulation) chooses its stepper once,
+    /// not at every step) that gives the same samples.
+    #[inline(always)]
+    fn stream_steps(
+        &mut self,
+        t_end: f64,
+        every: u64,
+        record: impl FnMut(Sample) -> bool,
+    ) -> Result<(u64, bool), SimError> {
+        stream(self, t_end, every, record)
+    }
+
     /// Runs until `t_end` [s], calling `record` every `every` steps (and at the start if
     /// t = 0).
     fn run_until(
@@ -178,7 +193,7 @@ pub trait Run {
         every: u64,
         mut record: impl FnMut(Sample),
     ) -> Result<(), SimError> {
-        stream(self, t_end, every, |s| {
+        self.stream_steps(t_end, every, |s| {
             record(s);
             true
         })
@@ -207,7 +222,7 @@ pub trait Run {
         record: impl FnMut(Sample) -> bool,
     ) -> Result<RunSummary, SimError> {
         let every = record_every(self.step_size(), rate_hz);
-        let (samples, stopped) = stream(self, t_end, every, record)?;
+        let (samples, stopped) = self.stream_steps(t_end, every, record)?;
         Ok(RunSummary {
             model: Self::KIND,
             samples,
@@ -234,7 +249,7 @@ pub(crate) fn trace_buffer(t_end: f64, rate_hz: f64, h: f64) -> Vec<Sample> {
 /// fused multiply–add the arithmetic is the same operations in the same order, so both forms
 /// give the same results bit for bit (`tests/it/engine.rs` checks a run against the SSE2 form).
 #[inline(always)]
-fn stream<R: Run + ?Sized>(
+pub(super) fn stream<R: Run + ?Sized>(
     run: &mut R,
     t_end: f64,
     every: u64,
