@@ -119,6 +119,9 @@ pub const NOT_ON_THE_WEB: &str = "not in the web build: the browser opens preset
      platform records and downloads presets, the traces' CSV and the plots' SVG \
      (File menu); the other files need the desktop app";
 
+/// A file saved through the browser (web): its name, bytes and MIME type.
+pub type Download = (String, Vec<u8>, &'static str);
+
 /// A file the browser's picker read (web): its name and bytes.
 #[derive(Debug, Clone)]
 pub struct PickedFile {

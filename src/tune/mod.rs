@@ -669,7 +669,7 @@ enum RunStage {
     Baseline(Box<GainSearch>),
     /// The optimiser between iterations (`state` is `None` before its start simplex).
     Search {
-        problem: Problem<SearchCost>,
+        problem: Box<Problem<SearchCost>>,
         solver: Box<NelderMead<Vec<f64>, f64>>,
         state: Option<Box<SearchState>>,
         baseline: Box<Evaluation>,
@@ -743,7 +743,7 @@ impl TuneRun {
                 self.stage = next;
                 None
             }
-            Err(Ended(result)) => Some(result),
+            Err(Ended(result)) => Some(*result),
         }
     }
 
@@ -780,9 +780,9 @@ impl TuneRun {
                 }
                 let solver = NelderMead::new(simplex)
                     .with_sd_tolerance(1e-4)
-                    .map_err(|e| Ended(Err(TuneError::Optimiser(e.to_string()))))?;
+                    .map_err(|e| end(Err(TuneError::Optimiser(e.to_string()))))?;
                 Ok(RunStage::Search {
-                    problem: Problem::new(SearchCost(*search)),
+                    problem: Box::new(Problem::new(SearchCost(*search))),
                     solver: Box::new(solver),
                     state: None,
                     baseline: Box::new(baseline),
@@ -808,16 +808,16 @@ impl TuneRun {
                 let next = match state {
                     None => {
                         if cancelled(&problem) {
-                            return Err(Ended(Err(TuneError::Cancelled)));
+                            return Err(end(Err(TuneError::Cancelled)));
                         }
                         starting(&problem, true);
                         let started = solver.init(
-                            &mut problem,
+                            &mut *problem,
                             SearchState::new().max_iters(opts.max_evaluations as u64),
                         );
                         starting(&problem, false);
                         if cancelled(&problem) {
-                            return Err(Ended(Err(TuneError::Cancelled)));
+                            return Err(end(Err(TuneError::Cancelled)));
                         }
                         started.map(|(mut s, _)| {
                             s.update();
@@ -839,9 +839,9 @@ impl TuneRun {
                                 || "budget of iterations used".to_string(),
                                 |t| t.text().to_string(),
                             );
-                            return self.search_ended(problem, *baseline, stop_reason);
+                            return self.search_ended(*problem, *baseline, stop_reason);
                         }
-                        solver.next_iter(&mut problem, s).map(|(mut s, _)| {
+                        solver.next_iter(&mut *problem, s).map(|(mut s, _)| {
                             s.update();
                             s.increment_iter();
                             s
@@ -857,12 +857,12 @@ impl TuneRun {
                     }),
                     Err(e) => match SearchStop::of(&e) {
                         Some(SearchStop::BudgetUsed) => self.search_ended(
-                            problem,
+                            *problem,
                             *baseline,
                             SearchStop::BudgetUsed.to_string(),
                         ),
-                        Some(SearchStop::Cancelled) => Err(Ended(Err(TuneError::Cancelled))),
-                        None => Err(Ended(Err(TuneError::Optimiser(e.to_string())))),
+                        Some(SearchStop::Cancelled) => Err(end(Err(TuneError::Cancelled))),
+                        None => Err(end(Err(TuneError::Optimiser(e.to_string())))),
                     },
                 }
             }
@@ -876,7 +876,7 @@ impl TuneRun {
                 if let Some(cancel) = &search.cancel
                     && cancel.load(Ordering::Relaxed)
                 {
-                    return Err(Ended(Err(TuneError::Cancelled)));
+                    return Err(end(Err(TuneError::Cancelled)));
                 }
                 let checked = match candidates.next() {
                     Some(e) => {
@@ -900,7 +900,7 @@ impl TuneRun {
                         ((*baseline).clone(), table)
                     }
                 };
-                Err(Ended(self.finish(
+                Err(end(self.finish(
                     *search,
                     *baseline,
                     log,
@@ -920,7 +920,7 @@ impl TuneRun {
         stop_reason: String,
     ) -> Result<RunStage, Ended> {
         let Some(SearchCost(search)) = problem.take_problem() else {
-            return Err(Ended(Err(TuneError::Optimiser(
+            return Err(end(Err(TuneError::Optimiser(
                 "the optimiser lost its cost function".into(),
             ))));
         };
@@ -1044,7 +1044,12 @@ impl TuneRun {
 }
 
 /// A [`TuneRun`]'s end, carried out of a step.
-struct Ended(Result<TuneResult, TuneError>);
+struct Ended(Box<Result<TuneResult, TuneError>>);
+
+/// The run's end with `result`.
+fn end(result: Result<TuneResult, TuneError>) -> Ended {
+    Ended(Box::new(result))
+}
 
 /// The plants with their linearisation and margin grid.
 fn plants_of(ps: Vec<Params>) -> Vec<(Params, LinearisedModel, MarginGrid)> {

@@ -203,7 +203,7 @@ impl SeatTwinApp {
         &self,
         purpose: Purpose,
         name: &str,
-    ) -> Result<Vec<(String, Vec<u8>, &'static str)>, String> {
+    ) -> Result<Vec<files::Download>, String> {
         let stem = Path::new(name)
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
