@@ -50,6 +50,12 @@ enum Pending {
 /// Wall time the engine may step in one frame on the web, where it has no thread of its own
 /// (at 60 frames a second this leaves about 4 ms for the UI).
 const ENGINE_BUDGET: Duration = Duration::from_millis(12);
+/// Wall time per frame for the engine and background jobs together on the web: jobs
+/// ([`super::job::pump`]) get what the engine left, at least [`JOB_MIN_BUDGET`] (a step
+/// longer than that still runs whole).
+const FRAME_WORK_BUDGET: Duration = Duration::from_millis(14);
+/// The least wall time per frame for background jobs on the web.
+const JOB_MIN_BUDGET: Duration = Duration::from_millis(4);
 
 /// Longest wait between a wake from a worker (engine, jobs) and the frame that shows it.
 const REPAINT_PERIOD: Duration = Duration::from_millis(33);
@@ -619,6 +625,14 @@ impl SeatTwinApp {
         #[cfg(target_arch = "wasm32")]
         if self.engine_view.running && self.settings.speed == Speed::Max {
             // As fast as it goes: the next frame steps on at once.
+            ctx.request_repaint();
+        }
+        // Background jobs (dwells, Tune) run here too on the web, in slices, after the
+        // engine; on the desktop they have threads and this returns at once.
+        let job_budget = FRAME_WORK_BUDGET
+            .saturating_sub(stepping)
+            .max(JOB_MIN_BUDGET);
+        if super::job::pump(job_budget) {
             ctx.request_repaint();
         }
         self.drain_engine();

@@ -113,11 +113,14 @@ pub struct Dialogs {
     web: Option<(Purpose, std::sync::mpsc::Receiver<Option<PickedFile>>)>,
 }
 
-/// What the web build says where a desktop file dialog would open (saving, exports,
-/// measured campaigns, sessions).
-pub const NOT_ON_THE_WEB: &str = "not in the web build yet: the browser opens presets and \
-     platform records and downloads the traces' CSV (File menu); the other files need the \
-     desktop app";
+/// What the web build says where a desktop file dialog would open and the browser cannot
+/// serve (measured campaigns, sessions, calibration reports, FMU and controller code).
+pub const NOT_ON_THE_WEB: &str = "not in the web build: the browser opens presets and \
+     platform records and downloads presets, the traces' CSV and the plots' SVG \
+     (File menu); the other files need the desktop app";
+
+/// A file saved through the browser (web): its name, bytes and MIME type.
+pub type Download = (String, Vec<u8>, &'static str);
 
 /// A file the browser's picker read (web): its name and bytes.
 #[derive(Debug, Clone)]
@@ -129,10 +132,17 @@ pub struct PickedFile {
 }
 
 impl Purpose {
-    /// The browser's picker can serve it (web): opening a preset or a platform record. The
-    /// rest (saving, exports, measured campaigns, sessions) is not in the web build yet.
+    /// The browser's picker can serve it (web): opening a preset or a platform record.
     pub fn picked_on_the_web(self) -> bool {
         matches!(self, Purpose::OpenPreset | Purpose::LoadRecord)
+    }
+
+    /// The browser saves it as downloads (web): a preset, the traces' CSV, the plots.
+    pub fn downloads_on_the_web(self) -> bool {
+        matches!(
+            self,
+            Purpose::SavePreset | Purpose::ExportCsv | Purpose::ExportPng
+        )
     }
 }
 

@@ -1,11 +1,19 @@
-//! One background job: a worker thread with progress, cancel, streamed partial results and a
-//! final result, polled each frame. A panic inside the work is caught and reported as the
-//! job's error, never taking the UI down. Every background task of the app runs on it: the
-//! sine dwell (streams its points), the file dialogs and writers, the measured-record loader,
-//! replays and calibration, and Tune.
+//! One background job: progress, cancel, streamed partial results and a final result, polled
+//! each frame. A panic inside the work is caught and reported as the job's error, never
+//! taking the UI down. Every background task of the app runs on it: the sine dwell (streams
+//! its points), the file dialogs and writers, the measured-record loader, replays and
+//! calibration, and Tune.
+//!
+//! Where the work runs is the job's [`Runner`], not the caller's business: on the desktop a
+//! thread of its own; in a browser tab (no threads) in slices inside the frame loop, under a
+//! time budget ([`pump`], called once per frame by the app). Work given as steps
+//! ([`Job::spawn_steps`]: each call does a bounded piece and says whether it is done) is cut
+//! there; work given as one call ([`Job::spawn`]) is one slice.
 //!
 //! ```text
-//!   Job::spawn(work) ──► thread: work(&ctx) ──► Result<T, String> ──► poll() (once)
+//!   Job::spawn_steps(step) ──► Thread: loop step(&ctx)           ──► Result<T, String> ──► poll()
+//!        │                     Frames: pump(budget) each frame:
+//!        │                             step(&ctx) until the budget is spent
 //!        │                 ctx.report(done, total) ──► progress()
 //!        │                 ctx.send(part)          ──► drain() (each frame)
 //!        └── cancel() / drop ──► ctx.cancelled() / ctx.cancel_flag() (the work stops itself)
@@ -67,10 +75,105 @@ impl<P> JobCtx<P> {
     }
 }
 
-/// The error of every background job in the web build (sine dwells, Tune, calibration,
-/// file dialogs): they need a thread, which a browser tab does not have.
-pub const NO_THREADS_ON_THE_WEB: &str = "not available in the web build (a browser tab has no background threads): use the \
-     desktop app";
+/// What one step of a job's work gives: more to do, or the end.
+#[derive(Debug, PartialEq)]
+pub enum Step<T> {
+    /// Not finished: call again.
+    More,
+    /// Finished with this result.
+    Done(Result<T, String>),
+}
+
+/// Where a job's work runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Runner {
+    /// A thread of its own (the desktop).
+    Thread,
+    /// In slices inside the frames, run by [`pump`] on the thread that started the job (a
+    /// browser tab, which has no threads).
+    Frames,
+}
+
+impl Runner {
+    /// The runner of this build: [`Runner::Frames`] on wasm32, else [`Runner::Thread`].
+    pub fn here() -> Self {
+        if cfg!(target_arch = "wasm32") {
+            Runner::Frames
+        } else {
+            Runner::Thread
+        }
+    }
+}
+
+/// A job run in the frames, as [`pump`] sees it.
+trait Sliced {
+    /// One step; true when the work has ended (its result is sent).
+    fn slice(&mut self) -> bool;
+}
+
+/// The work of a [`Runner::Frames`] job, its context and where its result goes.
+struct InFrames<T, P, F> {
+    ctx: JobCtx<P>,
+    step: F,
+    result: Sender<Result<T, String>>,
+}
+
+impl<T, P, F: FnMut(&JobCtx<P>) -> Step<T>> Sliced for InFrames<T, P, F> {
+    fn slice(&mut self) -> bool {
+        let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| (self.step)(&self.ctx)))
+            .unwrap_or_else(|panic| Step::Done(Err(panic_text(panic))));
+        match out {
+            Step::More => false,
+            Step::Done(r) => {
+                let _ = self.result.send(r);
+                (self.ctx.waker)();
+                true
+            }
+        }
+    }
+}
+
+thread_local! {
+    /// The [`Runner::Frames`] jobs started on this thread and not ended, in start order.
+    static IN_FRAMES: std::cell::RefCell<Vec<Box<dyn Sliced>>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Runs the [`Runner::Frames`] jobs of this thread for about `budget` of wall time: one step
+/// of each in turn, at least one step in all, until they end or the budget is spent (a step
+/// is not interrupted, so a long step overruns it). Returns whether work is left (the caller
+/// asks for another frame). Without such jobs (the desktop) it returns false at once.
+pub fn pump(budget: std::time::Duration) -> bool {
+    // Taken out while they run, so a step may start another job.
+    let mut jobs = IN_FRAMES.with(|j| std::mem::take(&mut *j.borrow_mut()));
+    if jobs.is_empty() {
+        return false;
+    }
+    let t0 = web_time::Instant::now();
+    while !jobs.is_empty() {
+        jobs.retain_mut(|job| !job.slice());
+        if t0.elapsed() >= budget {
+            break;
+        }
+    }
+    IN_FRAMES.with(|j| {
+        let mut j = j.borrow_mut();
+        let started_meanwhile = std::mem::take(&mut *j);
+        *j = jobs;
+        j.extend(started_meanwhile);
+        !j.is_empty()
+    })
+}
+
+/// A panic's message, as the job's error.
+fn panic_text(panic: Box<dyn std::any::Any + Send>) -> String {
+    let msg = panic
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "unknown panic".into());
+    format!("the job stopped on an internal error: {msg}")
+}
 
 /// A job running (or finished) on its own thread, producing partial results `P` and then a
 /// `T`. Dropping it cancels the work (nobody will read its result).
@@ -88,12 +191,37 @@ impl<T, P> Drop for Job<T, P> {
 }
 
 impl<T: Send + 'static, P: Send + 'static> Job<T, P> {
-    /// Starts `work` on a thread named `name`. Its `Err` (or a panic, as text) is the job's
-    /// error.
+    /// Starts `work`, one call, on this build's [`Runner`] (named `name` as a thread). Its
+    /// `Err` (or a panic, as text) is the job's error. In the frames it is one slice.
     pub fn spawn(
         name: &str,
         waker: Waker,
         work: impl FnOnce(&JobCtx<P>) -> Result<T, String> + Send + 'static,
+    ) -> Self {
+        let mut work = Some(work);
+        Self::spawn_steps(name, waker, move |ctx| match work.take() {
+            Some(w) => Step::Done(w(ctx)),
+            None => Step::Done(Err("the job was run twice".into())),
+        })
+    }
+
+    /// Starts work given as steps on this build's [`Runner`]: `step` is called until it
+    /// returns [`Step::Done`]; each call should do a bounded piece (in a browser it runs
+    /// inside a frame).
+    pub fn spawn_steps(
+        name: &str,
+        waker: Waker,
+        step: impl FnMut(&JobCtx<P>) -> Step<T> + Send + 'static,
+    ) -> Self {
+        Self::spawn_steps_on(Runner::here(), name, waker, step)
+    }
+
+    /// [`Self::spawn_steps`] on a given runner (tests run [`Runner::Frames`] natively).
+    pub fn spawn_steps_on(
+        runner: Runner,
+        name: &str,
+        waker: Waker,
+        mut step: impl FnMut(&JobCtx<P>) -> Step<T> + Send + 'static,
     ) -> Self {
         let (parts_tx, parts) = channel();
         let ctx = JobCtx {
@@ -105,41 +233,41 @@ impl<T: Send + 'static, P: Send + 'static> Job<T, P> {
         };
         let (tx, rx) = channel();
         let worker = ctx.clone();
-        #[cfg(target_arch = "wasm32")]
-        let spawned: std::io::Result<()> = {
-            // A browser tab has no threads: the job says so instead of freezing the page.
-            let _ = (work, worker, tx, name);
-            Err(std::io::Error::other(NO_THREADS_ON_THE_WEB))
-        };
-        #[cfg(not(target_arch = "wasm32"))]
-        let spawned = std::thread::Builder::new()
-            .name(name.to_string())
-            .spawn(move || {
-                let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&worker)))
-                    .unwrap_or_else(|panic| {
-                        let msg = panic
-                            .downcast_ref::<String>()
-                            .cloned()
-                            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                            .unwrap_or_else(|| "unknown panic".into());
-                        Err(format!("the job stopped on an internal error: {msg}"))
-                    });
-                let _ = tx.send(out);
-                (worker.waker)();
-            });
-        let result = match spawned {
-            Ok(_) => rx,
-            #[cfg(target_arch = "wasm32")]
-            Err(e) => {
-                let (tx, rx) = channel();
-                let _ = tx.send(Err(e.to_string()));
+        let result = match runner {
+            Runner::Frames => {
+                let job = InFrames {
+                    ctx: worker,
+                    step,
+                    result: tx,
+                };
+                IN_FRAMES.with(|j| j.borrow_mut().push(Box::new(job)));
+                // The next frame runs it.
+                (ctx.waker)();
                 rx
             }
-            #[cfg(not(target_arch = "wasm32"))]
-            Err(e) => {
-                let (tx, rx) = channel();
-                let _ = tx.send(Err(format!("could not start a thread: {e}")));
-                rx
+            Runner::Thread => {
+                let spawned = std::thread::Builder::new()
+                    .name(name.to_string())
+                    .spawn(move || {
+                        let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                            loop {
+                                if let Step::Done(r) = step(&worker) {
+                                    break r;
+                                }
+                            }
+                        }))
+                        .unwrap_or_else(|panic| Err(panic_text(panic)));
+                        let _ = tx.send(out);
+                        (worker.waker)();
+                    });
+                match spawned {
+                    Ok(_) => rx,
+                    Err(e) => {
+                        let (tx, rx) = channel();
+                        let _ = tx.send(Err(format!("could not start a thread: {e}")));
+                        rx
+                    }
+                }
             }
         };
         Self {
@@ -212,63 +340,152 @@ mod tests {
                 return r;
             }
             assert!(t0.elapsed() < Duration::from_secs(10), "job never ended");
-            std::thread::sleep(Duration::from_millis(5));
+            // Runs this thread's Frames jobs (nothing for a Thread job).
+            if !pump(Duration::from_millis(2)) {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        }
+    }
+
+    /// Work in steps: the sum of squares of 0..n, one term per step, reporting progress and
+    /// streaming each term; stops when cancelled.
+    fn squares(n: usize) -> impl FnMut(&JobCtx<usize>) -> Step<usize> + Send + 'static {
+        let (mut i, mut sum) = (0, 0);
+        move |ctx| {
+            if ctx.cancelled() {
+                return Step::Done(Err("cancelled".into()));
+            }
+            if i == n {
+                return Step::Done(Ok(sum));
+            }
+            sum += i * i;
+            ctx.send(i * i);
+            i += 1;
+            ctx.report(i, n);
+            Step::More
         }
     }
 
     #[test]
     fn result_progress_cancel_and_panic() {
+        for runner in [Runner::Thread, Runner::Frames] {
+            let noop: Waker = Arc::new(|| {});
+            let mut once = Some(7);
+            let ok: Job<i32> = Job::spawn_steps_on(runner, "t", noop.clone(), move |ctx| {
+                ctx.report(3, 4);
+                Step::Done(once.take().ok_or_else(|| "twice".to_string()))
+            });
+            assert_eq!(wait(&ok), Ok(7), "{runner:?}");
+            assert_eq!(ok.progress(), (3, 4));
+            assert!(ok.poll().is_none(), "the result comes once");
+
+            let stop: Job<()> = Job::spawn_steps_on(runner, "t", noop.clone(), |ctx| {
+                if ctx.cancelled() {
+                    Step::Done(Err("cancelled".into()))
+                } else {
+                    std::thread::sleep(Duration::from_millis(1));
+                    Step::More
+                }
+            });
+            pump(Duration::from_millis(5));
+            assert!(stop.poll().is_none(), "{runner:?}: it runs until cancelled");
+            stop.cancel();
+            assert_eq!(wait(&stop), Err("cancelled".into()), "{runner:?}");
+
+            let boom: Job<()> =
+                Job::spawn_steps_on(runner, "t", noop, |_| -> Step<()> { panic!("kaboom") });
+            let e = wait(&boom).unwrap_err();
+            assert!(e.contains("kaboom"), "{runner:?}: {e}");
+        }
+    }
+
+    /// The same work in slices inside "frames" (as in a browser) and on a thread: the same
+    /// parts, progress and result; in the frames, each pump runs a bounded part of it.
+    #[test]
+    fn frames_runner_gives_what_the_thread_gives() {
         let noop: Waker = Arc::new(|| {});
-        let ok: Job<i32> = Job::spawn("t", noop.clone(), |ctx| {
-            ctx.report(3, 4);
-            Ok(7)
-        });
-        assert_eq!(wait(&ok), Ok(7));
-        assert_eq!(ok.progress(), (3, 4));
-        assert!(ok.poll().is_none(), "the result comes once");
+        let n = 200;
+        let threaded: Job<usize, usize> =
+            Job::spawn_steps_on(Runner::Thread, "t", noop.clone(), squares(n));
+        let sliced: Job<usize, usize> = Job::spawn_steps_on(Runner::Frames, "t", noop, squares(n));
+        // A zero budget: one step per pump, so progress is seen advancing a step at a time.
+        assert!(pump(Duration::ZERO));
+        assert_eq!(sliced.progress(), (1, n));
+        assert!(pump(Duration::ZERO));
+        assert_eq!(sliced.progress(), (2, n));
+        let r_sliced = wait(&sliced);
+        let r_threaded = wait(&threaded);
+        assert_eq!(r_sliced, Ok((0..n).map(|i| i * i).sum()));
+        assert_eq!(r_sliced, r_threaded);
+        assert_eq!(sliced.progress(), threaded.progress());
+        assert_eq!(
+            sliced.drain().collect::<Vec<_>>(),
+            threaded.drain().collect::<Vec<_>>()
+        );
+        assert!(!pump(Duration::ZERO), "nothing left to run");
+    }
 
-        let stop: Job<()> = Job::spawn("t", noop.clone(), |ctx| {
-            while !ctx.cancelled() {
-                std::thread::sleep(Duration::from_millis(1));
+    #[test]
+    fn a_long_step_is_not_cut_but_a_budget_stops_the_next() {
+        let noop: Waker = Arc::new(|| {});
+        let job: Job<(), ()> = Job::spawn_steps_on(Runner::Frames, "t", noop, {
+            let mut i = 0;
+            move |ctx| {
+                std::thread::sleep(Duration::from_millis(20));
+                i += 1;
+                ctx.report(i, 3);
+                if i == 3 {
+                    Step::Done(Ok(()))
+                } else {
+                    Step::More
+                }
             }
-            Err::<(), _>("cancelled".into())
         });
-        stop.cancel();
-        assert_eq!(wait(&stop), Err("cancelled".into()));
-
-        let boom: Job<()> = Job::spawn("t", noop, |_| panic!("kaboom"));
-        let e = wait(&boom).unwrap_err();
-        assert!(e.contains("kaboom"), "{e}");
+        // 10 ms of budget: the first 20 ms step runs whole, the second waits for the next
+        // frame.
+        assert!(pump(Duration::from_millis(10)));
+        assert_eq!(job.progress(), (1, 3));
+        assert_eq!(wait(&job), Ok(()));
     }
 
     #[test]
     fn partial_results_arrive_in_order_and_a_dropped_job_is_cancelled() {
-        let noop: Waker = Arc::new(|| {});
-        let job: Job<usize, usize> = Job::spawn("t", noop.clone(), |ctx| {
-            for i in 0..5 {
-                ctx.send(i * i);
-            }
-            Ok(5)
-        });
-        assert_eq!(wait(&job), Ok(5));
-        assert_eq!(job.drain().collect::<Vec<_>>(), vec![0, 1, 4, 9, 16]);
-        assert_eq!(job.drain().count(), 0, "each part comes once");
+        for runner in [Runner::Thread, Runner::Frames] {
+            let noop: Waker = Arc::new(|| {});
+            let job: Job<usize, usize> = Job::spawn_steps_on(runner, "t", noop.clone(), squares(5));
+            assert_eq!(wait(&job), Ok(30));
+            assert_eq!(job.drain().collect::<Vec<_>>(), vec![0, 1, 4, 9, 16]);
+            assert_eq!(job.drain().count(), 0, "each part comes once");
 
-        // A job nobody holds stops: its work sees the cancel flag.
-        let (tx, rx) = std::sync::mpsc::channel();
-        let dropped: Job<(), ()> = Job::spawn("t", noop, move |ctx| {
+            // A job nobody holds stops: its work sees the cancel flag.
+            let (tx, rx) = std::sync::mpsc::channel();
             let t0 = Instant::now();
-            while !ctx.cancelled() {
-                if t0.elapsed() > Duration::from_secs(10) {
+            let dropped: Job<(), ()> = Job::spawn_steps_on(runner, "t", noop, move |ctx| {
+                if ctx.cancelled() {
+                    let _ = tx.send(true);
+                    Step::Done(Ok(()))
+                } else if t0.elapsed() > Duration::from_secs(10) {
                     let _ = tx.send(false);
-                    return Ok(());
+                    Step::Done(Ok(()))
+                } else {
+                    std::thread::sleep(Duration::from_millis(1));
+                    Step::More
                 }
-                std::thread::sleep(Duration::from_millis(1));
-            }
-            let _ = tx.send(true);
-            Ok(())
-        });
-        drop(dropped);
-        assert_eq!(rx.recv_timeout(Duration::from_secs(20)), Ok(true));
+            });
+            drop(dropped);
+            pump(Duration::from_millis(5));
+            assert_eq!(
+                rx.recv_timeout(Duration::from_secs(20)),
+                Ok(true),
+                "{runner:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_one_call_job_runs_whole_in_one_slice() {
+        let noop: Waker = Arc::new(|| {});
+        let job: Job<i32> = Job::spawn("t", noop, |_| Ok(5));
+        assert_eq!(wait(&job), Ok(5));
     }
 }

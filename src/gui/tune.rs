@@ -3,7 +3,7 @@
 //! held-out objective before/after and the margins, and "Apply" for the chosen point.
 
 use super::format::controller_text;
-use super::job::{Job, Waker};
+use super::job::{Job, JobCtx, Step, Waker};
 use super::plotkit;
 use super::units::MM_PER_M;
 use crate::params::{ControllerParams, Params};
@@ -21,6 +21,31 @@ pub fn interactive_options(params: &Params) -> TuneOptions {
         duration_s: 20.0,
         max_evaluations: 40,
         ..TuneOptions::default()
+    }
+}
+
+/// Tuning `p` with `o` as job steps (a [`tune::TuneRun`]: the baseline, one optimiser
+/// iteration, one robustness check per step), with the job's progress and cancel.
+fn tune_steps(p: Params, o: TuneOptions) -> impl FnMut(&JobCtx) -> Step<TuneResult> + Send {
+    let mut run: Option<tune::TuneRun> = None;
+    move |ctx| {
+        let run = match &mut run {
+            Some(r) => r,
+            None => {
+                let reporter = ctx.clone();
+                let progress: tune::Progress = std::sync::Arc::new(move |done, total| {
+                    reporter.report(done, total);
+                });
+                match tune::TuneRun::new(&p, &o, Some(ctx.cancel_flag()), Some(progress)) {
+                    Ok(r) => run.insert(r),
+                    Err(e) => return Step::Done(Err(e.to_string())),
+                }
+            }
+        };
+        match run.step() {
+            None => Step::More,
+            Some(r) => Step::Done(r.map_err(|e| e.to_string())),
+        }
     }
 }
 
@@ -53,14 +78,7 @@ impl TunePanel {
         let o = opts.clone();
         self.options = Some(opts);
         self.message = None;
-        self.job = Some(Job::spawn("seat-twin-tune", waker, move |ctx| {
-            let reporter = ctx.clone();
-            let progress: tune::Progress = std::sync::Arc::new(move |done, total| {
-                reporter.report(done, total);
-            });
-            tune::tune_observed(&p, &o, Some(ctx.cancel_flag()), Some(progress))
-                .map_err(|e| e.to_string())
-        }));
+        self.job = Some(Job::spawn_steps("seat-twin-tune", waker, tune_steps(p, o)));
     }
 
     /// Whether a tuning runs.
@@ -337,4 +355,85 @@ fn pareto_plot(ui: &mut egui::Ui, front: &[Evaluation], selected: Option<usize>)
         .filter(|&(_, d)| d < 20.0)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(i, _)| i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gui::job::{Runner, pump};
+    use std::time::{Duration, Instant};
+
+    fn short() -> TuneOptions {
+        TuneOptions {
+            tune_seeds: vec![1],
+            heldout_seeds: vec![101],
+            duration_s: 6.0,
+            max_evaluations: 12,
+            ..TuneOptions::default()
+        }
+    }
+
+    fn run_on(runner: Runner) -> (Result<TuneResult, String>, (usize, usize)) {
+        let noop: Waker = std::sync::Arc::new(|| {});
+        let job = Job::spawn_steps_on(runner, "t", noop, tune_steps(Params::paper(), short()));
+        let t0 = Instant::now();
+        let mut seen = Vec::new();
+        loop {
+            if let Some(r) = job.poll() {
+                if runner == Runner::Frames {
+                    // Progress seen advancing between frames, not only at the end.
+                    assert!(seen.windows(2).any(|w| w[0] < w[1]), "{seen:?}");
+                }
+                return (r, job.progress());
+            }
+            assert!(
+                t0.elapsed() < Duration::from_secs(300),
+                "the tune never ended"
+            );
+            if pump(Duration::from_millis(8)) {
+                seen.push(job.progress().0);
+            } else {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        }
+    }
+
+    /// Tune in the web's frames gives the desktop thread's result bit for bit, with the same
+    /// progress, and the result is `tune`'s own.
+    #[test]
+    fn tune_in_frames_equals_the_threaded_tune() {
+        let (threaded, progress_t) = run_on(Runner::Thread);
+        let (sliced, progress_f) = run_on(Runner::Frames);
+        let json = |r: &TuneResult| serde_json::to_string(r).unwrap();
+        let (threaded, sliced) = (threaded.unwrap(), sliced.unwrap());
+        assert_eq!(json(&threaded), json(&sliced));
+        assert_eq!(progress_t, progress_f);
+        let direct = tune::tune(&Params::paper(), &short(), None).unwrap();
+        assert_eq!(json(&direct), json(&sliced));
+    }
+
+    #[test]
+    fn a_tune_in_frames_is_cancelled() {
+        let noop: Waker = std::sync::Arc::new(|| {});
+        let job = Job::spawn_steps_on(
+            Runner::Frames,
+            "t",
+            noop,
+            tune_steps(Params::paper(), short()),
+        );
+        pump(Duration::ZERO);
+        job.cancel();
+        let t0 = Instant::now();
+        let r = loop {
+            if let Some(r) = job.poll() {
+                break r;
+            }
+            assert!(
+                t0.elapsed() < Duration::from_secs(60),
+                "cancel not honoured"
+            );
+            pump(Duration::from_millis(8));
+        };
+        assert_eq!(r.unwrap_err(), tune::TuneError::Cancelled.to_string());
+    }
 }

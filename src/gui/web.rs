@@ -203,6 +203,58 @@ impl WebHandle {
         self.with_app(|a| a.request_file_by_api(super::files::Purpose::ExportCsv))
     }
 
+    /// File ▸ Export PNG: every plot as a `plots-<plot>.svg` download (the web build draws
+    /// no PNG: plotters has no font rasteriser on wasm32).
+    pub fn export_png(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.request_file_by_api(super::files::Purpose::ExportPng))
+    }
+
+    /// File ▸ Save preset as: the parameters on screen as a `<preset>.toml` download.
+    pub fn save_preset(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.request_file_by_api(super::files::Purpose::SavePreset))
+    }
+
+    /// Background jobs as JSON ([`SeatTwinApp::jobs_json`]): the sine dwell and Tune, with
+    /// progress.
+    pub fn jobs(&self) -> Result<String, JsValue> {
+        self.with_app(|a| a.jobs_json())
+    }
+
+    /// Tunes the live controller as the Tune panel's button does, with rides of
+    /// `duration_s` and at most `max_evaluations` evaluations (the panel's: 20 s, 40). It
+    /// runs in slices inside the frames; follow it with [`Self::jobs`].
+    pub fn start_tune(&self, duration_s: f64, max_evaluations: usize) -> Result<(), JsValue> {
+        self.with_app(|a| {
+            let opts = crate::tune::TuneOptions {
+                duration_s,
+                max_evaluations,
+                ..super::tune::interactive_options(a.params())
+            };
+            a.start_tune(opts)
+        })
+    }
+
+    /// Cancels a running Tune, as its Cancel button does.
+    pub fn cancel_tune(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.tune_panel().cancel())
+    }
+
+    /// Starts the twin's sine dwell now (in slices inside the frames).
+    pub fn start_dwell(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.start_dwell())
+    }
+
+    /// Forgets the frame times so far: `state()`'s `ui_ms_*` then cover the frames from now
+    /// (at most the last 120).
+    pub fn reset_frame_stats(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.reset_frame_stats())
+    }
+
+    /// Cancels the running sine dwell.
+    pub fn cancel_dwell(&self) -> Result<(), JsValue> {
+        self.with_app(|a| a.cancel_dwell())
+    }
+
     /// Whether the app has panicked (then the page shows the message).
     pub fn has_panicked(&self) -> bool {
         self.runner.has_panicked()

@@ -65,7 +65,7 @@ mod tests;
 use plotters::prelude::RGBColor;
 use std::path::PathBuf;
 
-pub use output::save_figure;
+pub use output::{figure_bytes, figure_svg, save_figure};
 
 /// Default figure width (px).
 pub const DEFAULT_WIDTH: u32 = 1000;

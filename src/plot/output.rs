@@ -26,21 +26,34 @@ pub fn save_figure(
 ) -> Result<(PathBuf, PathBuf), PlotError> {
     let png = with_suffix(path_without_extension, ".png");
     let svg = with_suffix(path_without_extension, ".svg");
-    let (w, h) = size(fig);
-
-    let (rgb, _) = render_rgb(fig)?;
-    let mut encoded = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut encoded)
-        .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| PlotError::Backend(format!("{}: {e}", png.display())))?;
+    let (encoded, text) =
+        figure_bytes(fig).map_err(|e| PlotError::Backend(format!("{}: {e}", png.display())))?;
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| PlotError::Io { path, source }
     };
     write_atomic_bytes(&png, &encoded).map_err(io(&png))?;
-    let (text, _) = render_svg(fig)?;
     write_atomic_bytes(&svg, text.as_bytes()).map_err(io(&svg))?;
     Ok((png, svg))
+}
+
+/// `fig` drawn as the bytes of a PNG file and the text of an SVG file, in memory (what
+/// [`save_figure`] writes). Not in the web build (see [`figure_svg`]).
+pub fn figure_bytes(fig: &Figure) -> Result<(Vec<u8>, String), PlotError> {
+    let (w, h) = size(fig);
+    let (rgb, _) = render_rgb(fig)?;
+    let mut encoded = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut encoded)
+        .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| PlotError::Backend(e.to_string()))?;
+    let (text, _) = render_svg(fig)?;
+    Ok((encoded, text))
+}
+
+/// `fig` as the text of an SVG file, in memory: what the web app downloads (its text is set
+/// by the viewer, so no font rasteriser is needed; the web build draws no PNG).
+pub fn figure_svg(fig: &Figure) -> Result<String, PlotError> {
+    render_svg(fig).map(|(text, _)| text)
 }
 
 /// The drawn size of `fig` (px).
@@ -54,6 +67,13 @@ fn size(fig: &Figure) -> (u32, u32) {
 /// The figure as 8-bit RGB rows of [`size`], rendered at 2× (up to 8 Mpx) and averaged down;
 /// where the panels went.
 pub(super) fn render_rgb(fig: &Figure) -> Result<(Vec<u8>, Vec<Drawn>), PlotError> {
+    if cfg!(target_arch = "wasm32") {
+        // plotters rasterises text with its font registry, which wasm32 lacks: a PNG here
+        // would have no text.
+        return Err(PlotError::Backend(
+            "PNG figures are not drawn in the web build (no font rasteriser); the SVG is".into(),
+        ));
+    }
     let m = font()?;
     let (w, h) = size(fig);
     let ss: u32 = if u64::from(w) * u64::from(h) <= 8_000_000 {

@@ -81,10 +81,8 @@ impl Font {
 pub(super) fn font() -> Result<&'static Font, PlotError> {
     static FONT: OnceLock<Result<Font, String>> = OnceLock::new();
     let parsed = FONT.get_or_init(|| {
-        // plotters has no font registry on wasm32 (the web app draws no figure files).
-        if cfg!(target_arch = "wasm32") {
-            return Err("figure files are not drawn in the web build".to_string());
-        }
+        // plotters has no font registry on wasm32: the metrics serve the SVG there (its
+        // text is set by the viewer); no PNG is drawn (see `output::render_rgb`).
         let font = Font::parse(FONT_BYTES)?;
         #[cfg(not(target_arch = "wasm32"))]
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES)

@@ -163,9 +163,9 @@ impl SeatTwinApp {
     /// Opens the file dialog for `purpose` in [`Self::file_dir`], suggesting `name`.
     pub(super) fn request_file(&mut self, purpose: Purpose, name: &str, ctx: &egui::Context) {
         #[cfg(target_arch = "wasm32")]
-        if purpose == Purpose::ExportCsv {
-            // The browser saves it: a download.
-            self.download_traces_csv(name);
+        if purpose.downloads_on_the_web() {
+            // The browser saves it: downloads.
+            self.download(purpose, name);
             return;
         }
         let dir = self.file_dir();
@@ -194,28 +194,107 @@ impl SeatTwinApp {
         }
     }
 
-    /// The scopes' traces as a CSV download (web).
+    /// The files that saving for `purpose` under the suggested `name` makes, in memory: (file
+    /// name, bytes, MIME type). The web app hands them to the browser as downloads (the
+    /// desktop writes the same contents through its dialogs and atomic writers): the traces'
+    /// CSV, the plots' PNG and SVG (`<stem>-<plot>.png`, `.svg`; SVG only in the web build),
+    /// the preset's TOML.
+    pub fn download_files(
+        &self,
+        purpose: Purpose,
+        name: &str,
+    ) -> Result<Vec<files::Download>, String> {
+        let stem = Path::new(name)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .filter(|s| !s.is_empty());
+        match purpose {
+            Purpose::ExportCsv => {
+                let table = self.traces_table();
+                if table.rows.is_empty() {
+                    return Err("nothing to export yet: run the simulation first".into());
+                }
+                let mut bytes = Vec::new();
+                crate::dataset::write_csv(
+                    &mut bytes,
+                    &table.header,
+                    &table.comments,
+                    table.rows.into_iter(),
+                )
+                .map_err(|e| format!("export failed: {e}"))?;
+                Ok(vec![(name.to_string(), bytes, "text/csv")])
+            }
+            Purpose::ExportPng => {
+                let stem = stem.unwrap_or_else(|| "plots".into());
+                let mut out = Vec::new();
+                let failed = |e: crate::plot::PlotError| format!("export failed: {e}");
+                for (suffix, fig) in self.plot_figures() {
+                    // The web build draws no PNG (no font rasteriser there): SVG only.
+                    if !cfg!(target_arch = "wasm32") {
+                        let (png, _) = crate::plot::figure_bytes(&fig).map_err(failed)?;
+                        out.push((format!("{stem}-{suffix}.png"), png, "image/png"));
+                    }
+                    let svg = crate::plot::figure_svg(&fig).map_err(failed)?;
+                    out.push((
+                        format!("{stem}-{suffix}.svg"),
+                        svg.into_bytes(),
+                        "image/svg+xml",
+                    ));
+                }
+                Ok(out)
+            }
+            Purpose::SavePreset => {
+                let mut p = self.preset_now();
+                if let Some(stem) = stem {
+                    p.meta.name = stem;
+                }
+                Ok(vec![(
+                    format!("{}.toml", p.meta.name),
+                    p.to_toml().into_bytes(),
+                    "application/toml",
+                )])
+            }
+            other => Err(format!("{}: {}", other.title(), files::NOT_ON_THE_WEB)),
+        }
+    }
+
+    /// Saves for `purpose` through the browser (web): the files of [`Self::download_files`]
+    /// as downloads.
     #[cfg(target_arch = "wasm32")]
-    fn download_traces_csv(&mut self, name: &str) {
-        let table = self.traces_table();
-        if table.rows.is_empty() {
-            self.error("nothing to export yet: run the simulation first");
-            return;
+    fn download(&mut self, purpose: Purpose, name: &str) {
+        let name = if name.is_empty() {
+            match purpose {
+                Purpose::ExportCsv => "traces.csv".to_string(),
+                Purpose::ExportPng => "plots.png".to_string(),
+                _ => format!("{}.toml", self.preset.name),
+            }
+        } else {
+            name.to_string()
+        };
+        let made = match self.download_files(purpose, &name) {
+            Ok(f) => f,
+            Err(e) => {
+                self.error(e);
+                return;
+            }
+        };
+        let mut names = Vec::new();
+        for (file, bytes, mime) in &made {
+            if let Err(e) = files::download(file, bytes, mime) {
+                self.error(format!("export failed: {e}"));
+                return;
+            }
+            names.push(file.as_str());
         }
-        let mut bytes = Vec::new();
-        let n = table.rows.len();
-        let written = crate::dataset::write_csv(
-            &mut bytes,
-            &table.header,
-            &table.comments,
-            table.rows.into_iter(),
-        )
-        .map_err(|e| e.to_string())
-        .and_then(|()| files::download(name, &bytes, "text/csv"));
-        match written {
-            Ok(()) => self.info(format!("{n} rows downloaded as {name}")),
-            Err(e) => self.error(format!("export failed: {e}")),
+        let message = format!("downloaded: {}", names.join(", "));
+        if purpose == Purpose::SavePreset {
+            // Saved: what is on screen is now the preset's content.
+            if let Some((file, _, _)) = made.first() {
+                self.preset.name = file.trim_end_matches(".toml").to_string();
+            }
+            self.preset.baseline = self.params;
         }
+        self.info(message);
     }
 
     /// A file the browser's picker read (web): a preset or a platform record, parsed from
@@ -479,5 +558,44 @@ impl SeatTwinApp {
         self.apply_excitation();
         self.reset();
         self.info(format!("session opened from {}", path.display()));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gui::app::Settings;
+
+    /// What the web app downloads is what the desktop writes: the preset's TOML reads back
+    /// as the parameters on screen, each plot is a PNG and an SVG, and nothing is made
+    /// where there is nothing to save.
+    #[test]
+    fn download_files_hold_what_the_desktop_writes() {
+        let mut app = SeatTwinApp::new(Settings::default(), || {});
+        app.params.controller.kp_v_per_m = -21.5;
+        let files = app
+            .download_files(Purpose::SavePreset, "mine.toml")
+            .unwrap();
+        assert_eq!(files.len(), 1);
+        let (name, bytes, mime) = &files[0];
+        assert_eq!((name.as_str(), *mime), ("mine.toml", "application/toml"));
+        let back = Preset::from_bytes(bytes, Path::new(name)).unwrap();
+        assert_eq!(back.params, app.params);
+        assert_eq!(back.meta.name, "mine");
+
+        let plots = app.download_files(Purpose::ExportPng, "plots.png").unwrap();
+        let figures = app.plot_figures();
+        assert_eq!(plots.len(), 2 * figures.len());
+        for ((suffix, _), pair) in figures.iter().zip(plots.chunks(2)) {
+            assert_eq!(pair[0].0, format!("plots-{suffix}.png"));
+            assert!(pair[0].1.starts_with(b"\x89PNG\r\n\x1a\n"));
+            assert_eq!(pair[1].0, format!("plots-{suffix}.svg"));
+            assert!(pair[1].1.starts_with(b"<svg"));
+        }
+
+        let none = app.download_files(Purpose::ExportCsv, "traces.csv");
+        assert!(none.unwrap_err().contains("nothing to export"));
+        let refused = app.download_files(Purpose::ExportReport, "calibration");
+        assert!(refused.unwrap_err().contains("not in the web build"));
     }
 }

@@ -142,9 +142,27 @@ impl FrameStats {
         self.frame_at.push_back(Instant::now());
     }
 
+    /// Forgets the frames so far (a measurement starts afresh).
+    pub fn clear(&mut self) {
+        self.ui_ms.clear();
+        self.frame_at.clear();
+    }
+
     /// Mean time of `SeatTwinApp::ui` over the last 120 frames [ms].
     pub fn mean_ui_ms(&self) -> f64 {
         self.ui_ms.iter().sum::<f64>() / self.ui_ms.len().max(1) as f64
+    }
+
+    /// 95th percentile of the time of `SeatTwinApp::ui` over the last 120 frames [ms] (the
+    /// nearest-rank value: 6 of 120 frames are slower).
+    pub fn p95_ui_ms(&self) -> f64 {
+        let mut v: Vec<f64> = self.ui_ms.iter().copied().collect();
+        if v.is_empty() {
+            return 0.0;
+        }
+        v.sort_by(f64::total_cmp);
+        let rank = (0.95 * v.len() as f64).ceil() as usize;
+        v[rank.clamp(1, v.len()) - 1]
     }
 
     /// Largest time of `SeatTwinApp::ui` over the last 120 frames [ms].

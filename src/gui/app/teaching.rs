@@ -146,13 +146,58 @@ impl SeatTwinApp {
         Ok(())
     }
 
+    /// Background jobs as JSON (the web page's API): the sine dwell (`running`, `done`,
+    /// `total` frequencies, `points` shown, `cancelled`) and Tune (`running`, `done`, `total`
+    /// evaluations, `result`: whether one is there, `message`: cancelled or failed).
+    pub fn jobs_json(&self) -> String {
+        let dwell = self.dwell.progress();
+        let tune = self.tune.last_progress();
+        serde_json::json!({
+            "dwell": {
+                "running": dwell.is_some(),
+                "done": dwell.map_or(0, |p| p.0),
+                "total": dwell.map_or(0, |p| p.1),
+                "points": self.dwell.mag.len(),
+                "cancelled": self.dwell.cancelled,
+            },
+            "tune": {
+                "running": self.tune.is_running(),
+                "done": tune.map_or(0, |p| p.0),
+                "total": tune.map_or(0, |p| p.1),
+                "result": self.tune.result().is_some(),
+                "message": self.tune.message().map(|m| m.0.clone()),
+            },
+        })
+        .to_string()
+    }
+
+    /// Forgets the frame times so far (the web page's API: a measurement from now on).
+    pub fn reset_frame_stats(&mut self) {
+        self.frame_stats.clear();
+    }
+
+    /// Starts the sine dwell of the twin now, as the Recompute button does.
+    pub fn start_dwell(&mut self) {
+        self.dwell.start(&self.params);
+    }
+
+    /// Cancels the sine dwell, as its Cancel button does.
+    pub fn cancel_dwell(&mut self) {
+        self.dwell.cancel();
+    }
+
     /// Opens the file dialog for `purpose`, as the File menu does (the web page's API: the
-    /// browser's picker for a preset or a record, a download for the traces' CSV).
+    /// browser's picker for a preset or a record, downloads for a preset, the traces' CSV
+    /// and the plots).
     pub fn request_file_by_api(&mut self, purpose: crate::gui::files::Purpose) {
+        use crate::gui::files::Purpose;
         let name = match purpose {
-            crate::gui::files::Purpose::ExportCsv => "traces.csv",
-            _ => "",
+            Purpose::ExportCsv => "traces.csv".to_string(),
+            Purpose::ExportPng => "plots.png".to_string(),
+            Purpose::SavePreset => format!("{}.toml", self.preset.name),
+            _ => String::new(),
         };
+        let name = name.as_str();
         if let Some(ctx) = self.teach.ctx.clone() {
             self.request_file(purpose, name, &ctx);
         }
@@ -340,6 +385,7 @@ impl SeatTwinApp {
             "rtf": self.engine_view.realtime_factor,
             "engine_rtf": self.teach.engine_rtf(),
             "ui_ms_mean": stats.mean_ui_ms(),
+            "ui_ms_p95": stats.p95_ui_ms(),
             "ui_ms_max": stats.max_ui_ms(),
             "cpu_ms": stats.cpu_ms,
             "fps": stats.fps(),

@@ -1,10 +1,12 @@
-//! The simulated twin's sine dwell in the background: one thread steps the twin at each
-//! dwell frequency and streams the points back; cancelled when superseded.
+//! The simulated twin's sine dwell in the background: a [`Job`] steps the twin at each dwell
+//! frequency, one frequency per step (on the desktop's thread, or in the web's frames), and
+//! streams the points back; cancelled when superseded.
 
 use super::*;
-use crate::gui::job::{Job, Waker};
+use crate::gui::job::{Job, JobCtx, Step, Waker};
 
 /// One simulated dwell frequency, streamed back by the dwell job.
+#[derive(Debug, PartialEq)]
 enum DwellPoint {
     Point {
         freq_hz: f64,
@@ -15,6 +17,59 @@ enum DwellPoint {
         freq_hz: f64,
         reason: String,
     },
+}
+
+/// The dwell sweep of the twin with `p` as job steps: one frequency of `freqs` per step, its
+/// point sent as it is done; stops at the next step when cancelled.
+fn dwell_steps(
+    p: Params,
+    freqs: Vec<f64>,
+) -> impl FnMut(&JobCtx<DwellPoint>) -> Step<()> + Send + 'static {
+    let mut left = freqs.into_iter();
+    let opt = DwellOptions::default();
+    move |ctx| {
+        if ctx.cancelled() {
+            return Step::Done(Err("cancelled".into()));
+        }
+        let Some(f) = left.next() else {
+            return Step::Done(Ok(()));
+        };
+        let r = std::panic::catch_unwind(|| {
+            let t = sine_dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
+            let b = if f <= BODE_DWELL_MAX_HZ {
+                Some(sine_dwell::simulated_bode(
+                    &p,
+                    ModelKind::Twin,
+                    f,
+                    bode_dwell_amplitude_v(f),
+                    &opt,
+                )?)
+            } else {
+                None
+            };
+            Ok::<_, crate::simulation::SimError>((t, b))
+        });
+        let point = match r {
+            Ok(Ok((value, bode))) => DwellPoint::Point {
+                freq_hz: f,
+                value,
+                bode,
+            },
+            Ok(Err(e)) => DwellPoint::Failed {
+                freq_hz: f,
+                reason: e.to_string(),
+            },
+            Err(_) => DwellPoint::Failed {
+                freq_hz: f,
+                reason: "internal error in the simulation".into(),
+            },
+        };
+        if ctx.send(point) {
+            Step::More
+        } else {
+            Step::Done(Err("cancelled".into()))
+        }
+    }
 }
 
 /// A running sine-dwell sweep of the twin (the app's [`Job`]: dropped, it stops after its
@@ -97,48 +152,7 @@ impl Dwell {
         let freqs = fr::log_space(DWELL_RANGE_HZ.0, DWELL_RANGE_HZ.1, N_DWELL);
         let p = *params;
         let total = freqs.len();
-        let job = Job::spawn("seat-twin-dwell", self.waker.clone(), move |ctx| {
-            let opt = DwellOptions::default();
-            for &f in &freqs {
-                if ctx.cancelled() {
-                    return Err("cancelled".into());
-                }
-                let r = std::panic::catch_unwind(|| {
-                    let t = sine_dwell::simulated_transmissibility(&p, ModelKind::Twin, f, &opt)?;
-                    let b = if f <= BODE_DWELL_MAX_HZ {
-                        Some(sine_dwell::simulated_bode(
-                            &p,
-                            ModelKind::Twin,
-                            f,
-                            bode_dwell_amplitude_v(f),
-                            &opt,
-                        )?)
-                    } else {
-                        None
-                    };
-                    Ok::<_, crate::simulation::SimError>((t, b))
-                });
-                let point = match r {
-                    Ok(Ok((value, bode))) => DwellPoint::Point {
-                        freq_hz: f,
-                        value,
-                        bode,
-                    },
-                    Ok(Err(e)) => DwellPoint::Failed {
-                        freq_hz: f,
-                        reason: e.to_string(),
-                    },
-                    Err(_) => DwellPoint::Failed {
-                        freq_hz: f,
-                        reason: "internal error in the simulation".into(),
-                    },
-                };
-                if !ctx.send(point) {
-                    return Err("cancelled".into());
-                }
-            }
-            Ok(())
-        });
+        let job = Job::spawn_steps("seat-twin-dwell", self.waker.clone(), dwell_steps(p, freqs));
         self.job = Some(DwellJob {
             params: p,
             job,
@@ -221,5 +235,57 @@ impl Dwell {
                 p.y = u.to_degrees();
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gui::job::{Runner, pump};
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    fn run_on(runner: Runner, freqs: Vec<f64>) -> (Result<(), String>, Vec<DwellPoint>) {
+        let noop: Waker = Arc::new(|| {});
+        let job = Job::spawn_steps_on(runner, "t", noop, dwell_steps(Params::paper(), freqs));
+        let t0 = Instant::now();
+        let end = loop {
+            if let Some(r) = job.poll() {
+                break r;
+            }
+            assert!(
+                t0.elapsed() < Duration::from_secs(60),
+                "the dwell never ended"
+            );
+            if !pump(Duration::from_millis(8)) {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        };
+        (end, job.drain().collect())
+    }
+
+    /// The dwell in slices (the web's frames) gives the thread's points bit for bit, and each
+    /// point is the library's sine dwell at that frequency.
+    #[test]
+    fn dwell_in_frames_equals_the_threaded_dwell() {
+        let freqs = vec![0.8, 2.5, 9.0];
+        let (end_t, threaded) = run_on(Runner::Thread, freqs.clone());
+        let (end_f, sliced) = run_on(Runner::Frames, freqs.clone());
+        assert_eq!(end_t, Ok(()));
+        assert_eq!(end_f, Ok(()));
+        assert_eq!(threaded.len(), 3);
+        assert_eq!(threaded, sliced);
+        let reference = sine_dwell::simulated_transmissibility(
+            &Params::paper(),
+            ModelKind::Twin,
+            2.5,
+            &DwellOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            matches!(sliced[1], DwellPoint::Point { value, .. } if value == reference),
+            "{:?}",
+            sliced[1]
+        );
     }
 }
