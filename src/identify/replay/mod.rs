@@ -206,7 +206,14 @@ fn replay_samples(
         params.numerics.max_step_s.min(0.9 * params.step_limit_s()),
         1.0 / dt,
     );
-    let drive = Drive::OpenLoop(CommandSignal::Sampled { dt, values: v_in });
+    // A proposed lag of the valve command filters the command as sent.
+    let corrections = &params.plant.corrections;
+    let values = if corrections.command_lag_s > 0.0 {
+        Arc::new(corrections.lagged_command(&v_in, dt))
+    } else {
+        v_in
+    };
+    let drive = Drive::OpenLoop(CommandSignal::Sampled { dt, values });
     let mut sim = Simulation::twin(params, h, drive, platform);
     let every = (dt / h).round().max(1.0) as u64;
     let t_end = (len.saturating_sub(1)) as f64 * dt;

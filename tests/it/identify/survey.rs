@@ -331,6 +331,9 @@ fn randomised_rigs_confusion_table() {
         let after = above_noise(&cal, &recs);
         let halved = (0..2).all(|k| after[k] <= 0.5 * nominal[k]);
         replay_ok += usize::from(halved);
+        if only.is_some() {
+            eprintln!("case {i} in full: {}", super::rig::summary(&r));
+        }
         let verdict_ok = r.verdict == c.class.right_verdict();
         let fx_ok = effects_right(c, &r);
         eprintln!(
