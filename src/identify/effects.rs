@@ -35,7 +35,9 @@ pub fn multi_start(
 ) -> Result<Params, IdentifyError> {
     let mut off = *current;
     for k in e.knobs() {
-        k.set(&mut off, 0.0);
+        // A shape knob starts where the parameters hold it (see `Knob::is_shape`).
+        let start = if k.is_shape() { k.theta(current) } else { 0.0 };
+        k.set(&mut off, start);
     }
     let signed = matches!(e, EffectId::ValveOffset);
     let mut grid = vec![0.0];

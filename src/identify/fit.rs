@@ -36,8 +36,14 @@ pub enum Knob {
     Overlap,
     /// `effects.valve_overlap.edge_width_m` [m] = 2e-5·|θ|.
     OverlapEdge,
-    /// `effects.friction.stribeck_n` [N] = 10·|θ| (at the preset's Stribeck velocity).
+    /// `effects.friction.stribeck_n` [N] = 10·|θ|.
     FrictionStribeck,
+    /// `effects.friction.stribeck_velocity_m_s` [m/s] = 0.01·|θ|, at least 0.5 mm/s: how fast
+    /// the static excess dies away with the velocity (a shape knob, [`Knob::is_shape`]).
+    FrictionStribeckVelocity,
+    /// `effects.friction.smoothing_velocity_m_s` [m/s] = 1e-3·|θ|, 0.5 ..= 10 mm/s: the
+    /// velocity over which the friction force changes sign (pre-sliding; a shape knob).
+    FrictionSmoothing,
 
     /// `effects.valve_offset.bias_v` [V] = 0.02·θ.
     Offset,
@@ -68,9 +74,21 @@ pub enum Knob {
     QuadraticDamping,
     /// `corrections.turbulent_leakage_m3_per_s_sqrt_pa` [m³/(s·√Pa)] = 1e-9·|θ|.
     TurbulentLeakage,
+    /// `corrections.command_lag_s` [s] = 1e-3·|θ|.
+    CommandLag,
 }
 
 impl Knob {
+    /// Whether the knob shapes its effect's law rather than sizing it: a search starts it at
+    /// the value the parameters hold (the preset's), not at zero, since at zero size its
+    /// shape cannot be seen.
+    pub fn is_shape(self) -> bool {
+        matches!(
+            self,
+            Knob::FrictionStribeckVelocity | Knob::FrictionSmoothing
+        )
+    }
+
     /// The sensor properties the calibration estimates beside the declared parameters.
     pub const SENSORS: [Knob; 3] = [
         Knob::SensorYddScale,
@@ -112,6 +130,8 @@ impl Knob {
             Knob::Overlap if e.valve_overlap.enabled => e.valve_overlap.overlap_m / 2e-5,
             Knob::OverlapEdge if e.valve_overlap.enabled => e.valve_overlap.edge_width_m / 2e-5,
             Knob::FrictionStribeck if e.friction.enabled => e.friction.stribeck_n / 10.0,
+            Knob::FrictionStribeckVelocity => e.friction.stribeck_velocity_m_s / 0.01,
+            Knob::FrictionSmoothing => e.friction.smoothing_velocity_m_s / 1e-3,
 
             Knob::Offset if e.valve_offset.enabled => e.valve_offset.bias_v / 0.02,
             Knob::Leakage if e.leakage.enabled => e.leakage.coefficient_m3_per_s_pa / 1e-12,
@@ -127,6 +147,7 @@ impl Knob {
             Knob::ExtraSpring => c.spring_n_per_m / 1000.0,
             Knob::QuadraticDamping => c.quadratic_damping_n_s2_per_m2 / 1000.0,
             Knob::TurbulentLeakage => c.turbulent_leakage_m3_per_s_sqrt_pa / 1e-9,
+            Knob::CommandLag => c.command_lag_s / 1e-3,
             _ => 0.0,
         }
     }
@@ -145,6 +166,8 @@ impl Knob {
             Knob::Overlap => "effects.valve_overlap.overlap_m",
             Knob::OverlapEdge => "effects.valve_overlap.edge_width_m",
             Knob::FrictionStribeck => "effects.friction.stribeck_n",
+            Knob::FrictionStribeckVelocity => "effects.friction.stribeck_velocity_m_s",
+            Knob::FrictionSmoothing => "effects.friction.smoothing_velocity_m_s",
 
             Knob::Offset => "effects.valve_offset.bias_v",
             Knob::Leakage => "effects.leakage.coefficient_m3_per_s_pa",
@@ -157,6 +180,7 @@ impl Knob {
             Knob::ExtraSpring => "corrections.spring_n_per_m",
             Knob::QuadraticDamping => "corrections.quadratic_damping_n_s2_per_m2",
             Knob::TurbulentLeakage => "corrections.turbulent_leakage_m3_per_s_sqrt_pa",
+            Knob::CommandLag => "corrections.command_lag_s",
         };
         spec(key).expect("every knob is in the parameter table")
     }
@@ -178,6 +202,8 @@ impl Knob {
             Knob::Overlap => (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m),
             Knob::OverlapEdge => (2e-5 * a).min(0.9 * p.plant.valve.xv_max_m),
             Knob::FrictionStribeck => 10.0 * a,
+            Knob::FrictionStribeckVelocity => (0.01 * a).max(5e-4),
+            Knob::FrictionSmoothing => (1e-3 * a).clamp(5e-4, 1e-2),
 
             Knob::Offset => 0.02 * theta,
             Knob::Leakage => 1e-12 * a,
@@ -192,15 +218,18 @@ impl Knob {
             }
             Knob::QuadraticDamping => 1000.0 * a,
             Knob::TurbulentLeakage => 1e-9 * a,
+            Knob::CommandLag => 1e-3 * a,
         };
         s.set_unchecked(p, value.clamp(s.min, s.max));
         let e = &mut p.plant.effects;
         match self {
             Knob::Cd | Knob::Tau | Knob::Mass => {}
             Knob::SensorYddScale | Knob::SensorYddOffset | Knob::SensorULag => {}
-            Knob::FrictionCoulomb | Knob::FrictionViscous | Knob::FrictionStribeck => {
-                e.friction.enabled = true
-            }
+            Knob::FrictionCoulomb
+            | Knob::FrictionViscous
+            | Knob::FrictionStribeck
+            | Knob::FrictionStribeckVelocity
+            | Knob::FrictionSmoothing => e.friction.enabled = true,
             Knob::Overlap | Knob::OverlapEdge => e.valve_overlap.enabled = true,
             Knob::Offset => e.valve_offset.enabled = true,
             Knob::Leakage => e.leakage.enabled = true,
@@ -213,7 +242,8 @@ impl Knob {
             | Knob::ReturnEdge
             | Knob::ExtraSpring
             | Knob::QuadraticDamping
-            | Knob::TurbulentLeakage => {}
+            | Knob::TurbulentLeakage
+            | Knob::CommandLag => {}
         }
     }
 

@@ -189,6 +189,8 @@ impl EffectId {
                 Knob::FrictionCoulomb,
                 Knob::FrictionViscous,
                 Knob::FrictionStribeck,
+                Knob::FrictionStribeckVelocity,
+                Knob::FrictionSmoothing,
             ],
             EffectId::ValveOverlap => &[Knob::Overlap, Knob::OverlapEdge],
             EffectId::ValveOffset => &[Knob::Offset],

@@ -34,17 +34,20 @@ pub enum CorrectionId {
     QuadraticDamping,
     /// Leakage across the piston growing with √|Δp|.
     TurbulentLeakage,
+    /// A first-order lag of the valve command, beside the delay τ.
+    CommandLag,
 }
 
 impl CorrectionId {
     /// Every correction of the family.
-    pub const ALL: [CorrectionId; 6] = [
+    pub const ALL: [CorrectionId; 7] = [
         CorrectionId::CdOpening,
         CorrectionId::FlowDirection,
         CorrectionId::ReturnEdge,
         CorrectionId::Spring,
         CorrectionId::QuadraticDamping,
         CorrectionId::TurbulentLeakage,
+        CorrectionId::CommandLag,
     ];
 
     /// The id in reports (`cd_opening`, `flow_direction`, …).
@@ -56,6 +59,7 @@ impl CorrectionId {
             CorrectionId::Spring => "spring",
             CorrectionId::QuadraticDamping => "quadratic_damping",
             CorrectionId::TurbulentLeakage => "turbulent_leakage",
+            CorrectionId::CommandLag => "command_lag",
         }
     }
 
@@ -74,6 +78,7 @@ impl CorrectionId {
             CorrectionId::Spring => &[Knob::ExtraSpring],
             CorrectionId::QuadraticDamping => &[Knob::QuadraticDamping],
             CorrectionId::TurbulentLeakage => &[Knob::TurbulentLeakage],
+            CorrectionId::CommandLag => &[Knob::CommandLag],
         }
     }
 
@@ -81,7 +86,9 @@ impl CorrectionId {
     fn signed(self) -> bool {
         !matches!(
             self,
-            CorrectionId::QuadraticDamping | CorrectionId::TurbulentLeakage
+            CorrectionId::QuadraticDamping
+                | CorrectionId::TurbulentLeakage
+                | CorrectionId::CommandLag
         )
     }
 
@@ -132,6 +139,13 @@ impl CorrectionId {
                 "a leakage across the piston growing with the square root of the pressure \
                  difference: {} L/min at 10 bar",
                 pm(6e4 * v * 1e3, 6e4 * s * 1e3, 3)
+            ),
+            CorrectionId::CommandLag => format!(
+                "the valve follows its command through a first-order lag of {} ms beside the \
+                 delay τ = {:.2} ms (its gain falls to {:.0} % at 20 Hz)",
+                pm(1e3 * v, 1e3 * s, 2),
+                1e3 * p.plant.valve.tau_s,
+                100.0 / (1.0 + (2.0 * std::f64::consts::PI * 20.0 * v).powi(2)).sqrt()
             ),
         }
     }
@@ -190,7 +204,15 @@ fn multi_start(
     c: CorrectionId,
 ) -> Result<Params, IdentifyError> {
     let mut grid = vec![0.0];
-    for g in [0.3, 1.0, 3.0] {
+    // A command lag looks like more delay at low frequency, and the delay τ has already
+    // taken it: each lag of the grid starts with τ shortened by as much (1, 2, 4, 8 ms).
+    let lag = c == CorrectionId::CommandLag;
+    let sizes: &[f64] = if lag {
+        &[1.0, 2.0, 4.0, 8.0]
+    } else {
+        &[0.3, 1.0, 3.0]
+    };
+    for &g in sizes {
         grid.push(g);
         if c.signed() {
             grid.push(-g);
@@ -201,6 +223,10 @@ fn multi_start(
         .map(|&g| {
             let mut p = *current;
             c.knob().set(&mut p, g);
+            if lag {
+                let shorter = p.plant.valve.tau_s - c.knob().value(&p);
+                p.plant.valve.tau_s = shorter.max(0.0);
+            }
             if c.knobs().len() > 1 {
                 // The direction difference starts built up over 50 µm.
                 c.knobs()[1].set(&mut p, 0.5);
@@ -411,6 +437,12 @@ mod tests {
         assert_eq!(
             CorrectionId::CdOpening.describe(0.05, 0.004, &p),
             "Cd rises 5.0 ± 0.4 % from small to full spool opening"
+        );
+        let d = CorrectionId::CommandLag.describe(4e-3, 2e-4, &p);
+        // 1/√(1 + (2π·20·0.004)²) = 0.893.
+        assert!(
+            d.contains("lag of 4.00 ± 0.20 ms") && d.contains("89 % at 20 Hz"),
+            "{d}"
         );
         let d = CorrectionId::Spring.describe(-368.0, 12.0, &p);
         assert!(d.contains("-368 ± 12 N/m") && d.contains("-10.0 %"), "{d}");

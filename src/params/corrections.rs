@@ -17,6 +17,11 @@ use serde::{Deserialize, Serialize};
 ///   a damping quadratic in the velocity, as an orifice or a seat cushion's air gives it).
 /// * Chamber flows, Eqs. (4)–(5): a leakage across the piston that grows with the square root
 ///   of the pressure difference (a turbulent gap), `c_t·sign(Δp)·√|Δp|`.
+/// * Valve command, Eq. (10): a first-order lag `T_cmd·v̇ = v_in − v` between the command as
+///   sent and the one the valve acts on (a servo amplifier's or a proportional magnet's),
+///   beside the pure delay τ. Applied by the replay of measured records (`seat-twin replay`,
+///   `seat-twin calibrate`: the record's command is filtered before it drives the valve,
+///   [`Self::lagged_command`]); the twin's own closed-loop simulation does not apply it yet.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct CorrectionParams {
@@ -34,6 +39,8 @@ pub struct CorrectionParams {
     pub quadratic_damping_n_s2_per_m2: f64,
     /// Turbulent leakage `c_t` across the piston [m³/(s·√Pa)], 0 ..= 1e-7.
     pub turbulent_leakage_m3_per_s_sqrt_pa: f64,
+    /// First-order lag `T_cmd` of the valve command [s], 0 ..= 0.05 (0: none).
+    pub command_lag_s: f64,
 }
 
 impl CorrectionParams {
@@ -67,6 +74,29 @@ impl CorrectionParams {
         )
     }
 
+    /// The command `v` [V] the valve acts on, sampled every `dt` [s], for the command as sent
+    /// `v_in` sampled at the same instants and linearly interpolated between them (as a replay
+    /// reads a record): the exact solution of `T_cmd·v̇ = v_in − v` from `v = 0` before the
+    /// first sample (the valve at rest). Returns `v_in` itself without a lag.
+    pub fn lagged_command(&self, v_in: &[f64], dt: f64) -> Vec<f64> {
+        let t = self.command_lag_s;
+        if t <= 0.0 || v_in.is_empty() {
+            return v_in.to_vec();
+        }
+        // Over one step the input is the ramp x_k + s·τ; the lag's response to it is exact.
+        let a = (-dt / t).exp();
+        let mut out = Vec::with_capacity(v_in.len());
+        // The first sample is reached by a step from rest at t = 0.
+        let mut v = 0.0;
+        out.push(v);
+        for w in v_in.windows(2) {
+            let slope = (w[1] - w[0]) / dt;
+            v = a * v + w[1] - a * w[0] - slope * t * (1.0 - a);
+            out.push(v);
+        }
+        out
+    }
+
     /// Force of the body terms [N] at relative position `u` [m] and velocity `du` [m/s],
     /// acting on the body (negative = downward).
     #[inline(always)]
@@ -90,6 +120,7 @@ mod tests {
             spring_n_per_m: 500.0,
             quadratic_damping_n_s2_per_m2: 2000.0,
             turbulent_leakage_m3_per_s_sqrt_pa: 0.0,
+            command_lag_s: 0.0,
         };
         // Full opening, positive: (1 + 0.05)·(1.05) and the edges ∓2 %.
         let (s, r) = c.edge_gains(8e-4, 8e-4);
@@ -108,5 +139,33 @@ mod tests {
         assert!((full - small - 0.1).abs() < 1e-9);
         assert!((c.body_force(0.01, -0.1) - (-5.0 + 20.0)).abs() < 1e-12);
         assert!(!CorrectionParams::default().any() && c.any() && c.valve());
+    }
+
+    /// The lagged command against the analytic response of a first-order lag: to a ramp
+    /// `v_in = r·t` from rest, `v = r·(t − T·(1 − e^(−t/T)))`; to a sine, the steady gain
+    /// `1/√(1 + (ωT)²)`.
+    #[test]
+    fn the_command_lag_is_the_exact_first_order_response() {
+        let c = CorrectionParams {
+            command_lag_s: 4e-3,
+            ..Default::default()
+        };
+        let dt = 1e-3;
+        let ramp: Vec<f64> = (0..200).map(|i| 2.0 * i as f64 * dt).collect();
+        let v = c.lagged_command(&ramp, dt);
+        for (i, vi) in v.iter().enumerate() {
+            let t = i as f64 * dt;
+            let exact = 2.0 * (t - 4e-3 * (1.0 - (-t / 4e-3).exp()));
+            assert!((vi - exact).abs() < 1e-12, "{i}: {vi} vs {exact}");
+        }
+        let w = 2.0 * std::f64::consts::PI * 20.0;
+        let sine: Vec<f64> = (0..4000).map(|i| (w * i as f64 * dt).sin()).collect();
+        let v = c.lagged_command(&sine, dt);
+        let amp = v[2000..].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let gain = 1.0 / (1.0 + (w * 4e-3).powi(2)).sqrt();
+        // Linear interpolation between samples and the sampled peak at 50 samples per
+        // period: within 0.5 %.
+        assert!((amp / gain - 1.0).abs() < 5e-3, "{amp} vs {gain}");
+        assert_eq!(CorrectionParams::default().lagged_command(&sine, dt), sine);
     }
 }

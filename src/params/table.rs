@@ -120,7 +120,7 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
-pub static PARAMS: [ParamSpec; 57] = [
+pub static PARAMS: [ParamSpec; 58] = [
     entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
     entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
@@ -243,6 +243,8 @@ pub static PARAMS: [ParamSpec; 57] = [
     entry!("corrections.turbulent_leakage_m3_per_s_sqrt_pa",
         plant.corrections.turbulent_leakage_m3_per_s_sqrt_pa, "c_t", "m³/(s·√Pa)", [0.0, 1e-7], None,
         (1.0, "m³/(s·√Pa)"), "leakage across the piston growing with √|Δp|"),
+    entry!("corrections.command_lag_s", plant.corrections.command_lag_s, "T_cmd", "s", [0.0, 0.05],
+        None, (1e3, "ms"), "first-order lag of the valve command"),
 ];
 
 /// The table entry of a dotted key (`valve.cd`), `None` for an unknown key.

@@ -43,6 +43,10 @@ pub(super) struct RigEffects {
     /// Outside the library: a spring the declared stiffness lacks (a seat cushion), slightly
     /// progressive: `k·u·(1 + (u/30 mm)²)` with `k` in N/m.
     pub(super) extra_spring: Option<f64>,
+    /// Outside the library: the valve acts on its command through a first-order lag [s] (a
+    /// servo amplifier's), integrated at the rig's step by the trapezoidal rule; the record's
+    /// `v_in` is the command as sent.
+    pub(super) command_lag_s: Option<f64>,
     /// A drift, not an effect: the discharge coefficient grows by this fraction from one test
     /// to the next (oil warming up through the campaign: test i has Cd·(1 + d·i)).
     pub(super) cd_drift_per_test: Option<f64>,
@@ -247,7 +251,15 @@ impl Rig {
         let (mut p1_col, mut p2_col) = (vec![], vec![]);
         let mut t = 0.0;
         let mut u_sensed = 0.0;
+        // What the valve acts on (before its delay): the command, or its lag from rest.
+        let mut valve_hist: Vec<f64> = Vec::with_capacity(n * per_sample + 1);
+        let mut lagged = 0.0;
         hist.push(cmd(0.0, &y));
+        valve_hist.push(if self.fx.command_lag_s.is_some() {
+            lagged
+        } else {
+            hist[0]
+        });
         for s in 0..n {
             let (x, _, xdd) = plat(t);
             t_col.push(s as f64 * dt_s);
@@ -277,7 +289,7 @@ impl Rig {
             for _ in 0..per_sample {
                 let drift = |tt: f64| self.fx.null_drift_v_per_s.map_or(0.0, |r| r * tt);
                 let f = |tt: f64, yy: &[f64; 10]| {
-                    self.rhs(yy, delayed(&hist, tt) + drift(tt), plat(tt).2)
+                    self.rhs(yy, delayed(&valve_hist, tt) + drift(tt), plat(tt).2)
                 };
                 let k1 = f(t, &y);
                 let mut tmp = [0.0; 10];
@@ -301,7 +313,17 @@ impl Rig {
                     u_sensed += h / lag * (y[0] - u_sensed);
                 }
                 t += h;
-                hist.push(cmd(t, &y));
+                let c = cmd(t, &y);
+                if let Some(lag) = self.fx.command_lag_s {
+                    let k = h / (2.0 * lag);
+                    lagged = ((1.0 - k) * lagged + k * (hist[hist.len() - 1] + c)) / (1.0 + k);
+                }
+                hist.push(c);
+                valve_hist.push(if self.fx.command_lag_s.is_some() {
+                    lagged
+                } else {
+                    c
+                });
             }
         }
         let ride = matches!(test, Test::Ride { .. });
@@ -473,25 +495,27 @@ pub(super) fn check_single(fx: RigEffects, expected: EffectId, seed: u64) -> Cal
     check_single_with(fx, expected, seed, false)
 }
 
-/// A friction rig: friction is ranked first and added, Cd and τ are found, and the verdict is
-/// `unexplained` with what is left small and named. Known limitation (issue 20): the rig's
-/// friction law (sign smoothed over 2 mm/s, Stribeck velocity 10 mm/s) differs from the
-/// library's (1 mm/s, and the preset's 5 mm/s, neither fitted), and the raw error measure sees
-/// that difference on u and ÿ below 25 Hz at 3–7× the noise floor, where the old weighted
-/// velocity measure called it `explained`.
+/// A friction rig: friction is ranked first and added, Cd and τ are found, and — since
+/// issue 20 fits the friction law's shape (the Stribeck velocity and the velocity over which
+/// the force changes sign) beside its sizes — the verdict is `explained`, every raw band at
+/// its floor. The rig's law is the library's form with its own values (sign smoothed over
+/// 2 mm/s, Stribeck velocity 10 mm/s, against the preset's 1 and 5 mm/s); before, with the
+/// shape fixed at the preset's, u and ÿ stayed 3–7× above the floor and the verdict read
+/// `unexplained`.
 pub(super) fn check_friction(fx: RigEffects, seed: u64, pressures: bool) -> CalibrationReport {
     let r = run_with(fx, seed, pressures);
     let s = summary(&r);
-    eprintln!("friction: {s}");
+    eprintln!("friction: {s}; effects {:?}", r.effects);
+    let friction = r
+        .effects
+        .iter()
+        .find(|e| e.effect == EffectId::Friction)
+        .unwrap_or_else(|| panic!("friction not found: {s}"));
+    assert_eq!(r.verdict, Verdict::Explained, "{s}");
     assert!(
-        r.effects.iter().any(|e| e.effect == EffectId::Friction),
-        "{s}"
+        friction.params.contains_key("stribeck_velocity_m_s"),
+        "{friction:?}"
     );
-    assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
-    for e in &r.raw_error_after.above {
-        assert!(e.ratio < 10.0 && e.band_hz[1] <= 25.0, "{e:?}: {s}");
-        assert!(e.channel == "u" || e.channel == "ydd", "{e:?}");
-    }
     assert!(
         (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
         "{s}"

@@ -47,6 +47,11 @@ use std::sync::Arc;
 use crate::dsp::{NoiseFloor, noise_floor, noise_gain, noise_rms};
 pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
 
+mod errors;
+mod streamed;
+pub use errors::{ChannelErrors, RawChannel, RawErrors};
+pub use streamed::{StreamedErrors, replay_streamed};
+
 /// Cut-off of the zero-phase low-pass applied to the recorded platform motion before it drives
 /// the twin [Hz] (see the [module docs](self)); at most 0.3 × the sample rate.
 pub const EXCITATION_LOWPASS_HZ: f64 = 30.0;
@@ -201,7 +206,14 @@ fn replay_samples(
         params.numerics.max_step_s.min(0.9 * params.step_limit_s()),
         1.0 / dt,
     );
-    let drive = Drive::OpenLoop(CommandSignal::Sampled { dt, values: v_in });
+    // A proposed lag of the valve command filters the command as sent.
+    let corrections = &params.plant.corrections;
+    let values = if corrections.command_lag_s > 0.0 {
+        Arc::new(corrections.lagged_command(&v_in, dt))
+    } else {
+        v_in
+    };
+    let drive = Drive::OpenLoop(CommandSignal::Sampled { dt, values });
     let mut sim = Simulation::twin(params, h, drive, platform);
     let every = (dt / h).round().max(1.0) as u64;
     let t_end = (len.saturating_sub(1)) as f64 * dt;
@@ -447,198 +459,6 @@ impl PreparedRecord {
         params.sensors.read_ydd(&mut out.ydd);
         Ok(out)
     }
-
-    /// Weighted residuals (twin − measured) of a replay, appended to `out`:
-    /// decimated velocity channel, then decimated acceleration channel, then the pressure
-    /// channels the record has, then the stroke-drift channel (`u` through the zero-phase
-    /// [`DRIFT_LOWPASS_HZ`] low-pass, kept at [`DRIFT_EVAL_RATE_HZ`], divided by
-    /// [`Self::scale_u_drift`]): the velocity channel is blind to a drift of the stroke that
-    /// the raw error measure, and a user, sees.
-    pub fn weighted_residuals(&self, sim: &SimChannels, out: &mut Vec<f64>) {
-        let du_sim_f = filtered_derivative(&sim.u, self.dt, self.lowpass_hz);
-        for i in self.eval_indices() {
-            out.push((du_sim_f[i] - self.du_meas_f[i]) / self.scale_du);
-        }
-        if let Some(ym) = &self.ydd_meas_f {
-            let ys = lowpass(&sim.ydd, self.dt, self.lowpass_hz);
-            for i in self.eval_indices() {
-                out.push((ys[i] - ym[i]) / self.scale_ydd);
-            }
-        }
-        for (k, sim_p) in [&sim.p1, &sim.p2].into_iter().enumerate() {
-            if let Some(pm) = &self.p_meas_f[k] {
-                let ps = lowpass(sim_p, self.dt, self.lowpass_hz);
-                for i in self.eval_indices() {
-                    out.push((ps[i] - pm[i]) / self.scale_p[k]);
-                }
-            }
-        }
-        let fc = DRIFT_LOWPASS_HZ.min(0.3 / self.dt);
-        let us = butterworth_zero_phase(&sim.u, self.dt, fc, 2);
-        for i in self.window.clone().step_by(self.drift_decimate.max(1)) {
-            out.push((us[i] - self.u_drift_meas[i]) / self.scale_u_drift);
-        }
-    }
-
-    /// Raw-signal errors of a replay on the window: every written channel the record also
-    /// has (`u`, `ÿ`, `p1`, `p2`), unfiltered, sample by sample on the record's own grid.
-    pub fn raw_errors(&self, sim: &SimChannels) -> RawErrors {
-        let w = self.window.clone();
-        let ch = |twin: &[f64], meas: &[f64]| RawChannel::of(&twin[w.clone()], &meas[w.clone()]);
-        RawErrors {
-            u: ch(&sim.u, &self.u),
-            ydd: self.ydd.as_ref().map(|m| ch(&sim.ydd, m)),
-            p1: self.p_raw[0].as_ref().map(|m| ch(&sim.p1, m)),
-            p2: self.p_raw[1].as_ref().map(|m| ch(&sim.p2, m)),
-        }
-    }
-
-    /// Unweighted channel errors of a replay.
-    pub fn channel_errors(&self, sim: &SimChannels) -> ChannelErrors {
-        let w = self.window.clone();
-        let du_sim_f = filtered_derivative(&sim.u, self.dt, self.lowpass_hz);
-        let e_du: Vec<f64> = du_sim_f[w.clone()]
-            .iter()
-            .zip(&self.du_meas_f[w.clone()])
-            .map(|(a, b)| a - b)
-            .collect();
-        let e_u: Vec<f64> = sim.u[w.clone()]
-            .iter()
-            .zip(&self.u[w.clone()])
-            .map(|(a, b)| a - b)
-            .collect();
-        let (ydd, ydd_nrmse) = match &self.ydd_meas_f {
-            Some(ym) => {
-                let ys = lowpass(&sim.ydd, self.dt, self.lowpass_hz);
-                let e: Vec<f64> = ys[w.clone()]
-                    .iter()
-                    .zip(&ym[w.clone()])
-                    .map(|(a, b)| a - b)
-                    .collect();
-                let r = rms(&e);
-                (Some(r), Some(r / rms(&ym[w.clone()]).max(1e-12)))
-            }
-            None => (None, None),
-        };
-        let p_err = |k: usize, sim_p: &[f64]| {
-            self.p_meas_f[k].as_ref().map(|pm| {
-                let ps = lowpass(sim_p, self.dt, self.lowpass_hz);
-                rms(&ps[w.clone()]
-                    .iter()
-                    .zip(&pm[w.clone()])
-                    .map(|(a, b)| a - b)
-                    .collect::<Vec<_>>())
-            })
-        };
-        // Weighted RMS per channel, in the order of `weighted_residuals`.
-        let mut wres = Vec::new();
-        self.weighted_residuals(sim, &mut wres);
-        let k = self.window.len().div_ceil(self.decimate.max(1));
-        let mut chunks = wres.chunks(k.max(1));
-        let w_du = chunks.next().map(rms).unwrap_or(0.0);
-        let w_ydd = self
-            .ydd_meas_f
-            .as_ref()
-            .and_then(|_| chunks.next().map(rms));
-        let mut w_p = [None, None];
-        for (j, slot) in w_p.iter_mut().enumerate() {
-            if self.p_meas_f[j].is_some() {
-                *slot = chunks.next().map(rms);
-            }
-        }
-        ChannelErrors {
-            p1: p_err(0, &sim.p1),
-            p2: p_err(1, &sim.p2),
-            du: rms(&e_du),
-            du_nrmse: rms(&e_du) / rms(&self.du_meas_f[w.clone()]).max(1e-12),
-            ydd,
-            ydd_nrmse,
-            u: rms(&e_u),
-            samples: w.len(),
-            weighted: rms(&wres),
-            weighted_du: w_du,
-            weighted_ydd: w_ydd,
-            weighted_p1: w_p[0],
-            weighted_p2: w_p[1],
-            raw: self.raw_errors(sim),
-        }
-    }
-}
-
-/// RMS errors of one replay, per channel (SI).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct ChannelErrors {
-    /// RMS error of the filtered relative velocity [m/s].
-    pub du: f64,
-    /// The same divided by the RMS of the measured filtered velocity [-].
-    pub du_nrmse: f64,
-    /// RMS error of the filtered body acceleration [m/s²], if measured.
-    pub ydd: Option<f64>,
-    /// The same divided by the RMS of the measured filtered acceleration [-].
-    pub ydd_nrmse: Option<f64>,
-    /// RMS error of the filtered upper chamber pressure [Pa], if measured.
-    pub p1: Option<f64>,
-    /// RMS error of the filtered lower chamber pressure [Pa], if measured.
-    pub p2: Option<f64>,
-    /// RMS error of the relative displacement [m] (open loop: includes drift; not fitted).
-    pub u: f64,
-    /// Samples counted (the record's, or its window's).
-    pub samples: usize,
-    /// RMS of the noise-weighted residual of this record (1 = sensor-noise level).
-    pub weighted: f64,
-    /// The same for the velocity channel alone.
-    pub weighted_du: f64,
-    /// The same for the acceleration channel, if measured.
-    pub weighted_ydd: Option<f64>,
-    /// The same for `p1`, if measured.
-    pub weighted_p1: Option<f64>,
-    /// The same for `p2`, if measured.
-    pub weighted_p2: Option<f64>,
-    /// Errors of the raw (unfiltered) channels, as `seat-twin replay` writes them.
-    pub raw: RawErrors,
-}
-
-/// Error of one raw channel of a replay against the record.
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
-pub struct RawChannel {
-    /// RMS of twin − measured [SI].
-    pub rms_error: f64,
-    /// Standard deviation of the measured channel about its mean [SI].
-    pub measured_std: f64,
-    /// `rms_error / measured_std` [-] (0 when the channel does not vary).
-    pub nrmse: f64,
-}
-
-impl RawChannel {
-    fn of(twin: &[f64], meas: &[f64]) -> Self {
-        let e: Vec<f64> = twin.iter().zip(meas).map(|(a, b)| a - b).collect();
-        let n = meas.len().max(1) as f64;
-        let mean = meas.iter().sum::<f64>() / n;
-        let dev: Vec<f64> = meas.iter().map(|v| v - mean).collect();
-        let (rms_error, measured_std) = (rms(&e), rms(&dev));
-        Self {
-            rms_error,
-            measured_std,
-            nrmse: if measured_std > 0.0 {
-                rms_error / measured_std
-            } else {
-                0.0
-            },
-        }
-    }
-}
-
-/// Raw-channel errors of a replay (`None`: the record lacks the channel).
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
-pub struct RawErrors {
-    /// Relative displacement [m].
-    pub u: RawChannel,
-    /// Body acceleration [m/s²].
-    pub ydd: Option<RawChannel>,
-    /// Upper chamber pressure [Pa].
-    pub p1: Option<RawChannel>,
-    /// Lower chamber pressure [Pa].
-    pub p2: Option<RawChannel>,
 }
 
 /// One record replayed through the twin: the simulated channels aligned with the record and
@@ -694,126 +514,9 @@ pub fn replay_prepared(params: &Params, rec: &PreparedRecord) -> Result<Replay, 
     })
 }
 
-/// Errors of a streamed replay ([`replay_streamed`]): the channel errors `seat-twin replay`
-/// prints, computed as [`ChannelErrors`] computes them over the whole record.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StreamedErrors {
-    /// Samples replayed.
-    pub samples: usize,
-    /// RMS error of the filtered relative velocity [m/s] ([`ChannelErrors::du`]).
-    pub du: f64,
-    /// The same divided by the RMS of the measured filtered velocity [-].
-    pub du_nrmse: f64,
-    /// RMS error of the relative displacement [m] ([`ChannelErrors::u`]).
-    pub u: f64,
-    /// RMS error of the filtered body acceleration [m/s²], if measured.
-    pub ydd: Option<f64>,
-}
-
-/// [`replay`] of a long record in bounded memory: every sample of the twin goes to `sample`
-/// with the record's own time as it is made (for a CSV written row by row), and only what the
-/// errors need is kept (the twin's `u`, and `ÿ` when the record has it), so the peak is the
-/// record's columns plus about four values a row. Same run, same numbers as [`replay`].
-pub fn replay_streamed(
-    params: &Params,
-    mut record: Record,
-    opt: &MetricOptions,
-    mut sample: impl FnMut(f64, &Sample),
-) -> Result<StreamedErrors, IdentifyError> {
-    params.validate()?;
-    let missing = |col: &str| IdentifyError::MissingColumn {
-        file: record.path.clone(),
-        column: col.to_string(),
-    };
-    let v_in = record.v_in.take().ok_or_else(|| missing("v_in"))?;
-    let u_meas = record.u.take().ok_or_else(|| missing("u"))?;
-    let (dt, len) = (record.dt, record.len());
-    let name = record
-        .path
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| record.path.display().to_string());
-    let (platform, _) = record_platform(&record);
-    // The platform columns now live in `platform`: drop the record's copies.
-    (record.x, record.xdd, record.p1, record.p2) = (None, None, None, None);
-    let keep_ydd = record.ydd.is_some();
-    let mut u_sim = Vec::with_capacity(len);
-    let mut ydd_sim = Vec::with_capacity(if keep_ydd { len } else { 0 });
-    let mut i = 0;
-    // The twin's u and ÿ as the calibrated sensors read them, as in `PreparedRecord::simulate`.
-    let mut stroke = params.sensors.u_reader(dt);
-    replay_samples(params, dt, Arc::new(v_in), platform, len, &name, |s| {
-        let mut read = s;
-        read.u = stroke.read(s.u);
-        read.ydd = params.sensors.read_ydd_sample(s.ydd);
-        sample(record.t[i], &read);
-        u_sim.push(read.u);
-        if keep_ydd {
-            ydd_sim.push(read.ydd);
-        }
-        i += 1;
-    })?;
-    let lowpass_hz = opt.lowpass_hz.min(0.4 / dt);
-    let diff_rms = |a: &[f64], b: &[f64]| {
-        let sum: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-        (sum / a.len().max(1) as f64).sqrt()
-    };
-    let u = diff_rms(&u_sim, &u_meas);
-    let du_meas_f = filtered_derivative(&u_meas, dt, lowpass_hz);
-    drop(u_meas);
-    let du_sim_f = filtered_derivative(&u_sim, dt, lowpass_hz);
-    drop(u_sim);
-    let du = diff_rms(&du_sim_f, &du_meas_f);
-    let du_nrmse = du / rms(&du_meas_f).max(1e-12);
-    drop((du_sim_f, du_meas_f));
-    let ydd = record.ydd.take().map(|ym| {
-        let ym = lowpass(&ym, dt, lowpass_hz);
-        diff_rms(&lowpass(&ydd_sim, dt, lowpass_hz), &ym)
-    });
-    Ok(StreamedErrors {
-        samples: len,
-        du,
-        du_nrmse,
-        u,
-        ydd,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Issue 21, item 7: the streamed replay (bounded memory) is the same run as the held
-    /// one, sample for sample, and gives the same errors bit for bit.
-    #[test]
-    fn a_streamed_replay_equals_the_held_one() {
-        let params = crate::identify::testdata::true_params();
-        let rec = crate::identify::testdata::twin_record(&params, 2.0, "a.csv");
-        let held = super::super::replay(&Params::paper(), &rec).unwrap();
-        let mut rows = Vec::new();
-        let e = replay_streamed(
-            &Params::paper(),
-            rec.clone(),
-            &MetricOptions::default(),
-            |t, s| rows.push((t, s.u, s.ydd, s.p1, s.q2)),
-        )
-        .unwrap();
-        assert_eq!(rows.len(), held.sim.t.len());
-        for (i, r) in rows.iter().enumerate() {
-            let h = &held.sim;
-            assert_eq!(
-                *r,
-                (rec.t[i], h.u[i], h.ydd[i], h.p1[i], h.q2[i]),
-                "sample {i}"
-            );
-        }
-        let h = &held.errors;
-        assert_eq!(
-            (e.du, e.du_nrmse, e.u, e.ydd),
-            (h.du, h.du_nrmse, h.u, h.ydd)
-        );
-        assert_eq!(e.samples, h.samples);
-    }
 
     /// The written replay holds the record's times and the twin's channels, number for
     /// number, in the documented columns.
@@ -856,58 +559,6 @@ mod tests {
             ];
             assert_eq!(row.as_slice(), expected.as_slice(), "row {i}");
         }
-    }
-
-    #[test]
-    fn pressure_channels_enter_the_metric_only_when_recorded() {
-        let n = 2000;
-        let dt = 1e-3;
-        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
-        let p: Vec<f64> = t.iter().map(|t| 55e5 + 2e5 * (6.0 * t).sin()).collect();
-        let mut rec = Record {
-            path: "p.csv".into(),
-            metadata: vec![],
-            dt,
-            t: t.clone(),
-            v_in: Some(vec![0.0; n]),
-            u: Some(vec![0.0; n]),
-            x: None,
-            xdd: None,
-            ydd: None,
-            p1: None,
-            p2: None,
-            warnings: vec![],
-        };
-        let opt = MetricOptions::default();
-        let k = n.div_ceil(4);
-        // The stroke-drift channel: 5 Hz over 2 s.
-        let drift = n.div_ceil(200);
-        assert_eq!(
-            PreparedRecord::new(&rec, &opt).unwrap().residual_len(),
-            k + drift
-        );
-        rec.p1 = Some(p.clone());
-        let prep = PreparedRecord::new(&rec, &opt).unwrap();
-        assert_eq!(prep.residual_len(), 2 * k + drift);
-        // Floor: 1 % of the swing (2 bar sine → 0.014 bar), not of the 55 bar mean.
-        assert!((prep.scale_p[0] - 0.01 * 2e5 / 2f64.sqrt()).abs() < 100.0);
-        // A twin 1 bar too low on p1 gives a weighted pressure residual of −1 bar / scale.
-        let sim = SimChannels {
-            u: vec![0.0; n],
-            ydd: vec![0.0; n],
-            p1: p.iter().map(|v| v - 1e5).collect(),
-            p2: vec![0.0; n],
-            ..Default::default()
-        };
-        let mut w = Vec::new();
-        prep.weighted_residuals(&sim, &mut w);
-        assert_eq!(w.len(), 2 * k + drift);
-        let mid = w[k + k / 2];
-        assert!(
-            (mid + 1e5 / prep.scale_p[0]).abs() < 1e-3 * mid.abs(),
-            "{mid}"
-        );
-        assert!((prep.channel_errors(&sim).p1.unwrap() - 1e5).abs() < 1.0);
     }
 
     /// The excitation filter does what its documentation states: flat within 1 % to 20 Hz,
