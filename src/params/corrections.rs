@@ -83,15 +83,14 @@ impl CorrectionParams {
         if t <= 0.0 || v_in.is_empty() {
             return v_in.to_vec();
         }
-        // Over one step the input is the ramp x_k + s·τ; the lag's response to it is exact.
+        // Over one step the input is linear between its samples; the lag's response is exact.
         let a = (-dt / t).exp();
         let mut out = Vec::with_capacity(v_in.len());
         // The first sample is reached by a step from rest at t = 0.
         let mut v = 0.0;
         out.push(v);
         for w in v_in.windows(2) {
-            let slope = (w[1] - w[0]) / dt;
-            v = a * v + w[1] - a * w[0] - slope * t * (1.0 - a);
+            v = super::sensors::lag_step(v, w[0], w[1], dt, t, a);
             out.push(v);
         }
         out

@@ -89,17 +89,23 @@ impl StrokeReader {
         if self.lag_s <= 0.0 || self.dt <= 0.0 {
             return u;
         }
-        let (t, a, dt) = (self.lag_s, self.a, self.dt);
         let y = match self.state {
             None => u,
-            Some((y, prev)) => {
-                let slope = (u - prev) / dt;
-                a * y + (1.0 - a) * prev + slope * (dt - t * (1.0 - a))
-            }
+            Some((y, prev)) => lag_step(y, prev, u, self.dt, self.lag_s, self.a),
         };
         self.state = Some((y, u));
         y
     }
+}
+
+/// One step of a first-order lag `T·ẏ = x − y` of time constant `lag_s` [s] over `dt` [s],
+/// exact for an input linear from `prev` to `x` over the step: `y` the output at its start,
+/// `a = e^(−dt/T)`. Shared by the stroke sensor's lag and the valve command's
+/// ([`crate::params::CorrectionParams::lagged_command`]).
+#[inline]
+pub fn lag_step(y: f64, prev: f64, x: f64, dt: f64, lag_s: f64, a: f64) -> f64 {
+    let slope = (x - prev) / dt;
+    a * y + (1.0 - a) * prev + slope * (dt - lag_s * (1.0 - a))
 }
 
 #[cfg(test)]
