@@ -152,3 +152,41 @@ fn a_replay_holds_at_most_100_bytes_a_record_row() {
     });
     assert!(per_row <= 100.0, "{per_row} bytes a row");
 }
+
+/// Before: a record calibrate could not hold aborted it part-way ("memory allocation of …
+/// bytes failed", exit 134) and left its hidden `.cal.*.tmp` folder. Now a record over
+/// calibrate's 2 000 000 rows is refused before it is read, naming the file, its rows, the
+/// limit and what to do, and nothing is created beside `--out`.
+#[test]
+fn calibrate_refuses_a_record_over_its_row_limit_up_front_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("long.csv");
+    let rows = 2_100_000;
+    let mut text = String::with_capacity(rows * 16);
+    text.push_str("t,v_in,u\n");
+    for i in 0..rows {
+        let _ = writeln!(text, "{}.{:03},0.5,0", i / 1000, i % 1000);
+    }
+    std::fs::write(&rec, text).unwrap();
+    let out = dir.path().join("cal");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_seat-twin"))
+        .args(["calibrate", "--data"])
+        .arg(&rec)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!("calibrate: {}: about 2", rec.display()))
+            && err.contains("data rows (from its size), over the limit of 2000000 rows")
+            && err.contains("decimate the record"),
+        "{err}"
+    );
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, [std::ffi::OsString::from("long.csv")], "{err}");
+}
