@@ -448,25 +448,46 @@ pub fn memory_limit() -> Option<(u64, &'static str)> {
 }
 
 /// Data rows of a record file and its header's fields, estimated from the file's size and
-/// the length of its first lines.
-fn estimated_rows(path: &std::path::Path) -> Option<(u64, u64)> {
-    use std::io::Read;
+/// the mean length of its first and its last lines (times get longer towards the end of a
+/// long record: from its first lines alone, a 20-million-row record looked 24 million).
+pub(super) fn estimated_rows(path: &std::path::Path) -> Option<(u64, u64)> {
+    use std::io::{Read, Seek};
+    const SAMPLE: u64 = 64 * 1024;
     let size = std::fs::metadata(path).ok()?.len();
+    let mut file = crate::fsutil::open_input(path).ok()?;
     let mut head = Vec::new();
-    crate::fsutil::open_input(path)
-        .ok()?
-        .take(64 * 1024)
-        .read_to_end(&mut head)
-        .ok()?;
+    (&mut file).take(SAMPLE).read_to_end(&mut head).ok()?;
     let lines: Vec<&[u8]> = head
         .split(|&b| b == b'\n')
         .filter(|l| !l.is_empty() && l[0] != b'#')
         .collect();
     let fields = lines.first()?.iter().filter(|&&b| b == b',').count() as u64 + 1;
-    // The last piece may be cut; the header is not a row.
-    let rows = lines.len().saturating_sub(2).max(1);
-    let bytes: usize = lines.iter().skip(1).take(rows).map(|l| l.len() + 1).sum();
-    Some((size / (bytes as u64 / rows as u64).max(1), fields))
+    // Mean bytes of the whole lines among `lines` (the last piece may be cut), from `skip` on.
+    let mean = |lines: &[&[u8]], skip: usize| {
+        let whole = lines.len().saturating_sub(1 + skip);
+        let bytes: usize = lines
+            .iter()
+            .skip(skip)
+            .take(whole)
+            .map(|l| l.len() + 1)
+            .sum();
+        (whole > 0).then(|| bytes as f64 / whole as f64)
+    };
+    // The header is not a row.
+    let head_mean = mean(&lines, 1).unwrap_or(1.0);
+    let mut tail = Vec::new();
+    let tail_mean = if size > 2 * SAMPLE
+        && file.seek(std::io::SeekFrom::Start(size - SAMPLE)).is_ok()
+        && file.take(SAMPLE).read_to_end(&mut tail).is_ok()
+    {
+        // The first piece may be cut, and so may the last.
+        let lines: Vec<&[u8]> = tail.split(|&b| b == b'\n').skip(1).collect();
+        mean(&lines, 0)
+    } else {
+        None
+    };
+    let per_row = tail_mean.map_or(head_mean, |t| 0.5 * (head_mean + t));
+    Some(((size as f64 / per_row.max(1.0)) as u64, fields))
 }
 
 /// Memory a job holds per record row [bytes]: `row` plus `column` for each of the header's

@@ -166,7 +166,15 @@ impl Run for SimulateArgs {
         let mut peak_input: Option<String> = None;
         let (drive, platform, default_duration, label) = match (scenario, excitation) {
             (_, Some(path)) => {
-                let rec = dataset::read_record(path, RecordKind::Excitation)?;
+                // Only the platform's columns drive the run.
+                let rec = dataset::read_record_with(
+                    path,
+                    RecordKind::Excitation,
+                    dataset::ReadOptions {
+                        keep: &["t", "x", "xdd"],
+                        ..Default::default()
+                    },
+                )?;
                 for w in &rec.warnings {
                     eprintln!("warning: {}: {w}", path.display());
                     warnings.push(w.clone());

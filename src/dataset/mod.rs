@@ -53,7 +53,7 @@ mod write;
 
 pub use columns::{COLUMNS, RecordKind, column_limit};
 pub use error::DatasetError;
-pub use read::{parse_record, parse_record_bytes, read_record};
+pub use read::{ReadOptions, parse_record, parse_record_bytes, read_record, read_record_with};
 pub use validate::{RIG_HALF_STROKE_M, RIG_V_IN_MAX_V};
 pub use write::{CsvWriter, write_csv, write_csv_atomic};
 
@@ -75,7 +75,8 @@ pub const DT_ABS_TOLERANCE_S: f64 = 1e-9;
 
 /// A record read from a CSV file: uniformly sampled columns, all of the same length.
 ///
-/// Columns absent from the file are `None`. A parsed record has at least two samples.
+/// Columns absent from the file, or not asked for ([`read_record_with`]), are `None`. A parsed
+/// record has at least two samples.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Record {
     /// The file it was read from (as given; used in messages).

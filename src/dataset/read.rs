@@ -1,29 +1,73 @@
 //! Reading a record: file access, the text checks, and parsing of the header and rows.
+//!
+//! A file is read twice, in bounded memory: a first pass checks that it is text (UTF-8, no
+//! NUL byte, no lone carriage return) and counts its lines, so that the columns are allocated
+//! once at their final size; the second parses it line by line. Only the columns asked for
+//! are stored (8 bytes a row each); the file's text is never held whole. In-memory text
+//! ([`parse_record`], [`parse_record_bytes`]) goes through the same checks and the same
+//! parser.
 
 use super::columns::{COLUMNS, RecordKind, T, column_limit, column_unit};
 use super::error::{DatasetError, fmt_num, quote, shorten};
 use super::lines::LineMap;
 use super::{MAX_FILE_BYTES, MAX_ROWS, Record, validate};
 use std::collections::HashMap;
-use std::io::{self, Read};
+use std::io::{self, BufRead, BufReader, Read, Seek};
 use std::path::Path;
 
 /// Unknown columns warned about one by one; the rest are summed up in one warning.
 const MAX_UNKNOWN_WARNINGS: usize = 10;
-/// Bytes [`read_record`] reads and checks for text before it reads the rest, so that a device
-/// or a binary file fails at once.
-const PROBE_BYTES: u64 = 64 * 1024;
+/// Bytes the text check reads at a time, so that a device or a binary file fails after its
+/// first 64 KiB.
+const SCAN_CHUNK: usize = 64 * 1024;
+/// Slot of `v_in` in [`COLUMNS`].
+const V_IN: usize = 1;
+/// Slot of `u` in [`COLUMNS`].
+const U: usize = 2;
+
+/// What to keep of a record and how many rows to allow ([`read_record_with`]).
+#[derive(Debug, Clone, Copy)]
+pub struct ReadOptions<'a> {
+    /// Known columns to store (names from [`COLUMNS`]); `t` is always stored. A column of the
+    /// file that is not named here is still parsed and checked (so the errors and warnings are
+    /// those of a full read) but left `None` in the record, saving 8 bytes a row.
+    pub keep: &'a [&'a str],
+    /// Most data rows allowed, ≤ [`MAX_ROWS`]; a row past it is a
+    /// [`DatasetError::TooManyRows`] naming its line, met before the columns grow past it.
+    pub max_rows: usize,
+}
+
+impl Default for ReadOptions<'_> {
+    /// Every known column, up to [`MAX_ROWS`] rows.
+    fn default() -> Self {
+        ReadOptions {
+            keep: &COLUMNS,
+            max_rows: MAX_ROWS,
+        }
+    }
+}
 
 /// Reads a record from a CSV file (see the [module docs](super) for the format).
 ///
 /// Files over [`MAX_FILE_BYTES`] are refused before reading; a file that is not text (a
-/// binary file, `/dev/zero`, `/dev/urandom`) is refused after its first 64 KiB.
+/// binary file, `/dev/zero`, `/dev/urandom`) is refused after its first 64 KiB. Memory: 8
+/// bytes a row for each known column of the file (and 8 more, briefly, for the median step).
 pub fn read_record(path: &Path, kind: RecordKind) -> Result<Record, DatasetError> {
+    read_record_with(path, kind, ReadOptions::default())
+}
+
+/// [`read_record`] storing only the columns in `options.keep` and refusing more than
+/// `options.max_rows` rows: for a job that needs a few columns of a long record.
+pub fn read_record_with(
+    path: &Path,
+    kind: RecordKind,
+    options: ReadOptions,
+) -> Result<Record, DatasetError> {
     let io_err = |error| DatasetError::Io {
         file: path.to_path_buf(),
         error,
     };
-    let file = crate::fsutil::open_input(path).map_err(io_err)?;
+    let mut file = crate::fsutil::open_input(path).map_err(io_err)?;
     let meta = file.metadata().map_err(io_err)?;
     if meta.is_dir() {
         return Err(io_err(io::Error::new(
@@ -39,16 +83,16 @@ pub fn read_record(path: &Path, kind: RecordKind) -> Result<Record, DatasetError
             limit: MAX_FILE_BYTES,
         });
     }
-    let mut data = Vec::with_capacity(usize::try_from(bytes).unwrap_or(0));
-    // `take` guards against a file that grows while it is read, and against devices.
-    let mut reader = file.take(MAX_FILE_BYTES + 1);
-    (&mut reader)
-        .take(PROBE_BYTES)
-        .read_to_end(&mut data)
-        .map_err(io_err)?;
-    check_text(&data, path, true)?;
-    reader.read_to_end(&mut data).map_err(io_err)?;
-    parse_record_bytes(&data, path, kind)
+    let scan = scan_text(&mut file, path)?;
+    file.rewind().map_err(io_err)?;
+    // `take` guards against a file that grows between the two passes.
+    let lines = FileLines {
+        reader: BufReader::with_capacity(SCAN_CHUNK, file.take(MAX_FILE_BYTES + 1)),
+        buf: Vec::new(),
+        line: 0,
+        path,
+    };
+    parse_lines(lines, path, kind, options, scan.line_feeds + 1)
 }
 
 /// Parses a record from the raw bytes of a file, which must be UTF-8; `path` is used in
@@ -58,80 +102,17 @@ pub fn parse_record_bytes(
     path: &Path,
     kind: RecordKind,
 ) -> Result<Record, DatasetError> {
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(DatasetError::TooLarge {
-            file: path.to_path_buf(),
-            bytes: bytes.len() as u64,
-            limit: MAX_FILE_BYTES,
-        });
-    }
-    check_text(bytes, path, false)?;
+    check_size(bytes.len(), path)?;
+    let scan = scan_text(bytes, path)?;
     match std::str::from_utf8(bytes) {
-        Ok(text) => parse_record(text, path, kind),
-        // Not reached: `check_text` has found any invalid byte.
+        Ok(text) => parse_text(text, path, kind, MAX_ROWS, scan),
+        // Not reached: the scan has found any invalid byte.
         Err(_) => Err(DatasetError::Encoding {
             file: path.to_path_buf(),
             line: 1,
             detail: "invalid UTF-8".into(),
         }),
     }
-}
-
-/// Checks that `bytes` are UTF-8 text without NUL bytes or a UTF-16 byte-order mark. With
-/// `partial`, `bytes` are the start of a file and may end inside a character.
-fn check_text(bytes: &[u8], path: &Path, partial: bool) -> Result<(), DatasetError> {
-    if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
-        return Err(DatasetError::Encoding {
-            file: path.to_path_buf(),
-            line: 1,
-            detail: "the file starts with a UTF-16 byte-order mark; save it as UTF-8".into(),
-        });
-    }
-    let locate = |at: usize| crate::fsutil::line_column(bytes, at);
-    let invalid = match std::str::from_utf8(bytes) {
-        Ok(_) => None,
-        Err(e) if partial && e.error_len().is_none() => None,
-        Err(e) => Some(e.valid_up_to()),
-    };
-    let nul = bytes.iter().position(|&b| b == 0);
-    match (invalid, nul) {
-        (Some(at), nul) if nul.is_none_or(|n| at < n) => {
-            let (line, col) = locate(at);
-            Err(DatasetError::Encoding {
-                file: path.to_path_buf(),
-                line,
-                detail: format!(
-                    "invalid byte 0x{:02x} at character {col} of the line (byte offset {at} in the file)",
-                    bytes[at]
-                ),
-            })
-        }
-        (_, Some(at)) => {
-            let (line, col) = locate(at);
-            Err(DatasetError::Encoding {
-                file: path.to_path_buf(),
-                line,
-                detail: format!(
-                    "a NUL byte (0x00) at character {col} of the line (byte offset {at} in the file): \
-                     this is not a text file"
-                ),
-            })
-        }
-        _ => Ok(()),
-    }
-}
-
-/// Byte offset of the first `\r` not followed by `\n`, if any.
-fn lone_carriage_return(bytes: &[u8]) -> Option<usize> {
-    let mut from = 0;
-    while let Some(i) = bytes[from..].iter().position(|&b| b == b'\r') {
-        let at = from + i;
-        if bytes.get(at + 1) != Some(&b'\n') {
-            return Some(at);
-        }
-        from = at + 1;
-    }
-    None
 }
 
 /// Parses a record from CSV text (see the [module docs](super) for the format); `path` is
@@ -147,31 +128,273 @@ pub(super) fn parse_with_row_limit(
     kind: RecordKind,
     max_rows: usize,
 ) -> Result<Record, DatasetError> {
-    let file = || path.to_path_buf();
-    if text.len() as u64 > MAX_FILE_BYTES {
+    check_size(text.len(), path)?;
+    let scan = scan_text(text.as_bytes(), path)?;
+    parse_text(text, path, kind, max_rows, scan)
+}
+
+/// Refuses text over [`MAX_FILE_BYTES`].
+fn check_size(len: usize, path: &Path) -> Result<(), DatasetError> {
+    if len as u64 > MAX_FILE_BYTES {
         return Err(DatasetError::TooLarge {
-            file: file(),
-            bytes: text.len() as u64,
+            file: path.to_path_buf(),
+            bytes: len as u64,
             limit: MAX_FILE_BYTES,
         });
     }
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    if let Some(at) = lone_carriage_return(text.as_bytes()) {
+    Ok(())
+}
+
+/// Parses text that [`scan_text`] has passed.
+fn parse_text(
+    text: &str,
+    path: &Path,
+    kind: RecordKind,
+    max_rows: usize,
+    scan: Scan,
+) -> Result<Record, DatasetError> {
+    let lines = TextLines {
+        rest: Some(text.strip_prefix('\u{feff}').unwrap_or(text)),
+        line: 0,
+    };
+    let options = ReadOptions {
+        max_rows,
+        ..ReadOptions::default()
+    };
+    parse_lines(lines, path, kind, options, scan.line_feeds + 1)
+}
+
+/// What the text check of a whole file found.
+struct Scan {
+    /// Line feeds in the file.
+    line_feeds: usize,
+}
+
+/// Reads `reader` to its end (at most [`MAX_FILE_BYTES`] + 1 bytes), [`SCAN_CHUNK`] bytes at
+/// a time, and checks that it is text: UTF-8 without a UTF-16 byte-order mark or a NUL byte
+/// (the first bad byte in the file is named by line, character and byte offset), not over
+/// [`MAX_FILE_BYTES`], and with no carriage return that has no line feed after it.
+fn scan_text(reader: impl Read, path: &Path) -> Result<Scan, DatasetError> {
+    let encoding = |line, detail| DatasetError::Encoding {
+        file: path.to_path_buf(),
+        line,
+        detail,
+    };
+    let mut reader = reader.take(MAX_FILE_BYTES + 1);
+    // The chunk, after up to 3 bytes of a character cut by the previous chunk's end.
+    let mut buf = vec![0u8; SCAN_CHUNK + 3];
+    let mut carry = 0;
+    // File offset, line and characters into that line at `buf[0]`.
+    let (mut offset, mut line, mut line_chars) = (0u64, 1usize, 0usize);
+    let mut line_feeds = 0;
+    let mut lone_cr: Option<usize> = None;
+    // The previous chunk ended with a CR on this line.
+    let mut cr_at_end: Option<usize> = None;
+    loop {
+        let n = fill(&mut reader, &mut buf[carry..]).map_err(|error| DatasetError::Io {
+            file: path.to_path_buf(),
+            error,
+        })?;
+        let end = carry + n;
+        let eof = end < buf.len();
+        let data = &buf[..end];
+        if offset == 0 && (data.starts_with(&[0xff, 0xfe]) || data.starts_with(&[0xfe, 0xff])) {
+            return Err(encoding(
+                1,
+                "the file starts with a UTF-16 byte-order mark; save it as UTF-8".into(),
+            ));
+        }
+        let (valid, invalid) = match std::str::from_utf8(data) {
+            Ok(_) => (end, false),
+            // A character cut by the chunk's end: carried into the next chunk.
+            Err(e) if e.error_len().is_none() && !eof => (e.valid_up_to(), false),
+            Err(e) => (e.valid_up_to(), true),
+        };
+        let nul = data[..valid].iter().position(|&b| b == 0);
+        if let Some(at) = nul.or(invalid.then_some(valid)) {
+            let (l, col) = position(line, line_chars, &data[..at], data[at]);
+            let at = offset + at as u64;
+            return Err(encoding(
+                l,
+                if nul.is_some() {
+                    format!(
+                        "a NUL byte (0x00) at character {col} of the line (byte offset {at} in \
+                         the file): this is not a text file"
+                    )
+                } else {
+                    format!(
+                        "invalid byte 0x{:02x} at character {col} of the line (byte offset \
+                         {at} in the file)",
+                        data[at as usize - offset as usize]
+                    )
+                },
+            ));
+        }
+        if offset + end as u64 > MAX_FILE_BYTES {
+            return Err(DatasetError::TooLarge {
+                file: path.to_path_buf(),
+                bytes: offset + end as u64,
+                limit: MAX_FILE_BYTES,
+            });
+        }
+        if let Some(l) = cr_at_end.take()
+            && data.first() != Some(&b'\n')
+        {
+            lone_cr.get_or_insert(l);
+        }
+        let text = &data[..valid];
+        let mut last_lf = None;
+        for (i, &b) in text.iter().enumerate() {
+            if b == b'\n' {
+                line_feeds += 1;
+                last_lf = Some(i);
+            } else if b == b'\r' && lone_cr.is_none() {
+                let l = line + text[..i].iter().filter(|&&b| b == b'\n').count();
+                match data.get(i + 1) {
+                    Some(b'\n') => {}
+                    None if !eof => cr_at_end = Some(l),
+                    _ => lone_cr = Some(l),
+                }
+            }
+        }
+        line = line_feeds + 1;
+        line_chars = match last_lf {
+            Some(i) => char_starts(&text[i + 1..]),
+            None => line_chars + char_starts(text),
+        };
+        if eof {
+            break;
+        }
+        offset += valid as u64;
+        buf.copy_within(valid..end, 0);
+        carry = end - valid;
+    }
+    if let Some(line) = lone_cr {
         return Err(DatasetError::LoneCarriageReturn {
-            file: file(),
-            line: crate::fsutil::line_column(text.as_bytes(), at).0,
+            file: path.to_path_buf(),
+            line,
         });
     }
-    let mut lines = text
-        .split('\n')
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)));
+    Ok(Scan { line_feeds })
+}
+
+/// Reads into `buf` until it is full or the reader ends; the bytes read.
+fn fill(reader: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match reader.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
+}
+
+/// Bytes that start a character (not UTF-8 continuation bytes 10xxxxxx).
+fn char_starts(bytes: &[u8]) -> usize {
+    bytes.iter().filter(|&&b| b & 0xC0 != 0x80).count()
+}
+
+/// 1-based line and character of the byte `at` that follows `before`, where `before` starts
+/// on line `line` after `line_chars` characters of it: [`crate::fsutil::line_column`] for a
+/// file read in chunks (an offset inside a character points at that character).
+fn position(line: usize, line_chars: usize, before: &[u8], at: u8) -> (usize, usize) {
+    let line = line + before.iter().filter(|&&b| b == b'\n').count();
+    let starts = match before.iter().rposition(|&b| b == b'\n') {
+        Some(i) => char_starts(&before[i + 1..]),
+        None => line_chars + char_starts(before),
+    };
+    let inside = at & 0xC0 == 0x80 && starts > 0;
+    (line, starts + 1 - usize::from(inside))
+}
+
+/// The lines of a record, one at a time: borrowed from the text, or read from a file into one
+/// reused buffer.
+trait LineSource {
+    /// The next line's 1-based number and its text without the line end (`\n` or `\r\n`);
+    /// `None` after the last.
+    fn next_line(&mut self) -> Result<Option<(usize, &str)>, DatasetError>;
+}
+
+/// The lines of text in memory (a byte-order mark already stripped).
+struct TextLines<'a> {
+    rest: Option<&'a str>,
+    line: usize,
+}
+
+impl LineSource for TextLines<'_> {
+    fn next_line(&mut self) -> Result<Option<(usize, &str)>, DatasetError> {
+        let Some(rest) = self.rest else {
+            return Ok(None);
+        };
+        let (l, rest) = match rest.split_once('\n') {
+            Some((l, r)) => (l, Some(r)),
+            None => (rest, None),
+        };
+        self.rest = rest;
+        self.line += 1;
+        Ok(Some((self.line, l.strip_suffix('\r').unwrap_or(l))))
+    }
+}
+
+/// The lines of a file that [`scan_text`] has passed, read one at a time.
+struct FileLines<'p, R> {
+    reader: R,
+    buf: Vec<u8>,
+    line: usize,
+    path: &'p Path,
+}
+
+impl<R: BufRead> LineSource for FileLines<'_, R> {
+    fn next_line(&mut self) -> Result<Option<(usize, &str)>, DatasetError> {
+        self.buf.clear();
+        let n = self
+            .reader
+            .read_until(b'\n', &mut self.buf)
+            .map_err(|error| DatasetError::Io {
+                file: self.path.to_path_buf(),
+                error,
+            })?;
+        if n == 0 {
+            return Ok(None);
+        }
+        self.line += 1;
+        let mut bytes = self.buf.as_slice();
+        bytes = bytes.strip_suffix(b"\n").unwrap_or(bytes);
+        bytes = bytes.strip_suffix(b"\r").unwrap_or(bytes);
+        if self.line == 1 {
+            bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
+        }
+        match std::str::from_utf8(bytes) {
+            Ok(text) => Ok(Some((self.line, text))),
+            Err(_) => Err(DatasetError::Encoding {
+                file: self.path.to_path_buf(),
+                line: self.line,
+                detail: "invalid UTF-8 (the file changed while it was read)".into(),
+            }),
+        }
+    }
+}
+
+/// Parses a record line by line (see the [module docs](super) for the format), storing the
+/// columns `options` asks for; `lines_hint` (the file's lines) sizes the columns.
+fn parse_lines(
+    mut lines: impl LineSource,
+    path: &Path,
+    kind: RecordKind,
+    options: ReadOptions,
+    lines_hint: usize,
+) -> Result<Record, DatasetError> {
+    let file = || path.to_path_buf();
+    let max_rows = options.max_rows;
 
     // Preamble: comments, metadata, blank lines, then the header.
     let mut metadata = Vec::new();
     let mut warnings = Vec::new();
     let (header_line, header_text) = loop {
-        let Some((n, line)) = lines.next() else {
+        let Some((n, line)) = lines.next_line()? else {
             return Err(DatasetError::Empty {
                 file: file(),
                 detail: "no header row (the file has only comments or blank lines)".into(),
@@ -185,10 +408,9 @@ pub(super) fn parse_with_row_limit(
                 }
             }
         } else if !line.trim().is_empty() {
-            break (n, line);
+            break (n, line.to_string());
         }
     };
-
     // Header: map each field to a column slot.
     let header: Vec<String> = header_text
         .split(',')
@@ -257,17 +479,10 @@ pub(super) fn parse_with_row_limit(
     }
 
     // Data rows.
-    let header_offset = header_text.as_ptr() as usize - text.as_ptr() as usize;
-    let capacity = text
-        .get(header_offset..)
-        .unwrap_or("")
-        .bytes()
-        .filter(|&b| b == b'\n')
-        .count()
-        .min(max_rows);
+    let capacity = lines_hint.min(max_rows);
     let mut cols: [Option<Vec<f64>>; COLUMNS.len()] = Default::default();
     for (s, f) in field_of_slot.iter().enumerate() {
-        if f.is_some() {
+        if f.is_some() && (s == T || options.keep.contains(&COLUMNS[s])) {
             cols[s] = Some(Vec::with_capacity(capacity));
         }
     }
@@ -278,7 +493,10 @@ pub(super) fn parse_with_row_limit(
     let mut first_late_comment = 0usize;
     let mut prev_t = f64::NEG_INFINITY;
     let mut prev_line = 0usize;
-    for (n, line) in lines {
+    // The largest |u| and |v_in| and their lines, for the plausibility warnings: the first of
+    // equal peaks.
+    let mut peaks: [Option<(usize, f64)>; 2] = [None, None];
+    while let Some((n, line)) = lines.next_line()? {
         if line.starts_with('#') {
             if late_comments == 0 {
                 first_late_comment = n;
@@ -336,6 +554,11 @@ pub(super) fn parse_with_row_limit(
                 }
                 prev_t = value;
                 prev_line = n;
+            } else if slot == V_IN || slot == U {
+                let peak = &mut peaks[usize::from(slot == U)];
+                if peak.is_none_or(|(_, p)| value.abs() > p.abs()) {
+                    *peak = Some((n, value));
+                }
             }
             if let Some(col) = cols[slot].as_mut() {
                 col.push(value);
@@ -385,11 +608,10 @@ pub(super) fn parse_with_row_limit(
 
     let dt = validate::sample_step(&t, &map, kind, path)?;
     warnings.extend(validate::plausibility_warnings(
-        u.as_deref(),
-        v_in.as_deref(),
+        peaks[1],
+        peaks[0],
         &metadata,
         1.0 / dt,
-        &map,
     ));
     Ok(Record {
         path: file(),

@@ -645,3 +645,92 @@ fn parses_a_long_seven_column_record() {
     }
     assert!(r.p2.is_none());
 }
+
+/// The message [`parse_record_bytes`] gives for the first bad byte of `b`, found on the whole
+/// file at once (the reference for the chunked check).
+fn whole_file_text_error(b: &[u8]) -> Option<String> {
+    let invalid = std::str::from_utf8(b).err().map(|e| e.valid_up_to());
+    let nul = b.iter().position(|&x| x == 0);
+    let (at, is_nul) = match (invalid, nul) {
+        (Some(i), Some(n)) if n < i => (n, true),
+        (Some(i), _) => (i, false),
+        (None, Some(n)) => (n, true),
+        (None, None) => return None,
+    };
+    let (line, col) = crate::fsutil::line_column(b, at);
+    let head = format!("ride.csv: line {line}: not UTF-8 text:");
+    let place = format!("at character {col} of the line (byte offset {at} in the file)");
+    Some(if is_nul {
+        format!("{head} a NUL byte (0x00) {place}: this is not a text file")
+    } else {
+        format!("{head} invalid byte 0x{:02x} {place}", b[at])
+    })
+}
+
+/// The text check reads a file in 64 KiB chunks: a bad byte, a NUL, a lone CR or a character
+/// cut by a chunk's end names the same line, character and byte offset as a check of the
+/// whole file would, and a CR LF pair split by a chunk's end is a line end.
+#[test]
+fn text_errors_across_chunk_ends_name_the_whole_file_position() {
+    const CHUNK: usize = 64 * 1024;
+    // Comment rows of "é" (2 bytes) so that characters straddle chunk ends at every phase.
+    let mut body = String::from("t,x\n");
+    let mut i = 0;
+    while body.len() < 2 * CHUNK + 100 {
+        let _ = writeln!(body, "# é{}", "é".repeat(i % 7));
+        i += 1;
+    }
+    let base = body.into_bytes();
+    let mut checked = 0;
+    for at in (CHUNK - 5..CHUNK + 5).chain(2 * CHUNK - 4..2 * CHUNK + 4) {
+        // A byte that is never valid, a NUL, a lead byte without its continuation and a stray
+        // continuation byte.
+        for bad in [0xffu8, 0x00, 0xc3, 0xa9] {
+            let mut b = base.clone();
+            b[at] = bad;
+            let Some(expected) = whole_file_text_error(&b) else {
+                continue;
+            };
+            let e = parse_record_bytes(&b, p(), RecordKind::Excitation).unwrap_err();
+            assert_eq!(e.to_string(), expected, "byte {bad:#04x} at {at}");
+            checked += 1;
+        }
+        // A CR at `at`: lone unless a LF follows (then the file is text, with no data rows).
+        let mut b = base.clone();
+        if b[at] < 0x80 && b[at + 1] < 0x80 && b[at] != b'\n' {
+            b[at] = b'\r';
+            let e = parse_record_bytes(&b, p(), RecordKind::Excitation).unwrap_err();
+            if b[at + 1] == b'\n' {
+                assert!(matches!(e, DatasetError::Empty { .. }), "{at}: {e}");
+            } else {
+                let line = crate::fsutil::line_column(&b, at).0;
+                assert!(
+                    matches!(e, DatasetError::LoneCarriageReturn { line: l, .. } if l == line),
+                    "{at}: {e}"
+                );
+            }
+        }
+    }
+    assert!(checked > 60, "{checked}");
+    // Through a real file (read in chunks by the file reader, not from a slice).
+    let mut b = base.clone();
+    b[CHUNK + 1] = 0xff;
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("ride.csv");
+    std::fs::write(&f, &b).unwrap();
+    let e = read_record(&f, RecordKind::Excitation).unwrap_err();
+    let expected = whole_file_text_error(&b).unwrap();
+    let expected = expected.replacen("ride.csv", &f.display().to_string(), 1);
+    assert_eq!(e.to_string(), expected);
+    // CR LF pairs at every phase of the chunk end: a valid record.
+    for shift in 0..4 {
+        let mut text = "#".repeat(CHUNK - 2 - shift);
+        text.push_str("\r\nt,x\r\n");
+        for k in 0..4 {
+            let _ = write!(text, "{k}e-2,0\r\n");
+        }
+        let r = parse_record(&text, p(), RecordKind::Excitation).unwrap();
+        assert_eq!(r.len(), 4);
+        assert_eq!(r.t, [0.0, 0.01, 0.02, 0.03]);
+    }
+}

@@ -63,26 +63,16 @@ pub(super) fn sample_step(
 
 /// Warnings for a stroke `u` beyond the rig's (a record in millimetres?), a command `v_in`
 /// beyond the valve's range, and a `sample_rate_hz` metadata value that disagrees with the
-/// times (`rate_hz`) by more than 1 %.
+/// times (`rate_hz`) by more than 1 %. `u_peak` and `v_in_peak` are the first largest
+/// magnitude of each column and its line, found while the rows are read.
 pub(super) fn plausibility_warnings(
-    u: Option<&[f64]>,
-    v_in: Option<&[f64]>,
+    u_peak: Option<(usize, f64)>,
+    v_in_peak: Option<(usize, f64)>,
     metadata: &[(String, String)],
     rate_hz: f64,
-    map: &LineMap,
 ) -> Vec<String> {
     let mut warnings = Vec::new();
-    let peak = |c: Option<&[f64]>| {
-        c.and_then(|c| {
-            // The first of equal peaks.
-            c.iter()
-                .enumerate()
-                .rev()
-                .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-                .map(|(i, v)| (map.line_of(i), *v))
-        })
-    };
-    if let Some((line, v)) = peak(u).filter(|(_, v)| v.abs() > RIG_HALF_STROKE_M) {
+    if let Some((line, v)) = u_peak.filter(|(_, v)| v.abs() > RIG_HALF_STROKE_M) {
         let hint = if v.abs() > 1.0 {
             ": is it in millimetres instead of metres? (the format is SI)"
         } else {
@@ -95,7 +85,7 @@ pub(super) fn plausibility_warnings(
             fmt_num(RIG_HALF_STROKE_M * 1e3)
         ));
     }
-    if let Some((line, v)) = peak(v_in).filter(|(_, v)| v.abs() > RIG_V_IN_MAX_V) {
+    if let Some((line, v)) = v_in_peak.filter(|(_, v)| v.abs() > RIG_V_IN_MAX_V) {
         warnings.push(format!(
             "column \"v_in\" reaches {} V at line {line}, beyond the valve's ±{} V \
              (the twin saturates the command there)",

@@ -245,6 +245,38 @@ proptest! {
     }
 }
 
+proptest! {
+    // Writes a file per case: not part of the long run.
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Issue 21, item 7: a file is read line by line from disk, text in memory is split at
+    /// once; both give the same record or the same message, on valid and on broken files.
+    #[test]
+    fn a_file_read_line_by_line_equals_its_bytes_parsed_at_once(
+        v in valid(),
+        mutations in proptest::collection::vec(mutation(), 0..4),
+        bom in any::<bool>(),
+        crlf in any::<bool>(),
+    ) {
+        let mut bytes = v.text().into_bytes();
+        for m in &mutations {
+            apply(&mut bytes, m);
+        }
+        if crlf {
+            bytes = String::from_utf8_lossy(&bytes).replace('\n', "\r\n").into_bytes();
+        }
+        if bom {
+            bytes.splice(0..0, "\u{feff}".bytes());
+        }
+        let dir = tempfile::tempdir().expect("temporary directory");
+        let file = dir.path().join("ride.csv");
+        std::fs::write(&file, &bytes).expect("written");
+        let from_file = read_record(&file, v.kind).map_err(|e| e.to_string());
+        let at_once = parse_record_bytes(&bytes, &file, v.kind).map_err(|e| e.to_string());
+        prop_assert_eq!(from_file, at_once);
+    }
+}
+
 /// A record with one cell replaced by `cell` in column `col` at data row `row`.
 fn with_cell(col: usize, row: usize, cell: &str) -> (String, &'static str, usize) {
     let name = COLUMNS[col];

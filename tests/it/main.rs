@@ -20,6 +20,7 @@ mod gui_use;
 mod gui_web;
 mod identify;
 mod integrator;
+mod memory;
 mod paper;
 mod physics;
 mod presets;
