@@ -33,9 +33,12 @@ then
 fi
 
 # The same build as the test command's (features as there): the binary and, beside it,
-# libseat_twin.so, which `export fmu` packs.
+# libseat_twin.so, which `export fmu` packs. `--examples` is not for the examples: a build
+# that includes them resolves features with the dev-dependencies, as `cargo test` does, so
+# right after the test command nothing is compiled; without it the library and the GUI stack
+# are compiled again (2 min 15 s here), and once more back by the web check.
 features="${SEAT_TWIN_FEATURES:---all-features}"
-cargo build $features --bin seat-twin --lib --quiet
+cargo build $features --bin seat-twin --lib --examples --quiet
 exe="$target/debug/seat-twin"
 
 work="$target/fmu-check"

@@ -39,8 +39,9 @@ if [ ! -d tests/web/node_modules/playwright-core ]; then
 fi
 
 step "the CLI's reference: seat-twin simulate, a_w as the app evaluates it"
-# The debug build with every feature is the one `cargo test --all-features` just made.
-cargo build --all-features --bin seat-twin --example web_aw
+# The debug build with every feature is the one `cargo test --all-features` just made (with
+# the example in the build, features resolve as in the test build: nothing is compiled again).
+cargo build --all-features --bin seat-twin --lib --examples
 target_dir=$(cargo metadata --format-version 1 --no-deps \
     | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
 work=$(mktemp -d)
