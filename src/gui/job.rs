@@ -328,23 +328,33 @@ impl<T, P> Job<T, P> {
     }
 }
 
+/// Test helper: `job`'s end, running this thread's Frames jobs meanwhile (nothing to run for
+/// a Thread job); fails the test with `what` if it has not ended within `limit`.
+#[cfg(test)]
+pub(crate) fn wait_pumping<T, P>(
+    job: &Job<T, P>,
+    limit: std::time::Duration,
+    what: &str,
+) -> Result<T, String> {
+    let t0 = std::time::Instant::now();
+    loop {
+        if let Some(r) = job.poll() {
+            return r;
+        }
+        assert!(t0.elapsed() < limit, "{what}");
+        if !pump(std::time::Duration::from_millis(2)) {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::time::{Duration, Instant};
 
     fn wait<T, P>(job: &Job<T, P>) -> Result<T, String> {
-        let t0 = Instant::now();
-        loop {
-            if let Some(r) = job.poll() {
-                return r;
-            }
-            assert!(t0.elapsed() < Duration::from_secs(10), "job never ended");
-            // Runs this thread's Frames jobs (nothing for a Thread job).
-            if !pump(Duration::from_millis(2)) {
-                std::thread::sleep(Duration::from_millis(5));
-            }
-        }
+        wait_pumping(job, Duration::from_secs(10), "job never ended")
     }
 
     /// Work in steps: the sum of squares of 0..n, one term per step, reporting progress and

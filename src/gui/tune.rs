@@ -360,7 +360,7 @@ fn pareto_plot(ui: &mut egui::Ui, front: &[Evaluation], selected: Option<usize>)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gui::job::{Runner, pump};
+    use crate::gui::job::{Runner, pump, wait_pumping};
     use std::time::{Duration, Instant};
 
     fn short() -> TuneOptions {
@@ -423,17 +423,7 @@ mod tests {
         );
         pump(Duration::ZERO);
         job.cancel();
-        let t0 = Instant::now();
-        let r = loop {
-            if let Some(r) = job.poll() {
-                break r;
-            }
-            assert!(
-                t0.elapsed() < Duration::from_secs(60),
-                "cancel not honoured"
-            );
-            pump(Duration::from_millis(8));
-        };
+        let r = wait_pumping(&job, Duration::from_secs(60), "cancel not honoured");
         assert_eq!(r.unwrap_err(), tune::TuneError::Cancelled.to_string());
     }
 }

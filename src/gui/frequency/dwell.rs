@@ -241,26 +241,14 @@ impl Dwell {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gui::job::{Runner, pump};
+    use crate::gui::job::{Runner, wait_pumping};
     use std::sync::Arc;
     use std::time::Duration;
 
     fn run_on(runner: Runner, freqs: Vec<f64>) -> (Result<(), String>, Vec<DwellPoint>) {
         let noop: Waker = Arc::new(|| {});
         let job = Job::spawn_steps_on(runner, "t", noop, dwell_steps(Params::paper(), freqs));
-        let t0 = Instant::now();
-        let end = loop {
-            if let Some(r) = job.poll() {
-                break r;
-            }
-            assert!(
-                t0.elapsed() < Duration::from_secs(60),
-                "the dwell never ended"
-            );
-            if !pump(Duration::from_millis(8)) {
-                std::thread::sleep(Duration::from_millis(2));
-            }
-        };
+        let end = wait_pumping(&job, Duration::from_secs(60), "the dwell never ended");
         (end, job.drain().collect())
     }
 
