@@ -11,7 +11,7 @@ mod panels;
 mod state;
 mod teaching;
 
-pub use state::{EngineView, FrameStats, Notice, PresetInfo, Settings, Theme};
+pub use state::{EngineView, FrameStats, Notice, PresetInfo};
 
 pub use teaching::{PRESENTATION_SCALE, Teaching};
 
@@ -24,6 +24,7 @@ use super::measured::{MeasuredAction, MeasuredData};
 use super::schematic;
 use super::scopes;
 use super::session::{self, Session, SessionAb, SessionTune, SessionView};
+use super::settings::{Settings, Theme};
 use super::traces::{Ch, Traces};
 use super::units::{BAR_PER_PA, MM_PER_M};
 use crate::analysis::watch::Finding;

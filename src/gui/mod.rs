@@ -14,6 +14,7 @@
 //!   the background.
 //! * [`lessons`] — the guided steps for a lecture; [`share`] — setup links (`#s=…`) and
 //!   the presets compiled in; `web` — the browser entry (wasm32 only).
+//! * [`settings`] — what persists between runs; [`session`] — the session file.
 //! * [`scopes`], [`schematic`], [`controls`] — widgets; [`files`] — dialogs and exports
 //!   off the UI thread; [`units`] — display units; [`format`] — numbers for people;
 //!   [`plotkit`] — y axes, clickable legends, wrapped phase.
@@ -32,6 +33,7 @@ pub mod plotkit;
 pub mod schematic;
 pub mod scopes;
 pub mod session;
+pub mod settings;
 pub mod share;
 pub mod style;
 pub mod traces;

@@ -49,7 +49,7 @@ pub struct SessionView {
 
 impl Default for SessionView {
     fn default() -> Self {
-        let s = super::app::Settings::default();
+        let s = super::settings::Settings::default();
         Self {
             hidden_curves: BTreeSet::new(),
             phase_unwrapped: s.phase_unwrapped,

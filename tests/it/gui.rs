@@ -6,7 +6,7 @@ use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use seat_twin::gui::SeatTwinApp;
-use seat_twin::gui::app::Settings;
+use seat_twin::gui::settings::Settings;
 use std::time::{Duration, Instant};
 
 pub(crate) fn harness() -> Harness<'static, SeatTwinApp> {

@@ -422,7 +422,7 @@ fn a_tune_result_for_another_structure_is_not_offered() {
 /// the window's furniture, and the last one lost its time axis).
 #[test]
 fn a_small_window_stacks_and_scrolls_instead_of_squeezing() {
-    let app = SeatTwinApp::new(seat_twin::gui::app::Settings::default(), || {});
+    let app = SeatTwinApp::new(seat_twin::gui::settings::Settings::default(), || {});
     let mut h = egui_kittest::Harness::builder()
         .with_size([1100.0, 700.0])
         .build_ui_state(|ui, app: &mut SeatTwinApp| app.ui(ui), app);

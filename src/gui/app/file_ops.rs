@@ -564,7 +564,6 @@ impl SeatTwinApp {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gui::app::Settings;
 
     /// What the web app downloads is what the desktop writes: the preset's TOML reads back
     /// as the parameters on screen, each plot is a PNG and an SVG, and nothing is made
