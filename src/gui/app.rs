@@ -5,13 +5,15 @@
 //! window title and the frame-time readout.
 
 mod accessors;
+mod engine_link;
 mod export;
 mod file_ops;
 mod panels;
 mod state;
 mod teaching;
 
-pub use state::{EngineView, FrameStats, Notice, PresetInfo};
+pub use engine_link::{EngineLink, EngineView};
+pub use state::{FrameStats, Notice, PresetInfo};
 
 pub use teaching::{PRESENTATION_SCALE, Teaching};
 
@@ -28,7 +30,7 @@ use super::settings::{Settings, Theme};
 use super::traces::{Ch, Traces};
 use super::units::{BAR_PER_PA, MM_PER_M};
 use crate::analysis::watch::Finding;
-use crate::engine::{self, Command, EngineHandle, Event, Speed};
+use crate::engine::{Command, Speed};
 use crate::params::{ControllerParams, Params};
 use crate::plot::{Figure, Panel, Rgb, Scale, Series};
 use crate::preset::{self, Preset, PresetMeta};
@@ -81,12 +83,7 @@ pub struct SeatTwinApp {
     params: Params,
     preset: PresetInfo,
     shipped: Vec<(String, PathBuf)>,
-    engine: EngineHandle,
-    waker: Waker,
-    engine_view: EngineView,
-    engine_error: Option<String>,
-    engine_alive: bool,
-    want_running: bool,
+    engine: EngineLink,
     traces: Traces,
     analytic: Analytic,
     dwell: Dwell,
@@ -102,9 +99,6 @@ pub struct SeatTwinApp {
     field_errors: controls::FieldErrors,
     hidden_curves: BTreeSet<String>,
     last_stable: Option<ControllerParams>,
-    /// What the running twin's watch found since the last reset or change (it can ring while
-    /// the linear verdict at rest says stable).
-    twin_watch: Option<crate::analysis::watch::Finding>,
     scope_frames: Vec<egui::Rect>,
     path_prompt: Option<(Purpose, String)>,
     ab: AbView,
@@ -140,7 +134,7 @@ impl SeatTwinApp {
         };
         let user_file = path.is_some();
         let params = preset.params;
-        let engine = spawn_engine(&params, &waker);
+        let engine = EngineLink::spawn(&params, waker.clone());
         let measured = MeasuredData::new(waker.clone());
         let mut app = Self {
             params,
@@ -157,11 +151,6 @@ impl SeatTwinApp {
             },
             shipped: preset::shipped_presets(),
             engine,
-            waker: waker.clone(),
-            engine_view: EngineView::default(),
-            engine_error: None,
-            engine_alive: true,
-            want_running: true,
             traces: Traces::new(),
             analytic: Analytic::default(),
             dwell: Dwell::new(waker),
@@ -178,7 +167,6 @@ impl SeatTwinApp {
             field_errors: controls::FieldErrors::new(),
             hidden_curves: BTreeSet::new(),
             last_stable: None,
-            twin_watch: None,
             scope_frames: Vec::new(),
             path_prompt: None,
             ab: AbView::default(),
@@ -220,17 +208,11 @@ impl SeatTwinApp {
             self.send(Command::SetExcitation(Box::new(e)));
         }
         self.send(Command::SetSpeed(self.settings.speed));
-        self.send(if self.want_running {
-            Command::Run
-        } else {
-            Command::Pause
-        });
+        self.send(self.engine.run_command());
     }
 
     fn send(&mut self, c: Command) {
-        if !self.engine.send(c) {
-            self.engine_alive = false;
-        }
+        self.engine.send(c);
     }
 
     // ----- actions -----
@@ -259,7 +241,7 @@ impl SeatTwinApp {
                 let p = Box::new(self.params);
                 self.send(Command::SetParams(p));
                 self.traces.reset_metrics();
-                self.twin_watch = None;
+                self.engine.watch = None;
             }
             Err(e) => self.param_error = Some(format!("not applied: {e}")),
         }
@@ -274,45 +256,25 @@ impl SeatTwinApp {
 
     /// Toggles run/pause.
     pub fn toggle_running(&mut self) {
-        self.want_running = !self.want_running;
-        let c = if self.want_running {
-            Command::Run
-        } else {
-            Command::Pause
-        };
-        self.send(c);
+        self.engine.toggle_running();
     }
 
     /// Back to rest at t = 0; clears an engine error (restarts a dead engine thread).
     pub fn reset(&mut self) {
-        if !self.engine_alive {
-            self.engine = spawn_engine(&self.params, &self.waker);
-            self.engine_alive = true;
+        if self.engine.respawn_if_gone(&self.params) {
             self.send_engine_setup();
         }
         self.send(Command::Reset);
-        if self.want_running {
+        if self.engine.want_running {
             self.send(Command::Run);
         }
         self.traces.clear();
-        self.engine_error = None;
-        self.twin_watch = None;
+        self.engine.forget_run();
     }
 
     /// The text of the toolbar clock (simulated time and real-time factor).
     pub fn clock_text(&self) -> String {
-        let v = &self.engine_view;
-        if self.engine_error.is_some() {
-            format!("t = {:8.2} s   stopped", v.t)
-        } else if !v.running {
-            format!("t = {:8.2} s   paused", v.t)
-        } else {
-            format!(
-                "t = {:8.2} s   ×{:.2} real time",
-                v.t,
-                v.realtime_factor.max(0.0)
-            )
-        }
+        self.engine.clock_text()
     }
 
     /// TEST HOOK: makes the engine's next step panic (see `Command::InjectFault`). The UI
@@ -347,7 +309,7 @@ impl SeatTwinApp {
     /// Starts tuning the live controller with these options (the Tune button uses
     /// [`super::tune::interactive_options`]).
     pub fn start_tune(&mut self, opts: crate::tune::TuneOptions) {
-        self.tune.start(&self.params, opts, self.waker.clone());
+        self.tune.start(&self.params, opts, self.engine.waker().clone());
     }
 
     /// Sets the controller of a chosen Pareto point on the live twin (the preset is then
@@ -391,56 +353,10 @@ impl SeatTwinApp {
     fn send_reference(&mut self) {
         self.send(Command::SetReference(self.ab.command()));
         self.traces.clear();
-        self.engine_error = None;
-        self.twin_watch = None;
+        self.engine.forget_run();
     }
 
     // ----- per frame -----
-
-    fn drain_engine(&mut self) {
-        loop {
-            match self.engine.events.try_recv() {
-                Ok(ev) => self.handle_event(ev),
-                Err(std::sync::mpsc::TryRecvError::Empty) => break,
-                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
-                    if self.engine_alive {
-                        self.engine_alive = false;
-                        self.engine_error = Some(
-                            "the engine thread has stopped. Press Reset to restart it.".into(),
-                        );
-                    }
-                    break;
-                }
-            }
-        }
-    }
-
-    fn handle_event(&mut self, ev: Event) {
-        match ev {
-            Event::Samples(b) => self.traces.push_batch(&b),
-            Event::Status {
-                t,
-                realtime_factor,
-                running,
-                params,
-                reference,
-                contacts,
-            } => {
-                self.engine_view = EngineView {
-                    t,
-                    realtime_factor,
-                    running,
-                    params: Some(*params),
-                    reference,
-                    contacts,
-                }
-            }
-            Event::Contact(_) => self.traces.contact_count += 1,
-            Event::Error(msg) => self.engine_error = Some(msg),
-            Event::Restarted => self.traces.mark_restart(),
-            Event::Watch(f) => self.twin_watch = Some(f),
-        }
-    }
 
     /// The simulated (sine dwell) frequency points of the twin.
     pub fn dwell(&self) -> &Dwell {
@@ -520,7 +436,7 @@ impl SeatTwinApp {
         self.scope_bar_ui(ui);
         let view = scopes::ScopeView {
             window_s: self.settings.scope_window_s,
-            live: self.want_running && !self.scopes_frozen && self.engine_error.is_none(),
+            live: self.engine.want_running && !self.scopes_frozen && self.engine.error.is_none(),
         };
         self.scope_frames = scopes::scopes_ui(
             ui,
@@ -548,7 +464,7 @@ impl SeatTwinApp {
                 hidden: &mut self.hidden_curves,
                 last_stable,
                 reference,
-                watch: self.twin_watch,
+                watch: self.engine.watch,
             },
         );
         self.frame_stats.freq_ms = t_freq.elapsed().as_secs_f64() * 1e3;
@@ -557,7 +473,7 @@ impl SeatTwinApp {
 
     /// The centre: the engine banner, the scopes and the frequency plots.
     fn centre_ui(&mut self, ui: &mut egui::Ui, unstable: bool) {
-        if let Some(err) = self.engine_error.clone() {
+        if let Some(err) = self.engine.error.clone() {
             egui::Frame::new()
                 .fill(Color32::from_rgb(150, 20, 20))
                 .inner_margin(6.0)
@@ -621,10 +537,10 @@ impl SeatTwinApp {
         let t0 = Instant::now();
         let ctx = ui.ctx().clone();
         // On the web the engine runs here, in the frame (on the desktop in its thread).
-        let sim_before = self.engine_view.t;
+        let sim_before = self.engine.view.t;
         let stepping = self.engine.pump(ENGINE_BUDGET);
         #[cfg(target_arch = "wasm32")]
-        if self.engine_view.running && self.settings.speed == Speed::Max {
+        if self.engine.view.running && self.settings.speed == Speed::Max {
             // As fast as it goes: the next frame steps on at once.
             ctx.request_repaint();
         }
@@ -636,9 +552,9 @@ impl SeatTwinApp {
         if super::job::pump(job_budget) {
             ctx.request_repaint();
         }
-        self.drain_engine();
+        self.engine.drain(&mut self.traces);
         self.teach
-            .engine_stepped(stepping, self.engine_view.t - sim_before);
+            .engine_stepped(stepping, self.engine.view.t - sim_before);
         // Ctrl + / Ctrl − change the zoom inside egui: remember it with the settings.
         self.settings.ui_scale = ctx.zoom_factor();
         self.poll_files(&ctx);
@@ -682,7 +598,8 @@ impl SeatTwinApp {
         self.analytic.update(&self.params);
         let unstable = self.analytic.curves().unstable()
             || self
-                .twin_watch
+                .engine
+                .watch
                 .is_some_and(|f| !matches!(f, Finding::NegativePressure { .. }));
         // "Last stable" means last *committed*: gains a drag only passes through (the
         // pointer still down, or a widget still dragged) are not remembered.
@@ -750,11 +667,6 @@ pub fn fitted_window(window: egui::Vec2, monitor: egui::Vec2) -> Option<egui::Ve
     } else {
         None
     }
-}
-
-fn spawn_engine(params: &Params, waker: &Waker) -> EngineHandle {
-    let w = waker.clone();
-    engine::spawn(*params, move || w())
 }
 
 impl eframe::App for SeatTwinApp {

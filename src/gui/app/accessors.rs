@@ -10,22 +10,22 @@ impl SeatTwinApp {
 
     /// The parameters the engine last reported running with.
     pub fn engine_params(&self) -> Option<&Params> {
-        self.engine_view.params.as_ref()
+        self.engine.view.params.as_ref()
     }
 
     /// What the engine last reported.
     pub fn engine_view(&self) -> &EngineView {
-        &self.engine_view
+        &self.engine.view
     }
 
     /// Whether the user wants the simulation running (space bar / Run button).
     pub fn wants_running(&self) -> bool {
-        self.want_running
+        self.engine.want_running
     }
 
     /// The engine's error, if it stopped.
     pub fn engine_error(&self) -> Option<&str> {
-        self.engine_error.as_deref()
+        self.engine.error.as_deref()
     }
 
     /// The analytic frequency curves shown.

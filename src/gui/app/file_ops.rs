@@ -109,8 +109,7 @@ impl SeatTwinApp {
         if let Some(e) = self.settings.excitation.excitation() {
             self.send(Command::SetExcitation(Box::new(e)));
             self.traces.clear();
-            self.engine_error = None;
-            self.twin_watch = None;
+            self.engine.forget_run();
         }
     }
 

@@ -132,7 +132,7 @@ impl SeatTwinApp {
 
     pub(super) fn toolbar_ui(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            let label = if self.want_running { "Pause" } else { "Run" };
+            let label = if self.engine.want_running { "Pause" } else { "Run" };
             if ui
                 .button(label)
                 .on_hover_text("Run / pause (space bar)")
@@ -157,8 +157,8 @@ impl SeatTwinApp {
                 self.send(Command::SetSpeed(self.settings.speed));
             }
             ui.separator();
-            let v = &self.engine_view;
-            let state = if self.engine_error.is_some() {
+            let v = &self.engine.view;
+            let state = if self.engine.error.is_some() {
                 RichText::new("stopped (error)").color(Color32::from_rgb(220, 50, 40))
             } else if v.running {
                 RichText::new("running").color(Color32::from_rgb(40, 160, 60))
@@ -218,7 +218,7 @@ impl SeatTwinApp {
             .default_open(false)
             .show(ui, |ui| {
                 if let crate::gui::tune::TuneAction::Apply(c) =
-                    self.tune.ui(ui, &self.params, &self.waker)
+                    self.tune.ui(ui, &self.params, self.engine.waker())
                 {
                     self.apply_tuned(c);
                 }
@@ -298,7 +298,7 @@ impl SeatTwinApp {
         ));
         if self.ab.is_on() {
             ui.separator();
-            crate::gui::ab::metrics_ui(ui, self.traces.metrics.ab(), self.engine_view.contacts);
+            crate::gui::ab::metrics_ui(ui, self.traces.metrics.ab(), self.engine.view.contacts);
         }
         if let Some(r) = self.traces.last_row() {
             ui.weak(format!(

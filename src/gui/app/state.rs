@@ -1,7 +1,7 @@
-//! The app's plain state types: the preset in use, what the engine last reported, the notice
-//! line and the frame timings.
+//! The app's plain state types: the preset in use, the notice line and the frame
+//! timings.
 
-use crate::params::{ControllerParams, Params};
+use crate::params::Params;
 use std::collections::VecDeque;
 use std::path::PathBuf;
 use web_time::Instant;
@@ -19,23 +19,6 @@ pub struct PresetInfo {
     pub user_file: bool,
     /// Parameters as loaded or last saved: the "modified" marker compares against these.
     pub baseline: Params,
-}
-
-/// What the engine last reported.
-#[derive(Debug, Clone, Default)]
-pub struct EngineView {
-    /// Simulated time [s].
-    pub t: f64,
-    /// Real-time factor.
-    pub realtime_factor: f64,
-    /// Running (not paused, not failed).
-    pub running: bool,
-    /// Parameters the engine runs with (echo).
-    pub params: Option<Params>,
-    /// The A/B reference controller the engine runs (`None`: A/B off).
-    pub reference: Option<ControllerParams>,
-    /// End-stop contacts since the last restart: live twin, reference twin.
-    pub contacts: (usize, usize),
 }
 
 /// A message line under the toolbar.
