@@ -20,7 +20,8 @@ pub use teaching::{PRESENTATION_SCALE, Teaching};
 use super::ab::{self, AbAction, AbView};
 use super::controls::{self, ExcitationAction, ExcitationKind, LoadedRecord};
 use super::files::{self, CsvTable, Dialogs, Purpose, Writer};
-use super::frequency::{self, Analytic, Curves, Dwell, FreqAction, FreqView};
+use super::centre::{CentreAction, CentreInput, CentreView};
+use super::frequency::{Curves, Dwell};
 use super::job::Waker;
 use super::measured::{MeasuredAction, MeasuredData};
 use super::schematic;
@@ -63,13 +64,6 @@ const JOB_MIN_BUDGET: Duration = Duration::from_millis(4);
 /// Longest wait between a wake from a worker (engine, jobs) and the frame that shows it.
 const REPAINT_PERIOD: Duration = Duration::from_millis(33);
 
-/// Narrowest centre [points] that shows the scopes and the frequency plots side by side.
-const TWO_COLUMNS_MIN_W: f32 = 700.0;
-/// Height of the scopes when stacked above the frequency plots, at least [points].
-const STACKED_SCOPES_MIN_H: f32 = 900.0;
-/// Height of the frequency plots when stacked, at least [points].
-const STACKED_FREQ_MIN_H: f32 = 760.0;
-
 /// The scales offered in the View menu.
 pub const UI_SCALES: [f32; 6] = [0.8, 1.0, 1.25, 1.5, 1.75, 2.0];
 
@@ -85,8 +79,7 @@ pub struct SeatTwinApp {
     shipped: Vec<(String, PathBuf)>,
     engine: EngineLink,
     traces: Traces,
-    analytic: Analytic,
-    dwell: Dwell,
+    centre: CentreView,
     dialogs: Dialogs,
     writer: Writer,
     notice: Option<Notice>,
@@ -97,13 +90,9 @@ pub struct SeatTwinApp {
     title: String,
     measured: MeasuredData,
     field_errors: controls::FieldErrors,
-    hidden_curves: BTreeSet<String>,
-    last_stable: Option<ControllerParams>,
-    scope_frames: Vec<egui::Rect>,
     path_prompt: Option<(Purpose, String)>,
     ab: AbView,
     tune: super::tune::TunePanel,
-    scopes_frozen: bool,
     window_checked: bool,
     teach: Teaching,
 }
@@ -152,8 +141,7 @@ impl SeatTwinApp {
             shipped: preset::shipped_presets(),
             engine,
             traces: Traces::new(),
-            analytic: Analytic::default(),
-            dwell: Dwell::new(waker),
+            centre: CentreView::new(waker),
             dialogs: Dialogs::default(),
             writer: Writer::default(),
             notice,
@@ -165,13 +153,9 @@ impl SeatTwinApp {
             measured,
             settings,
             field_errors: controls::FieldErrors::new(),
-            hidden_curves: BTreeSet::new(),
-            last_stable: None,
-            scope_frames: Vec::new(),
             path_prompt: None,
             ab: AbView::default(),
             tune: super::tune::TunePanel::default(),
-            scopes_frozen: false,
             window_checked: false,
             teach: Teaching::default(),
         };
@@ -287,7 +271,7 @@ impl SeatTwinApp {
     /// Puts back the last gains with which both loops were stable and restarts the
     /// simulation from rest with them.
     pub fn reset_to_last_stable_gains(&mut self) {
-        if let Some(g) = self.last_stable {
+        if let Some(g) = self.centre.last_stable() {
             self.params.controller = g;
             self.field_errors.remove("Kp");
             self.field_errors.remove("Ki");
@@ -358,11 +342,6 @@ impl SeatTwinApp {
 
     // ----- per frame -----
 
-    /// The simulated (sine dwell) frequency points of the twin.
-    pub fn dwell(&self) -> &Dwell {
-        &self.dwell
-    }
-
     /// The measured-data window's state.
     pub fn measured(&self) -> &MeasuredData {
         &self.measured
@@ -401,134 +380,6 @@ impl SeatTwinApp {
                 self.apply_params();
                 self.request_file(Purpose::SavePreset, "calibrated.toml", ctx);
             }
-        }
-    }
-
-    /// The scopes' window length and Freeze.
-    fn scope_bar_ui(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
-            ui.label("scopes:");
-            egui::ComboBox::from_id_salt("scope_window")
-                .selected_text(format!("{:.0} s", self.settings.scope_window_s))
-                .width(64.0)
-                .show_ui(ui, |ui| {
-                    for w in scopes::WINDOWS_S {
-                        ui.selectable_value(
-                            &mut self.settings.scope_window_s,
-                            w,
-                            format!("{w:.0} s"),
-                        );
-                    }
-                })
-                .response
-                .on_hover_text("Length of the time window shown");
-            ui.toggle_value(&mut self.scopes_frozen, "Freeze")
-                .on_hover_text(
-                    "Stops the scrolling while the simulation runs on; frozen or paused, drag to \
-                 pan in time, Ctrl + wheel to zoom, double-click for all that is kept (60 s)",
-                );
-        });
-    }
-
-    /// The scopes with their bar (window, Freeze).
-    fn scopes_column_ui(&mut self, ui: &mut egui::Ui) {
-        let t_scopes = Instant::now();
-        self.scope_bar_ui(ui);
-        let view = scopes::ScopeView {
-            window_s: self.settings.scope_window_s,
-            live: self.engine.want_running && !self.scopes_frozen && self.engine.error.is_none(),
-        };
-        self.scope_frames = scopes::scopes_ui(
-            ui,
-            &self.traces,
-            &self.params,
-            &mut self.hidden_curves,
-            self.ab.is_on(),
-            view,
-        );
-        self.frame_stats.scopes_ms = t_scopes.elapsed().as_secs_f64() * 1e3;
-    }
-
-    /// The stability line and the four frequency plots.
-    fn frequency_column_ui(&mut self, ui: &mut egui::Ui) -> FreqAction {
-        let t_freq = Instant::now();
-        let last_stable = self.last_stable.filter(|g| *g != self.params.controller);
-        let reference = self.ab.curves(&self.params);
-        let action = frequency::frequency_ui(
-            ui,
-            self.analytic.curves(),
-            &mut self.dwell,
-            &self.params,
-            FreqView {
-                phase_unwrapped: &mut self.settings.phase_unwrapped,
-                hidden: &mut self.hidden_curves,
-                last_stable,
-                reference,
-                watch: self.engine.watch,
-            },
-        );
-        self.frame_stats.freq_ms = t_freq.elapsed().as_secs_f64() * 1e3;
-        action
-    }
-
-    /// The centre: the engine banner, the scopes and the frequency plots.
-    fn centre_ui(&mut self, ui: &mut egui::Ui, unstable: bool) {
-        if let Some(err) = self.engine.error.clone() {
-            egui::Frame::new()
-                .fill(Color32::from_rgb(150, 20, 20))
-                .inner_margin(6.0)
-                .corner_radius(4.0)
-                .show(ui, |ui| {
-                    ui.horizontal_wrapped(|ui| {
-                        ui.label(
-                            RichText::new(format!(
-                                "Engine stopped: {}",
-                                super::format::shorten_numbers(&err)
-                            ))
-                            .color(Color32::WHITE)
-                            .strong(),
-                        );
-                        if ui.button("Reset").clicked() {
-                            self.reset();
-                        }
-                        if unstable
-                            && self.last_stable.is_some()
-                            && ui
-                                .button("Reset to last stable gains")
-                                .on_hover_text(
-                                    "The current gains make the loop unstable: Reset alone \
-                                         would diverge again",
-                                )
-                                .clicked()
-                        {
-                            self.reset_to_last_stable_gains();
-                        }
-                    });
-                });
-        }
-        let mut action = FreqAction::None;
-        // Side by side when the centre is wide enough; stacked (scopes, then the
-        // frequency plots, each a screen high at most) on a small window or with a
-        // large UI scale, where two columns would squeeze both unreadable.
-        if ui.available_width() >= TWO_COLUMNS_MIN_W {
-            ui.columns(2, |cols| {
-                let [left, right] = cols else { return };
-                self.scopes_column_ui(left);
-                action = self.frequency_column_ui(right);
-            });
-        } else {
-            let w = ui.available_width();
-            let h = ui.available_height();
-            ui.allocate_ui(egui::vec2(w, h.max(STACKED_SCOPES_MIN_H)), |ui| {
-                self.scopes_column_ui(ui)
-            });
-            ui.separator();
-            ui.allocate_ui(egui::vec2(w, h.max(STACKED_FREQ_MIN_H)), |ui| {
-                action = self.frequency_column_ui(ui);
-            });
-        }
-        if action == FreqAction::ResetToStableGains {
-            self.reset_to_last_stable_gains();
         }
     }
 
@@ -595,23 +446,17 @@ impl SeatTwinApp {
             self.apply_params();
         }
         // Same frame as the slider: the analytic curves follow the edited parameters.
-        self.analytic.update(&self.params);
-        let unstable = self.analytic.curves().unstable()
-            || self
-                .engine
-                .watch
-                .is_some_and(|f| !matches!(f, Finding::NegativePressure { .. }));
         // "Last stable" means last *committed*: gains a drag only passes through (the
         // pointer still down, or a widget still dragged) are not remembered.
         let editing = ctx.dragged_id().is_some() || ui.input(|i| i.pointer.any_down());
-        if !unstable && !editing {
-            self.last_stable = Some(self.params.controller);
-        }
+        let followed = self.centre.follow(
+            &self.params,
+            self.engine.watch,
+            editing,
+            self.settings.dwell_auto,
+        );
+        let unstable = followed.unstable;
         self.teach.unstable = unstable;
-        // No sine dwell of an unstable loop: it would only diverge.
-        let dwell_busy = self
-            .dwell
-            .poll(&self.params, self.settings.dwell_auto && !unstable);
 
         egui::Panel::right("side")
             .resizable(true)
@@ -620,13 +465,32 @@ impl SeatTwinApp {
                 egui::ScrollArea::vertical().show(ui, |ui| self.side_ui(ui));
             });
 
+        let mut centre_actions = Vec::new();
         egui::CentralPanel::default().show(ui, |ui| {
             // On a small window or with large text the plots keep a readable height and the
             // centre scrolls, instead of squeezing or cutting the last scope.
             egui::ScrollArea::vertical()
                 .auto_shrink(false)
-                .show(ui, |ui| self.centre_ui(ui, unstable));
+                .show(ui, |ui| {
+                    let input = CentreInput {
+                        params: &self.params,
+                        traces: &self.traces,
+                        ab: &mut self.ab,
+                        settings: &mut self.settings,
+                        running: self.engine.want_running,
+                        engine_error: self.engine.error.as_deref(),
+                        watch: self.engine.watch,
+                        unstable,
+                    };
+                    centre_actions = self.centre.ui(ui, input);
+                });
         });
+        for action in centre_actions {
+            match action {
+                CentreAction::Reset => self.reset(),
+                CentreAction::ResetToStableGains => self.reset_to_last_stable_gains(),
+            }
+        }
 
         if self.measured.open {
             let action = self.measured.window_ui(&ctx, &self.params, below_toolbar);
@@ -647,7 +511,7 @@ impl SeatTwinApp {
                 _ => self.notice = None,
             }
         }
-        if dwell_busy || self.writer.busy() > 0 || self.measured.busy() {
+        if followed.dwell_busy || self.writer.busy() > 0 || self.measured.busy() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
         self.frame_stats.record(t0.elapsed().as_secs_f64() * 1e3);

@@ -8,6 +8,7 @@
 //!
 //! * [`app::SeatTwinApp`] — state and layout; `SeatTwinApp::ui` is the whole per-frame work
 //!   and runs headless under `egui_kittest`.
+//! * [`centre`] — the engine banner, the scopes and the frequency plots, as one view.
 //! * [`traces`] — bounded sliding windows of the engine's batches (plots borrow them).
 //! * [`frequency`] — analytic responses, margins, the background dwell job.
 //! * [`measured`] — measured records: replay overlay, residual diagnosis, calibration in
@@ -21,6 +22,7 @@
 
 pub mod ab;
 pub mod app;
+pub mod centre;
 pub mod controls;
 pub mod files;
 pub mod format;

@@ -50,3 +50,6 @@ pub fn style_of(kind: CurveKind) -> (f32, LineStyle) {
         CurveKind::Reference => (1.8, LineStyle::dashed_loose()),
     }
 }
+
+/// Ground of the banner of a stopped engine (white text on it).
+pub const ENGINE_STOPPED_FILL: Color32 = Color32::from_rgb(150, 20, 20);

@@ -30,7 +30,12 @@ impl SeatTwinApp {
 
     /// The analytic frequency curves shown.
     pub fn curves(&self) -> &Curves {
-        self.analytic.curves()
+        self.centre.curves()
+    }
+
+    /// The simulated (sine dwell) frequency points of the twin.
+    pub fn dwell(&self) -> &Dwell {
+        self.centre.dwell()
     }
 
     /// The live traces.
@@ -70,17 +75,17 @@ impl SeatTwinApp {
 
     /// Curves switched off in the legends (`plot/name`).
     pub fn hidden_curves(&self) -> &BTreeSet<String> {
-        &self.hidden_curves
+        self.centre.hidden_curves()
     }
 
     /// The last gains with which both loops were stable.
     pub fn last_stable_gains(&self) -> Option<ControllerParams> {
-        self.last_stable
+        self.centre.last_stable()
     }
 
     /// The scopes' data areas drawn last frame, top to bottom.
     pub fn scope_frames(&self) -> &[egui::Rect] {
-        &self.scope_frames
+        self.centre.scope_frames()
     }
 
     /// The typed-path prompt shown when no file dialog is available: purpose and text.

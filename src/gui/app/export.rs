@@ -96,12 +96,12 @@ impl SeatTwinApp {
     /// and no curve the legend has hidden. An unstable loop says so in the title.
     fn frequency_figure(&self) -> Figure {
         use crate::gui::frequency::{dwell_shown, freq_panels, shown_phase};
-        let c = self.analytic.curves();
+        let c = self.centre.curves();
         let unwrapped = self.settings.phase_unwrapped;
         let unstable = c.unstable();
         // Dark markers on the figure's white ground (the view's are the theme's strongest
         // text colour).
-        let dwell_c = dwell_shown(c, &self.dwell, &self.params)
+        let dwell_c = dwell_shown(c, self.centre.dwell(), &self.params)
             .then_some(egui::Color32::from_rgb(30, 30, 30));
         let rgb = |c: egui::Color32| Rgb(c.r(), c.g(), c.b());
         // A curve as the view draws it: a phase wrapped into segments joined by a break.
@@ -124,8 +124,8 @@ impl SeatTwinApp {
             }
             xy
         };
-        let panels = freq_panels(c, &self.dwell, self.ab.drawn_curves(), dwell_c).map(|fp| {
-            let shown = |name: &str| !crate::gui::plotkit::hidden(&self.hidden_curves, fp.id, name);
+        let panels = freq_panels(c, self.centre.dwell(), self.ab.drawn_curves(), dwell_c).map(|fp| {
+            let shown = |name: &str| !crate::gui::plotkit::hidden(self.centre.hidden_curves(), fp.id, name);
             let title = match fp.id {
                 "t_mag" => "Transmissibility",
                 "bode_mag" => "Valve/actuator (du/dt)/V_in",

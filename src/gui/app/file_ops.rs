@@ -491,7 +491,7 @@ impl SeatTwinApp {
                 reference: self.ab.reference(),
             },
             view: SessionView {
-                hidden_curves: self.hidden_curves.clone(),
+                hidden_curves: self.centre.hidden_curves().clone(),
                 phase_unwrapped: self.settings.phase_unwrapped,
                 scope_window_s: self.settings.scope_window_s,
                 show_schematic: self.settings.show_schematic,
@@ -544,7 +544,7 @@ impl SeatTwinApp {
         self.ab.set_reference(s.ab.reference);
         self.ab.set_on(s.ab.on);
         let v = s.view;
-        self.hidden_curves = v.hidden_curves;
+        self.centre.set_hidden_curves(v.hidden_curves);
         self.settings.phase_unwrapped = v.phase_unwrapped;
         self.settings.scope_window_s = v.scope_window_s;
         self.settings.show_schematic = v.show_schematic;

@@ -354,13 +354,13 @@ impl SeatTwinApp {
                         "UI build {:.2} ms (max {:.2})\n  scopes {:.2} ms, freq. plots {:.2} ms\nframe CPU {}\n{:.0} frames/s\nfreq. curves {:.2} ms",
                         s.mean_ui_ms(),
                         s.max_ui_ms(),
-                        s.scopes_ms,
-                        s.freq_ms,
+                        self.centre.scopes_ms,
+                        self.centre.freq_ms,
                         s.cpu_ms
                             .map(|c| format!("{c:.2} ms"))
                             .unwrap_or_else(|| "n/a".into()),
                         s.fps(),
-                        self.analytic.curves().compute_ms,
+                        self.centre.curves().compute_ms,
                     ));
                 });
             });

@@ -38,10 +38,6 @@ pub struct FrameStats {
     frame_at: VecDeque<Instant>,
     /// Whole-frame CPU time reported by eframe (UI + tessellation) [ms].
     pub cpu_ms: Option<f64>,
-    /// Time of the scopes in the last frame [ms].
-    pub scopes_ms: f64,
-    /// Time of the frequency plots in the last frame [ms].
-    pub freq_ms: f64,
 }
 
 impl FrameStats {

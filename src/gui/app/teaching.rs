@@ -150,15 +150,15 @@ impl SeatTwinApp {
     /// `total` frequencies, `points` shown, `cancelled`) and Tune (`running`, `done`, `total`
     /// evaluations, `result`: whether one is there, `message`: cancelled or failed).
     pub fn jobs_json(&self) -> String {
-        let dwell = self.dwell.progress();
+        let dwell = self.centre.dwell().progress();
         let tune = self.tune.last_progress();
         serde_json::json!({
             "dwell": {
                 "running": dwell.is_some(),
                 "done": dwell.map_or(0, |p| p.0),
                 "total": dwell.map_or(0, |p| p.1),
-                "points": self.dwell.mag.len(),
-                "cancelled": self.dwell.cancelled,
+                "points": self.centre.dwell().mag.len(),
+                "cancelled": self.centre.dwell().cancelled,
             },
             "tune": {
                 "running": self.tune.is_running(),
@@ -178,12 +178,12 @@ impl SeatTwinApp {
 
     /// Starts the sine dwell of the twin now, as the Recompute button does.
     pub fn start_dwell(&mut self) {
-        self.dwell.start(&self.params);
+        self.centre.dwell_mut().start(&self.params);
     }
 
     /// Cancels the sine dwell, as its Cancel button does.
     pub fn cancel_dwell(&mut self) {
-        self.dwell.cancel();
+        self.centre.dwell_mut().cancel();
     }
 
     /// Opens the file dialog for `purpose`, as the File menu does (the web page's API: the
