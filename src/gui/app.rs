@@ -19,7 +19,8 @@ pub use teaching::{PRESENTATION_SCALE, Teaching};
 
 use super::ab::{self, AbAction, AbView};
 use super::controls::{self, ExcitationAction, ExcitationKind, LoadedRecord};
-use super::files::{self, CsvTable, Dialogs, Purpose, Writer};
+use super::files::{self, CsvTable, Purpose};
+use super::files_view::{FileAction, FilesView, Pending};
 use super::centre::{CentreAction, CentreInput, CentreView};
 use super::frequency::{Curves, Dwell};
 use super::job::Waker;
@@ -41,15 +42,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 use web_time::Instant;
-
-/// An action waiting for "discard unsaved changes?".
-#[derive(Debug, Clone, PartialEq)]
-enum Pending {
-    OpenDialog,
-    LoadFile(PathBuf),
-    OpenSessionDialog,
-    Quit,
-}
 
 /// Wall time the engine may step in one frame on the web, where it has no thread of its own
 /// (at 60 frames a second this leaves about 4 ms for the UI).
@@ -80,17 +72,13 @@ pub struct SeatTwinApp {
     engine: EngineLink,
     traces: Traces,
     centre: CentreView,
-    dialogs: Dialogs,
-    writer: Writer,
+    files: FilesView,
     notice: Option<Notice>,
-    pending: Option<Pending>,
-    quit_confirmed: bool,
     param_error: Option<String>,
     frame_stats: FrameStats,
     title: String,
     measured: MeasuredData,
     field_errors: controls::FieldErrors,
-    path_prompt: Option<(Purpose, String)>,
     ab: AbView,
     tune: super::tune::TunePanel,
     window_checked: bool,
@@ -142,18 +130,14 @@ impl SeatTwinApp {
             engine,
             traces: Traces::new(),
             centre: CentreView::new(waker),
-            dialogs: Dialogs::default(),
-            writer: Writer::default(),
+            files: FilesView::default(),
             notice,
-            pending: None,
-            quit_confirmed: false,
             param_error: None,
             frame_stats: FrameStats::default(),
             title: String::new(),
             measured,
             settings,
             field_errors: controls::FieldErrors::new(),
-            path_prompt: None,
             ab: AbView::default(),
             tune: super::tune::TunePanel::default(),
             window_checked: false,
@@ -416,19 +400,21 @@ impl SeatTwinApp {
             self.toggle_running();
         }
         if ui.input(|i| i.viewport().close_requested())
-            && self.is_modified()
-            && !self.quit_confirmed
+            && self.files.hold_close(self.is_modified())
         {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
-            self.pending = Some(Pending::Quit);
         }
 
         egui::Panel::top("menu").show(ui, |ui| {
             egui::MenuBar::new().ui(ui, |ui| self.menu_ui(ui, &ctx));
         });
         egui::Panel::top("toolbar").show(ui, |ui| self.toolbar_ui(ui));
-        if self.path_prompt.is_some() {
-            egui::Panel::top("path_prompt").show(ui, |ui| self.path_prompt_ui(ui, &ctx));
+        if self.files.path_prompt().is_some() {
+            let mut typed = None;
+            egui::Panel::top("path_prompt").show(ui, |ui| typed = self.files.path_prompt_ui(ui));
+            if let Some(action) = typed {
+                self.apply_file_action(action, &ctx);
+            }
         }
         // Windows stay below the menu, the toolbar and the path prompt.
         let below_toolbar = ui.available_rect_before_wrap();
@@ -496,7 +482,9 @@ impl SeatTwinApp {
             let action = self.measured.window_ui(&ctx, &self.params, below_toolbar);
             self.handle_measured(action, &ctx);
         }
-        self.confirm_ui(&ctx);
+        if let Some(action) = self.files.confirm_ui(&ctx, &self.preset.name) {
+            self.apply_file_action(action, &ctx);
+        }
         self.teaching_ui(&ctx);
         if self.settings.show_debug {
             self.debug_overlay(&ctx);
@@ -511,7 +499,7 @@ impl SeatTwinApp {
                 _ => self.notice = None,
             }
         }
-        if followed.dwell_busy || self.writer.busy() > 0 || self.measured.busy() {
+        if followed.dwell_busy || self.files.busy() || self.measured.busy() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
         self.frame_stats.record(t0.elapsed().as_secs_f64() * 1e3);

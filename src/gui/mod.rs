@@ -17,7 +17,8 @@
 //!   the presets compiled in; `web` — the browser entry (wasm32 only).
 //! * [`settings`] — what persists between runs; [`session`] — the session file.
 //! * [`scopes`], [`schematic`], [`controls`] — widgets; [`files`] — dialogs and exports
-//!   off the UI thread; [`units`] — display units; [`format`] — numbers for people;
+//!   off the UI thread; [`files_view`] — the path prompt and the discard question;
+//!   [`units`] — display units; [`format`] — numbers for people;
 //!   [`plotkit`] — y axes, clickable legends, wrapped phase.
 
 pub mod ab;
@@ -25,6 +26,7 @@ pub mod app;
 pub mod centre;
 pub mod controls;
 pub mod files;
+pub mod files_view;
 pub mod format;
 pub mod frequency;
 pub mod gain;

@@ -60,7 +60,7 @@ impl SeatTwinApp {
 
     /// Whether the "discard unsaved changes?" prompt is showing.
     pub fn is_confirm_open(&self) -> bool {
-        self.pending.is_some()
+        self.files.is_confirm_open()
     }
 
     /// Frame timing.
@@ -90,7 +90,7 @@ impl SeatTwinApp {
 
     /// The typed-path prompt shown when no file dialog is available: purpose and text.
     pub fn path_prompt(&self) -> Option<&(Purpose, String)> {
-        self.path_prompt.as_ref()
+        self.files.path_prompt()
     }
 
     /// The shipped presets `(name, file)` in the Presets menu.

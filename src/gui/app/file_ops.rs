@@ -115,9 +115,7 @@ impl SeatTwinApp {
 
     /// Runs `action` now, or asks first if there are unsaved changes.
     pub(super) fn guarded(&mut self, action: Pending, ctx: &egui::Context) {
-        if self.is_modified() {
-            self.pending = Some(action);
-        } else {
+        if let Some(action) = self.files.guard(action, self.is_modified()) {
             self.run_pending(action, ctx);
         }
     }
@@ -128,7 +126,7 @@ impl SeatTwinApp {
             Pending::LoadFile(p) => self.open_preset_file(&p),
             Pending::OpenSessionDialog => self.request_file(Purpose::OpenSession, "", ctx),
             Pending::Quit => {
-                self.quit_confirmed = true;
+                self.files.confirm_quit();
                 ctx.send_viewport_cmd(egui::ViewportCommand::Close);
             }
         }
@@ -168,7 +166,7 @@ impl SeatTwinApp {
             return;
         }
         let dir = self.file_dir();
-        self.dialogs.request(purpose, name, &dir, ctx);
+        self.files.dialogs.request(purpose, name, &dir, ctx);
     }
 
     /// The full path a typed-path prompt suggests for `purpose` (empty for opening).
@@ -337,85 +335,35 @@ impl SeatTwinApp {
         }
     }
 
+    /// Carries out what the dialogs, the writes and the typed-path prompt finished.
     pub(super) fn poll_files(&mut self, ctx: &egui::Context) {
-        while let Some((purpose, picked)) = self.dialogs.poll_picked() {
-            match picked {
-                Some(p) => self.use_picked(purpose, p),
-                None => self.info("no file chosen"),
-            }
+        for action in self.files.poll() {
+            self.apply_file_action(action, ctx);
         }
-        while let Some((purpose, paths)) = self.dialogs.poll() {
-            if cfg!(target_arch = "wasm32") {
-                // No file system in a browser: a typed path cannot help.
-                self.error(files::NOT_ON_THE_WEB);
-                continue;
-            }
-            if paths.is_empty() {
+    }
+
+    /// Carries out one of the file view's actions.
+    pub(super) fn apply_file_action(&mut self, action: FileAction, ctx: &egui::Context) {
+        match action {
+            FileAction::Run(pending) => self.run_pending(pending, ctx),
+            FileAction::Use(purpose, paths) => self.use_paths(purpose, paths, ctx),
+            // Several files, folders and patterns (see files::expand_paths).
+            FileAction::LoadMeasuredTyped(text) => self.measured.load_typed(&text),
+            FileAction::Picked(purpose, picked) => self.use_picked(purpose, picked),
+            FileAction::NoFileChosen(purpose) => {
                 // Cancelled, or no dialog on this desktop: offer a typed path instead.
-                self.path_prompt = Some((purpose, self.suggested_path(purpose)));
+                self.files
+                    .prompt_path(purpose, self.suggested_path(purpose));
                 self.info("no file chosen (dialog cancelled, or no file dialog on this desktop): type a path below");
-                continue;
             }
-            self.use_paths(purpose, paths, ctx);
-        }
-        while let Some(r) = self.writer.poll() {
-            match r {
-                Ok(m) => self.info(m),
-                Err(e) => self.error(format!("export failed: {e}")),
-            }
+            FileAction::Info(m) => self.info(m),
+            FileAction::Error(m) => self.error(m),
         }
     }
 
     /// Opens the typed-path prompt for `purpose` (the fallback when no file dialog shows).
     pub fn prompt_path(&mut self, purpose: Purpose, suggested: &str) {
-        self.path_prompt = Some((purpose, suggested.to_string()));
-    }
-
-    pub(super) fn path_prompt_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
-        let Some((purpose, mut text)) = self.path_prompt.clone() else {
-            return;
-        };
-        let mut done: Option<bool> = None;
-        ui.horizontal(|ui| {
-            let what = if purpose.picks_folder() {
-                "folder"
-            } else {
-                "file"
-            };
-            ui.label(format!("{} — {what} path:", purpose.title()));
-            let r = ui.add(
-                egui::TextEdit::singleline(&mut text)
-                    .id(egui::Id::unique("path_prompt"))
-                    .desired_width(360.0)
-                    .hint_text(if purpose == Purpose::LoadMeasured {
-                        "files separated by ;  a folder  or campaign/*.csv"
-                    } else {
-                        "path/to/file"
-                    }),
-            );
-            let enter = r.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
-            if ui.button("OK").clicked() || enter {
-                done = Some(true);
-            }
-            if ui.button("Cancel").clicked() {
-                done = Some(false);
-            }
-        });
-        match done {
-            Some(true) if purpose == Purpose::LoadMeasured => {
-                // Several files, folders and patterns (see files::expand_paths).
-                self.path_prompt = None;
-                self.measured.load_typed(&text);
-            }
-            Some(true) if !text.trim().is_empty() => {
-                self.path_prompt = None;
-                let path = PathBuf::from(text.trim());
-                self.use_paths(purpose, vec![path], ctx);
-            }
-            Some(true) => self.error("type a file path first"),
-            Some(false) => self.path_prompt = None,
-            None => self.path_prompt = Some((purpose, text)),
-        }
+        self.files.prompt_path(purpose, suggested.to_string());
     }
 
     /// Uses files chosen in a dialog or typed for `purpose` (the first, or all of them for
@@ -450,25 +398,25 @@ impl SeatTwinApp {
                     if table.rows.is_empty() {
                         self.error("nothing to export yet: run the simulation first");
                     } else {
-                        self.writer.write_csv(ctx, path, table);
+                        self.files.writer.write_csv(ctx, path, table);
                     }
                 }
                 Purpose::ExportReport => match self.measured.report() {
-                    Some(r) => self.writer.write_report(ctx, path, r.clone()),
+                    Some(r) => self.files.writer.write_report(ctx, path, r.clone()),
                     None => self.error("no calibration report yet: calibrate first"),
                 },
                 Purpose::ExportFmu(placement) => {
                     let preset = self.preset_now();
-                    self.writer.write_fmu(ctx, path, preset, placement);
+                    self.files.writer.write_fmu(ctx, path, preset, placement);
                 }
                 Purpose::ExportController => {
                     let preset = self.preset_now();
-                    self.writer.write_controller(ctx, path, preset);
+                    self.files.writer.write_controller(ctx, path, preset);
                 }
                 Purpose::ExportPng => {
                     let stem = path.with_extension("");
                     let figs = self.plot_figures();
-                    self.writer.write_figures(ctx, stem, figs);
+                    self.files.writer.write_figures(ctx, stem, figs);
                 }
             }
         }

@@ -1,5 +1,5 @@
 //! The app's panels: menu, toolbar, controls (parameters, Tune, A/B, excitation), side
-//! (schematic, metrics), the discard prompt and the debug overlay.
+//! (schematic, metrics) and the debug overlay.
 
 use super::*;
 
@@ -246,7 +246,7 @@ impl SeatTwinApp {
             ExcitationAction::LoadRecord => self.request_file(Purpose::LoadRecord, "", ctx),
             ExcitationAction::LoadRecordPath(p) => self.load_record_file(&p),
         }
-        if let Some(p) = self.dialogs.open() {
+        if let Some(p) = self.files.dialogs.open() {
             ui.weak(format!("file dialog open ({p:?})…"));
         }
         changed
@@ -307,38 +307,6 @@ impl SeatTwinApp {
                 r.twin.p1 * BAR_PER_PA,
                 r.twin.p2 * BAR_PER_PA
             ));
-        }
-    }
-
-    pub(super) fn confirm_ui(&mut self, ctx: &egui::Context) {
-        let Some(action) = self.pending.clone() else {
-            return;
-        };
-        let mut decision: Option<bool> = None;
-        egui::Modal::new(egui::Id::unique("discard")).show(ctx, |ui| {
-            ui.set_width(360.0);
-            ui.heading("Unsaved changes");
-            ui.label(format!(
-                "The parameters differ from the preset “{}”. Discard the changes?",
-                self.preset.name
-            ));
-            ui.add_space(8.0);
-            ui.horizontal(|ui| {
-                if ui.button("Discard changes").clicked() {
-                    decision = Some(true);
-                }
-                if ui.button("Cancel").clicked() {
-                    decision = Some(false);
-                }
-            });
-        });
-        match decision {
-            Some(true) => {
-                self.pending = None;
-                self.run_pending(action, ctx);
-            }
-            Some(false) => self.pending = None,
-            None => {}
         }
     }
 
