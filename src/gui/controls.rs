@@ -332,7 +332,7 @@ pub fn params_ui(ui: &mut egui::Ui, p: &mut Params, errors: &mut FieldErrors) ->
 /// The refusal message of control `label`, if any, next to it.
 fn show_error(ui: &mut egui::Ui, errors: &FieldErrors, label: &str) {
     if let Some(e) = errors.get(label) {
-        ui.colored_label(egui::Color32::from_rgb(220, 50, 40), e);
+        ui.colored_label(super::style::ERROR_TEXT, e);
     }
 }
 

@@ -15,6 +15,7 @@ pub use dwell::Dwell;
 pub use stability::{margin_text, stability_ui};
 
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};
+use super::style::{CurveKind, frequency_style_of};
 use super::units::{db, deg};
 use crate::analysis::dwell::{self as sine_dwell, DwellOptions};
 use crate::analysis::frequency_response::{self as fr, Crossing, LinearisedModel, OpenLoop};
@@ -322,7 +323,7 @@ fn dwell_status_ui(ui: &mut egui::Ui, dwell: &mut Dwell, params: &Params, unstab
     }
     if !unstable && !dwell.failures.is_empty() {
         ui.colored_label(
-            Color32::from_rgb(200, 60, 40),
+            super::style::FAILED_TEXT,
             format!("{} point(s) diverged", dwell.failures.len()),
         )
         .on_hover_text(
@@ -351,7 +352,7 @@ fn crossing_marks(pu: &mut egui_plot::PlotUi<'_>, curves: &Curves, colors: [Colo
             pu.vline(
                 VLine::new("", x)
                     .color(colors[i].gamma_multiply(0.8))
-                    .style(LineStyle::dotted_dense()),
+                    .style(super::style::mark_style()),
             );
             // Linear to the right of its line, twin to the left.
             let (text, anchor) = if i == 0 {
@@ -408,7 +409,7 @@ pub fn frequency_ui(
         pu.hline(
             egui_plot::HLine::new("|T| = 1", 0.0)
                 .color(Color32::GRAY)
-                .style(LineStyle::dashed_dense()),
+                .style(super::style::guide_style()),
         );
         // The |T| = 1 crossings of an unstable loop mean nothing.
         if !unstable {
@@ -441,25 +442,19 @@ pub(crate) fn freq_panels<'a>(
     let unstable = curves.unstable();
     // Unstable: the active curves are faint (not a steady state).
     let active = |c: Color32| if unstable { c.gamma_multiply(0.45) } else { c };
+    let curve = |name: &'static str, color: Color32, kind: CurveKind| {
+        let (width, style) = frequency_style_of(kind);
+        CurveStyle {
+            name,
+            color,
+            width,
+            style,
+        }
+    };
     let t_styles = [
-        CurveStyle {
-            name: T_NAMES[0],
-            color: active(LINEAR),
-            width: 1.8,
-            style: LineStyle::dashed_dense(),
-        },
-        CurveStyle {
-            name: T_NAMES[1],
-            color: active(TWIN),
-            width: 2.4,
-            style: LineStyle::Solid,
-        },
-        CurveStyle {
-            name: T_NAMES[2],
-            color: PASSIVE,
-            width: 1.6,
-            style: LineStyle::dotted_dense(),
-        },
+        curve(T_NAMES[0], active(LINEAR), CurveKind::Linear),
+        curve(T_NAMES[1], active(TWIN), CurveKind::Twin),
+        curve(T_NAMES[2], PASSIVE, CurveKind::Passive),
     ];
     let (ref_w, ref_style) = super::style::style_of(super::style::CurveKind::Reference);
     let reference_style = CurveStyle {
@@ -493,18 +488,8 @@ pub(crate) fn freq_panels<'a>(
         phase: true,
     };
     let b_styles = [
-        CurveStyle {
-            name: BODE_NAMES[0],
-            color: TWIN,
-            width: 2.4,
-            style: LineStyle::Solid,
-        },
-        CurveStyle {
-            name: BODE_NAMES[1],
-            color: LINEAR,
-            width: 1.8,
-            style: LineStyle::dashed_dense(),
-        },
+        curve(BODE_NAMES[0], TWIN, CurveKind::Twin),
+        curve(BODE_NAMES[1], LINEAR, CurveKind::Linear),
     ];
     let bode_mag = FreqPanel {
         id: "bode_mag",

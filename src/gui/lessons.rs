@@ -295,7 +295,7 @@ impl LessonsPanel {
             ui.label(RichText::new(format!("Try: {}", l.task)).strong());
             ui.add_space(4.0);
             if self.done[n] {
-                ui.colored_label(egui::Color32::from_rgb(40, 160, 60), "Done — well spotted.");
+                ui.colored_label(super::style::OK_TEXT, "Done — well spotted.");
                 if n + 1 < LESSONS.len() && ui.button("Next step").clicked() {
                     action = LessonAction::Start(n + 1);
                 }

@@ -13,6 +13,7 @@ pub use replay::ReplayView;
 use replay::replay_view;
 
 use super::frequency::TWIN;
+use super::style::{CALIBRATED, MEASURED, RESIDUAL};
 use super::job::{Job, Waker};
 use super::units::MM_PER_M;
 use crate::dataset::{self, Record, RecordKind};
@@ -26,12 +27,6 @@ use egui_plot::{Line, Plot, PlotPoints};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-/// Measured channel colour.
-const MEASURED: Color32 = Color32::from_rgb(150, 150, 150);
-/// Calibrated twin colour.
-const CALIBRATED: Color32 = Color32::from_rgb(44, 160, 44);
-/// Residual colour.
-const RESIDUAL: Color32 = Color32::from_rgb(214, 39, 40);
 
 /// A record loaded in the window, with its metric preparation.
 pub struct LoadedMeasured {
@@ -410,7 +405,7 @@ impl MeasuredData {
             });
         }
         if let Some(e) = &self.last_error {
-            ui.colored_label(Color32::from_rgb(220, 50, 40), e);
+            ui.colored_label(super::style::ERROR_TEXT, e);
         }
         if let Some(i) = &self.last_info {
             ui.weak(i);
@@ -515,10 +510,10 @@ impl MeasuredData {
             RichText::new(format!("verdict: {}", r.verdict.name()))
                 .strong()
                 .color(match r.verdict {
-                    identify::Verdict::Explained => Color32::from_rgb(40, 160, 60),
-                    identify::Verdict::NoMissingEffect => Color32::from_rgb(40, 120, 200),
-                    identify::Verdict::Unexplained => Color32::from_rgb(220, 120, 20),
-                    identify::Verdict::InsufficientData => Color32::from_rgb(200, 60, 60),
+                    identify::Verdict::Explained => super::style::OK_TEXT,
+                    identify::Verdict::NoMissingEffect => super::style::NEUTRAL_TEXT,
+                    identify::Verdict::Unexplained => super::style::CAUTION_TEXT,
+                    identify::Verdict::InsufficientData => super::style::INSUFFICIENT_TEXT,
                 }),
         );
         for m in &r.missing {

@@ -5,6 +5,7 @@
 use super::units::{BAR_PER_PA, MM_PER_M};
 use crate::params::Params;
 use crate::simulation::Sample;
+use super::style::rig;
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
 
 /// Smallest half-width of the colour scale [Pa]: a still rig does not flicker through the
@@ -37,9 +38,7 @@ pub fn pressure_color(p_pa: f64, range: (f64, f64)) -> Color32 {
     } else {
         0.5
     };
-    let low = Color32::from_rgb(40, 90, 200);
-    let mid = Color32::from_rgb(235, 235, 235);
-    let high = Color32::from_rgb(210, 40, 30);
+    let (low, mid, high) = (rig::PRESSURE_LOW, rig::PRESSURE_MID, rig::PRESSURE_HIGH);
     if t < 0.5 {
         low.lerp_to_gamma(mid, t * 2.0)
     } else {
@@ -97,9 +96,9 @@ pub fn schematic_ui(
     let visuals = ui.visuals();
     let ink = visuals.text_color();
     let steel = if visuals.dark_mode {
-        Color32::from_gray(120)
+        rig::STEEL_DARK_THEME
     } else {
-        Color32::from_gray(150)
+        rig::STEEL_LIGHT_THEME
     };
     painter.rect_filled(rect, 4.0, visuals.extreme_bg_color);
 
@@ -177,14 +176,14 @@ pub fn schematic_ui(
         0.0,
         pressure_color(s.p1, range),
     );
-    painter.rect_filled(f.rect(-26.0, pl, 26.0, pu), 0.0, Color32::from_gray(60));
+    painter.rect_filled(f.rect(-26.0, pl, 26.0, pu), 0.0, rig::PISTON);
     // Double rod: up to the seat plate, down through the bottom cap.
     let seat0 = plat0 + cyl_h + 20.0 + u_mm;
-    painter.rect_filled(f.rect(-4.0, pu, 4.0, seat0), 0.0, Color32::from_gray(90));
+    painter.rect_filled(f.rect(-4.0, pu, 4.0, seat0), 0.0, rig::ROD);
     painter.rect_filled(
         f.rect(-4.0, (pl - half - 5.0).max(plat0 - 8.0), 4.0, pl),
         0.0,
-        Color32::from_gray(90),
+        rig::ROD,
     );
     let label = |pos: Pos2, text: String, align: Align2| {
         painter.text(pos, align, text, FontId::proportional(11.0), ink);
@@ -238,7 +237,7 @@ pub fn schematic_ui(
         painter.rect_stroke(
             f.rect(-34.0, plat0 - 2.0, 34.0, plat0 + cyl_h + 2.0),
             2.0,
-            Stroke::new(3.0, Color32::from_rgb(230, 30, 30)),
+            Stroke::new(3.0, rig::CONTACT),
             egui::StrokeKind::Outside,
         );
         label(
@@ -249,7 +248,7 @@ pub fn schematic_ui(
     }
 
     // Springs between platform and seat plate.
-    let spring_stroke = Stroke::new(2.0, Color32::from_rgb(90, 140, 90));
+    let spring_stroke = Stroke::new(2.0, rig::SPRING);
     for x in [-85.0, 85.0] {
         painter.add(spring(&f, x, plat0, seat0, spring_stroke));
     }
@@ -262,7 +261,7 @@ pub fn schematic_ui(
         thin,
         egui::StrokeKind::Inside,
     );
-    let seat_color = Color32::from_rgb(60, 60, 70);
+    let seat_color = rig::SEAT;
     painter.rect_filled(
         f.rect(-70.0, seat0 + 10.0, 70.0, seat0 + 35.0),
         6.0,
@@ -293,13 +292,13 @@ pub fn schematic_ui(
     painter.rect_filled(
         f.rect(sx - 30.0, v0 + 8.0, sx + 30.0, v1 - 8.0),
         1.0,
-        Color32::from_gray(70),
+        rig::VALVE_BODY,
     );
     for dx in [-22.0, 0.0, 22.0] {
         painter.rect_filled(
             f.rect(sx + dx - 5.0, v0 + 4.0, sx + dx + 5.0, v1 - 4.0),
             1.0,
-            Color32::from_gray(40),
+            rig::VALVE_SPOOL,
         );
     }
     // Two short lines above the valve body, right of the hose risers (which run at
@@ -355,7 +354,7 @@ mod tests {
     fn noise_stays_near_white() {
         let p = Params::paper();
         let range = color_range(Some((55e5 - 50.0, 55e5 + 50.0)), &p);
-        let mid = Color32::from_rgb(235, 235, 235);
+        let mid = rig::PRESSURE_MID;
         assert!(distance(pressure_color(55e5 + 50.0, range), mid) < 30);
     }
 }

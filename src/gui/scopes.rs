@@ -3,16 +3,17 @@
 //! the trace buffers; nothing is copied per frame.
 
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, y_axis, y_marks};
-use super::style::{CurveKind, LINEAR, P1, P2, PASSIVE, PLATFORM, REFERENCE, TWIN, style_of};
+use super::style::{
+    CHANGE_MARK, CONTACT_FILL, CurveKind, END_STOP, LINEAR, P1, P2, PASSIVE, PLATFORM, REFERENCE,
+    TWIN, guide_style, mark_style, style_of,
+};
 use super::traces::{Ch, MAX_WINDOW_S, Traces};
 use super::units::MM_PER_M;
 use crate::params::Params;
 use egui::Color32;
-use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoint, PlotPoints, PlotUi, Span, VLine};
+use egui_plot::{HLine, Line, Plot, PlotPoint, PlotPoints, PlotUi, Span, VLine};
 use std::collections::BTreeSet;
 
-/// End-stop contact highlight.
-const CONTACT: Color32 = Color32::from_rgba_premultiplied(200, 30, 30, 60);
 
 /// Number of scopes stacked in [`scopes_ui`].
 pub const N_SCOPES: usize = 6;
@@ -180,7 +181,7 @@ pub fn scopes_ui(
         if id == "scope_stroke" {
             items.push(LegendItem {
                 name: "end stops, contacts",
-                color: Color32::from_rgb(200, 30, 30),
+                color: END_STOP,
                 swatch: Swatch::Span,
             });
         }
@@ -196,8 +197,8 @@ pub fn scopes_ui(
             for &tc in traces.changes() {
                 pu.vline(
                     VLine::new("parameter change (metrics restart)", tc)
-                        .color(Color32::from_gray(140))
-                        .style(LineStyle::dotted_dense()),
+                        .color(CHANGE_MARK)
+                        .style(mark_style()),
                 );
             }
             for &(name, ch, color, m) in curves {
@@ -269,15 +270,15 @@ pub fn scopes_ui(
             for &(a, b) in contacts {
                 pu.span(
                     Span::new("end-stop contact", a..=b.max(a + 0.01))
-                        .fill(CONTACT)
-                        .border_color(Color32::from_rgb(200, 30, 30)),
+                        .fill(CONTACT_FILL)
+                        .border_color(END_STOP),
                 );
             }
             for y in [limit_mm, -limit_mm] {
                 pu.hline(
                     HLine::new(format!("end stop ±{limit_mm:.0} mm"), y)
-                        .color(Color32::from_rgb(200, 30, 30))
-                        .style(LineStyle::dashed_dense()),
+                        .color(END_STOP)
+                        .style(guide_style()),
                 );
             }
         },

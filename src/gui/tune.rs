@@ -8,7 +8,7 @@ use super::plotkit;
 use super::units::MM_PER_M;
 use crate::params::{ControllerParams, Params};
 use crate::tune::{self, Evaluation, TuneOptions, TuneResult};
-use egui::{Color32, RichText};
+use egui::RichText;
 use egui_plot::{AxisHints, MarkerShape, Plot, PlotPoint, Points};
 
 /// Short settings for interactive use (the CLI's default is 3 + 3 rides × 60 s, 120
@@ -188,7 +188,7 @@ impl TunePanel {
         });
         if let Some((m, error)) = &self.message {
             let color = if *error {
-                Color32::from_rgb(220, 50, 40)
+                super::style::ERROR_TEXT
             } else {
                 ui.visuals().weak_text_color()
             };
@@ -217,7 +217,7 @@ impl TunePanel {
         ));
         if let Some(first) = r.failures.first() {
             ui.colored_label(
-                Color32::from_rgb(200, 60, 40),
+                super::style::FAILED_TEXT,
                 format!(
                     "The claim fails where instability shows: {first}{}",
                     if r.failures.len() > 1 {
@@ -336,7 +336,7 @@ fn pareto_plot(ui: &mut egui::Ui, front: &[Evaluation], selected: Option<usize>)
             if let Some(p) = selected.and_then(|i| pts.get(i)) {
                 pu.points(
                     Points::new("chosen", vec![[p.x, p.y]])
-                        .color(Color32::from_rgb(220, 0, 150))
+                        .color(super::style::REFERENCE)
                         .shape(MarkerShape::Diamond)
                         .radius(7.0)
                         .filled(true),

@@ -102,7 +102,7 @@ impl SeatTwinApp {
         // Dark markers on the figure's white ground (the view's are the theme's strongest
         // text colour).
         let dwell_c = dwell_shown(c, self.centre.dwell(), &self.params)
-            .then_some(egui::Color32::from_rgb(30, 30, 30));
+            .then_some(crate::gui::style::FIGURE_DWELL);
         let rgb = |c: egui::Color32| Rgb(c.r(), c.g(), c.b());
         // A curve as the view draws it: a phase wrapped into segments joined by a break.
         let points = |pts: &[egui_plot::PlotPoint], phase: bool| -> (Vec<f64>, Vec<f64>) {

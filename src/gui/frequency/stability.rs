@@ -118,7 +118,7 @@ pub fn stability_ui(
             )
         };
         egui::Frame::new()
-            .fill(Color32::from_rgb(180, 30, 30))
+            .fill(crate::gui::style::UNSTABLE_FILL)
             .inner_margin(6.0)
             .corner_radius(4.0)
             .show(ui, |ui| {
@@ -153,7 +153,7 @@ pub fn stability_ui(
         );
         let rich = if thin(&twin.margins) || thin(&lin.margins) {
             RichText::new(format!("{text} Thin margin (< 6 dB or < 45°)."))
-                .color(Color32::from_rgb(230, 150, 20))
+                .color(crate::gui::style::WARNING_TEXT)
         } else {
             RichText::new(text)
         };
@@ -162,7 +162,7 @@ pub fn stability_ui(
     if let Some(f @ Finding::NegativePressure { .. }) = watch {
         ui.label(
             RichText::new(format!("Outside the model: {f}."))
-                .color(Color32::from_rgb(230, 150, 20)),
+                .color(crate::gui::style::WARNING_TEXT),
         );
     }
     action

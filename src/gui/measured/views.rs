@@ -168,9 +168,9 @@ impl MeasuredData {
                 }
             ))
             .color(if above {
-                Color32::from_rgb(220, 120, 20)
+                crate::gui::style::CAUTION_TEXT
             } else {
-                Color32::from_rgb(40, 160, 60)
+                crate::gui::style::OK_TEXT
             }),
         );
         ui.weak(format!(
