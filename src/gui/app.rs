@@ -13,12 +13,13 @@ mod state;
 mod teaching;
 
 pub use engine_link::{EngineLink, EngineView};
-pub use state::{FrameStats, Notice, PresetInfo};
+pub use state::{FrameStats, Notice, PresetInfo, WindowState, fitted_window};
 
 pub use teaching::{PRESENTATION_SCALE, Teaching};
 
-use super::ab::{self, AbAction, AbView};
+use super::ab::{self, AbView};
 use super::controls::{self, ExcitationAction, ExcitationKind, LoadedRecord};
+use super::controls_panel::{ControlsAction, ControlsInput, ControlsPanel};
 use super::files::{self, CsvTable, Purpose};
 use super::files_view::{FileAction, FilesView, Pending};
 use super::centre::{CentreAction, CentreInput, CentreView};
@@ -26,12 +27,11 @@ use super::frequency::{Curves, Dwell};
 use super::job::Waker;
 use super::measured::{MeasuredAction, MeasuredData};
 use super::schematic;
-use super::scopes;
 use super::session::{self, Session, SessionAb, SessionTune, SessionView};
 use super::settings::{Settings, Theme};
 use super::traces::{Ch, Traces};
+use super::tune::TunePanel;
 use super::units::{BAR_PER_PA, MM_PER_M};
-use crate::analysis::watch::Finding;
 use crate::engine::{Command, Speed};
 use crate::params::{ControllerParams, Params};
 use crate::plot::{Figure, Panel, Rgb, Scale, Series};
@@ -66,22 +66,33 @@ const NOTICE_LIFETIME: Duration = Duration::from_secs(8);
 pub struct SeatTwinApp {
     /// Persisted settings.
     pub settings: Settings,
+    /// The parameters being edited (SI); the engine runs them once validated.
     params: Params,
+    /// The preset they came from (the "modified" marker compares against it).
     preset: PresetInfo,
+    /// The shipped presets `(name, file)` of the Presets menu.
     shipped: Vec<(String, PathBuf)>,
+    /// The engine: commands out, events in, its last status and error.
     engine: EngineLink,
+    /// The live traces the engine sent (the scopes, metrics and exports read them).
     traces: Traces,
+    /// The centre: engine banner, scopes, frequency plots.
     centre: CentreView,
+    /// Dialogs, writes, the typed-path prompt and the discard question.
     files: FilesView,
+    /// The message line under the toolbar.
     notice: Option<Notice>,
-    param_error: Option<String>,
-    frame_stats: FrameStats,
-    title: String,
+    /// The window: title, fitted size, frame timings.
+    window: WindowState,
+    /// The measured-data window.
     measured: MeasuredData,
-    field_errors: controls::FieldErrors,
+    /// The left panel: parameters, Tune, A/B, excitation.
+    controls: ControlsPanel,
+    /// The A/B view (its controls are in the left panel, its curves in the centre).
     ab: AbView,
-    tune: super::tune::TunePanel,
-    window_checked: bool,
+    /// The Tune panel (in the left panel).
+    tune: TunePanel,
+    /// Lessons, presentation mode, setup links.
     teach: Teaching,
 }
 
@@ -132,15 +143,12 @@ impl SeatTwinApp {
             centre: CentreView::new(waker),
             files: FilesView::default(),
             notice,
-            param_error: None,
-            frame_stats: FrameStats::default(),
-            title: String::new(),
+            window: WindowState::default(),
             measured,
             settings,
-            field_errors: controls::FieldErrors::new(),
+            controls: ControlsPanel::default(),
             ab: AbView::default(),
-            tune: super::tune::TunePanel::default(),
-            window_checked: false,
+            tune: TunePanel::default(),
             teach: Teaching::default(),
         };
         if app.settings.excitation.kind == ExcitationKind::Record {
@@ -205,13 +213,13 @@ impl SeatTwinApp {
     fn apply_params(&mut self) {
         match self.params.validate() {
             Ok(()) => {
-                self.param_error = None;
+                self.controls.set_param_error(None);
                 let p = Box::new(self.params);
                 self.send(Command::SetParams(p));
                 self.traces.reset_metrics();
                 self.engine.watch = None;
             }
-            Err(e) => self.param_error = Some(format!("not applied: {e}")),
+            Err(e) => self.controls.set_param_error(Some(format!("not applied: {e}"))),
         }
     }
 
@@ -245,6 +253,11 @@ impl SeatTwinApp {
         self.engine.clock_text()
     }
 
+    /// Whether the parameters differ from the preset's.
+    pub fn is_modified(&self) -> bool {
+        self.params != self.preset.baseline
+    }
+
     /// TEST HOOK: makes the engine's next step panic (see `Command::InjectFault`). The UI
     /// never calls it.
     #[doc(hidden)]
@@ -257,21 +270,11 @@ impl SeatTwinApp {
     pub fn reset_to_last_stable_gains(&mut self) {
         if let Some(g) = self.centre.last_stable() {
             self.params.controller = g;
-            self.field_errors.remove("Kp");
-            self.field_errors.remove("Ki");
+            self.controls.field_errors_mut().remove("Kp");
+            self.controls.field_errors_mut().remove("Ki");
             self.apply_params();
         }
         self.reset();
-    }
-
-    /// The Tune panel.
-    pub fn tune_panel(&self) -> &super::tune::TunePanel {
-        &self.tune
-    }
-
-    /// The Tune panel, to drive it (tests, menus).
-    pub fn tune_panel_mut(&mut self) -> &mut super::tune::TunePanel {
-        &mut self.tune
     }
 
     /// Starts tuning the live controller with these options (the Tune button uses
@@ -288,7 +291,7 @@ impl SeatTwinApp {
         match p.validate() {
             Ok(()) => {
                 self.params = p;
-                self.field_errors.clear();
+                self.controls.field_errors_mut().clear();
                 self.apply_params();
                 self.info(format!(
                     "tuned gains applied: {}",
@@ -297,11 +300,6 @@ impl SeatTwinApp {
             }
             Err(e) => self.error(format!("tuned gains not applied: {e}")),
         }
-    }
-
-    /// The A/B state.
-    pub fn ab(&self) -> &AbView {
-        &self.ab
     }
 
     /// Switches A/B on or off (the engine restarts A and B together from rest).
@@ -325,16 +323,6 @@ impl SeatTwinApp {
     }
 
     // ----- per frame -----
-
-    /// The measured-data window's state.
-    pub fn measured(&self) -> &MeasuredData {
-        &self.measured
-    }
-
-    /// The measured-data window's state, to drive it (tests, dialogs).
-    pub fn measured_mut(&mut self) -> &mut MeasuredData {
-        &mut self.measured
-    }
 
     fn handle_measured(&mut self, action: MeasuredAction, ctx: &egui::Context) {
         match action {
@@ -419,17 +407,27 @@ impl SeatTwinApp {
         // Windows stay below the menu, the toolbar and the path prompt.
         let below_toolbar = ui.available_rect_before_wrap();
 
-        let mut params_changed = false;
+        let mut controls_actions = Vec::new();
+        let modified = self.is_modified();
         egui::Panel::left("controls")
             .resizable(true)
             .default_size(330.0)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    params_changed = self.controls_ui(ui, &ctx);
+                    let input = ControlsInput {
+                        params: &mut self.params,
+                        modified,
+                        tune: &mut self.tune,
+                        ab: &mut self.ab,
+                        excitation: &mut self.settings.excitation,
+                        waker: self.engine.waker(),
+                        dialog_open: self.files.dialogs.open(),
+                    };
+                    controls_actions = self.controls.ui(ui, input);
                 });
             });
-        if params_changed {
-            self.apply_params();
+        for action in controls_actions {
+            self.apply_controls_action(action, &ctx);
         }
         // Same frame as the slider: the analytic curves follow the edited parameters.
         // "Last stable" means last *committed*: gains a drag only passes through (the
@@ -502,46 +500,15 @@ impl SeatTwinApp {
         if followed.dwell_busy || self.files.busy() || self.measured.busy() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
-        self.frame_stats.record(t0.elapsed().as_secs_f64() * 1e3);
-    }
-}
-
-/// The window size to set at start for a `window` [points] on `monitor`, or `None` to keep
-/// it: a window that does not fit (with room for the desktop's panels and the title bar) is
-/// cut to 90 % of the monitor; one at most half the monitor both ways (remembered from a
-/// smaller screen) grows to 75 % of it.
-pub fn fitted_window(window: egui::Vec2, monitor: egui::Vec2) -> Option<egui::Vec2> {
-    let room = monitor * 0.95 - egui::vec2(0.0, 40.0);
-    if window.x > room.x || window.y > room.y {
-        Some(window.min(monitor * 0.9))
-    } else if window.x <= monitor.x * 0.5 && window.y <= monitor.y * 0.5 {
-        Some(monitor * 0.75)
-    } else {
-        None
+        self.window.stats.record(t0.elapsed().as_secs_f64() * 1e3);
     }
 }
 
 impl eframe::App for SeatTwinApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
-        self.frame_stats.cpu_ms = frame.info().cpu_usage.map(|c| f64::from(c) * 1e3);
-        if !self.window_checked {
-            // A window size remembered from a larger screen is cut to fit this one.
-            let (monitor, inner) =
-                ui.input(|i| (i.viewport().monitor_size, i.viewport().inner_rect));
-            if let (Some(m), Some(r)) = (monitor, inner) {
-                self.window_checked = true;
-                if let Some(size) = fitted_window(r.size(), m) {
-                    ui.ctx()
-                        .send_viewport_cmd(egui::ViewportCommand::InnerSize(size));
-                }
-            }
-        }
+        self.window.stats.cpu_ms = frame.info().cpu_usage.map(|c| f64::from(c) * 1e3);
         let title = self.window_title();
-        if title != self.title {
-            ui.ctx()
-                .send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
-            self.title = title;
-        }
+        self.window.follow(ui, title);
         SeatTwinApp::ui(self, ui);
     }
 

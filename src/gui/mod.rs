@@ -8,6 +8,7 @@
 //!
 //! * [`app::SeatTwinApp`] — state and layout; `SeatTwinApp::ui` is the whole per-frame work
 //!   and runs headless under `egui_kittest`.
+//! * [`controls_panel`] — the left panel (parameters, Tune, A/B, excitation), as one view.
 //! * [`centre`] — the engine banner, the scopes and the frequency plots, as one view.
 //! * [`traces`] — bounded sliding windows of the engine's batches (plots borrow them).
 //! * [`frequency`] — analytic responses, margins, the background dwell job.
@@ -25,6 +26,7 @@ pub mod ab;
 pub mod app;
 pub mod centre;
 pub mod controls;
+pub mod controls_panel;
 pub mod files;
 pub mod files_view;
 pub mod format;

@@ -20,6 +20,7 @@ pub enum Theme {
 }
 
 impl Theme {
+    /// The egui theme preference of this choice.
     pub fn preference(self) -> egui::ThemePreference {
         match self {
             Theme::System => egui::ThemePreference::System,

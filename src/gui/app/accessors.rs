@@ -1,4 +1,5 @@
-//! Read access to the app's state, for tests and the debug overlay.
+//! Read access to the app's state, for tests, the web page's API and the debug overlay:
+//! plain getters, no behaviour.
 
 use super::*;
 
@@ -48,11 +49,6 @@ impl SeatTwinApp {
         &self.preset
     }
 
-    /// Whether the parameters differ from the preset's.
-    pub fn is_modified(&self) -> bool {
-        self.params != self.preset.baseline
-    }
-
     /// The message line.
     pub fn notice(&self) -> Option<&Notice> {
         self.notice.as_ref()
@@ -65,12 +61,12 @@ impl SeatTwinApp {
 
     /// Frame timing.
     pub fn frame_stats(&self) -> &FrameStats {
-        &self.frame_stats
+        &self.window.stats
     }
 
     /// Refused parameter values, by control label (shown next to the control).
     pub fn field_errors(&self) -> &controls::FieldErrors {
-        &self.field_errors
+        self.controls.field_errors()
     }
 
     /// Curves switched off in the legends (`plot/name`).
@@ -96,5 +92,30 @@ impl SeatTwinApp {
     /// The shipped presets `(name, file)` in the Presets menu.
     pub fn shipped_presets(&self) -> &[(String, PathBuf)] {
         &self.shipped
+    }
+
+    /// The Tune panel.
+    pub fn tune_panel(&self) -> &crate::gui::tune::TunePanel {
+        &self.tune
+    }
+
+    /// The Tune panel, to drive it (tests, menus).
+    pub fn tune_panel_mut(&mut self) -> &mut crate::gui::tune::TunePanel {
+        &mut self.tune
+    }
+
+    /// The A/B state.
+    pub fn ab(&self) -> &AbView {
+        &self.ab
+    }
+
+    /// The measured-data window's state.
+    pub fn measured(&self) -> &MeasuredData {
+        &self.measured
+    }
+
+    /// The measured-data window's state, to drive it (tests, dialogs).
+    pub fn measured_mut(&mut self) -> &mut MeasuredData {
+        &mut self.measured
     }
 }

@@ -28,8 +28,7 @@ impl SeatTwinApp {
         };
         self.params = p.params;
         // Messages about the parameters that were there are about them, not the new preset.
-        self.field_errors.clear();
-        self.param_error = None;
+        self.controls.clear();
         self.preset = PresetInfo {
             name,
             description: p.meta.description,

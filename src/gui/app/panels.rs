@@ -1,4 +1,4 @@
-//! The app's panels: menu, toolbar, controls (parameters, Tune, A/B, excitation), side
+//! The app's panels: menu, toolbar, what the controls panel asks for, the side panel
 //! (schematic, metrics) and the debug overlay.
 
 use super::*;
@@ -159,9 +159,9 @@ impl SeatTwinApp {
             ui.separator();
             let v = &self.engine.view;
             let state = if self.engine.error.is_some() {
-                RichText::new("stopped (error)").color(Color32::from_rgb(220, 50, 40))
+                RichText::new("stopped (error)").color(crate::gui::style::ERROR_TEXT)
             } else if v.running {
-                RichText::new("running").color(Color32::from_rgb(40, 160, 60))
+                RichText::new("running").color(crate::gui::style::OK_TEXT)
             } else {
                 RichText::new("paused")
             };
@@ -180,7 +180,7 @@ impl SeatTwinApp {
             if let Some(n) = &self.notice {
                 ui.separator();
                 let color = if n.error {
-                    Color32::from_rgb(220, 50, 40)
+                    crate::gui::style::ERROR_TEXT
                 } else {
                     ui.visuals().weak_text_color()
                 };
@@ -189,67 +189,32 @@ impl SeatTwinApp {
         });
     }
 
-    pub(super) fn controls_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) -> bool {
-        ui.heading("Parameters");
-        let changed = controls::params_ui(ui, &mut self.params, &mut self.field_errors);
-        if let Some(e) = &self.param_error {
-            ui.colored_label(Color32::from_rgb(220, 50, 40), e);
-        }
-        let effects = crate::gui::format::active_effects(&self.params);
-        ui.label(RichText::new("Model effects").strong());
-        if effects.is_empty() {
-            ui.weak("none (the paper's model)");
-        } else {
-            for e in effects {
-                ui.label(format!("on: {e}"));
-            }
-        }
-        ui.horizontal(|ui| {
-            if ui
-                .add_enabled(self.is_modified(), egui::Button::new("Revert to preset"))
-                .clicked()
-            {
+    /// Carries out what the controls panel asked for.
+    pub(super) fn apply_controls_action(&mut self, action: ControlsAction, ctx: &egui::Context) {
+        match action {
+            ControlsAction::ParamsEdited => self.apply_params(),
+            ControlsAction::Revert => {
                 self.params = self.preset.baseline;
-                self.field_errors.clear();
+                self.controls.field_errors_mut().clear();
                 self.apply_params();
             }
-        });
-        egui::CollapsingHeader::new("Tune")
-            .default_open(false)
-            .show(ui, |ui| {
-                if let crate::gui::tune::TuneAction::Apply(c) =
-                    self.tune.ui(ui, &self.params, self.engine.waker())
-                {
-                    self.apply_tuned(c);
-                }
-            });
-        ui.separator();
-        ui.heading("A/B comparison");
-        if self.ab.controls_ui(ui, &self.params.controller) == AbAction::Send {
-            self.send_reference();
-        }
-        ui.separator();
-        ui.heading("Excitation");
-        match controls::excitation_ui(
-            ui,
-            &mut self.settings.excitation,
-            self.params.plant.body.mass_kg,
-        ) {
-            ExcitationAction::None => {}
-            ExcitationAction::Apply => {
+            ControlsAction::ApplyTuned(c) => self.apply_tuned(c),
+            ControlsAction::SendReference => self.send_reference(),
+            ControlsAction::Excitation(ExcitationAction::None) => {}
+            ControlsAction::Excitation(ExcitationAction::Apply) => {
                 if let Some(p) = self.settings.excitation.problem() {
                     self.error(format!("excitation not applied: {p}"));
                 } else {
                     self.apply_excitation();
                 }
             }
-            ExcitationAction::LoadRecord => self.request_file(Purpose::LoadRecord, "", ctx),
-            ExcitationAction::LoadRecordPath(p) => self.load_record_file(&p),
+            ControlsAction::Excitation(ExcitationAction::LoadRecord) => {
+                self.request_file(Purpose::LoadRecord, "", ctx)
+            }
+            ControlsAction::Excitation(ExcitationAction::LoadRecordPath(p)) => {
+                self.load_record_file(&p)
+            }
         }
-        if let Some(p) = self.files.dialogs.open() {
-            ui.weak(format!("file dialog open ({p:?})…"));
-        }
-        changed
     }
 
     pub(super) fn side_ui(&mut self, ui: &mut egui::Ui) {
@@ -317,7 +282,7 @@ impl SeatTwinApp {
             .interactable(false)
             .show(ctx, |ui| {
                 egui::Frame::popup(ui.style()).show(ui, |ui| {
-                    let s = &self.frame_stats;
+                    let s = &self.window.stats;
                     ui.monospace(format!(
                         "UI build {:.2} ms (max {:.2})\n  scopes {:.2} ms, freq. plots {:.2} ms\nframe CPU {}\n{:.0} frames/s\nfreq. curves {:.2} ms",
                         s.mean_ui_ms(),

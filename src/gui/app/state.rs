@@ -1,5 +1,5 @@
-//! The app's plain state types: the preset in use, the notice line and the frame
-//! timings.
+//! The app's plain state types: the preset in use, the notice line, the window and
+//! the frame timings.
 
 use crate::params::Params;
 use std::collections::VecDeque;
@@ -86,5 +86,53 @@ impl FrameStats {
             }
             _ => 0.0,
         }
+    }
+}
+
+/// The app's window: its title as last set, whether its size was checked against the
+/// monitor, and the frame timings of the debug overlay.
+#[derive(Debug, Clone, Default)]
+pub struct WindowState {
+    /// Per-frame timing.
+    pub stats: FrameStats,
+    title: String,
+    checked: bool,
+}
+
+impl WindowState {
+    /// Once, a window size remembered from a larger screen is cut to fit this one; the
+    /// title is set when it changed.
+    pub fn follow(&mut self, ui: &egui::Ui, title: String) {
+        if !self.checked {
+            let (monitor, inner) =
+                ui.input(|i| (i.viewport().monitor_size, i.viewport().inner_rect));
+            if let (Some(m), Some(r)) = (monitor, inner) {
+                self.checked = true;
+                if let Some(size) = fitted_window(r.size(), m) {
+                    ui.ctx()
+                        .send_viewport_cmd(egui::ViewportCommand::InnerSize(size));
+                }
+            }
+        }
+        if title != self.title {
+            ui.ctx()
+                .send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.title = title;
+        }
+    }
+}
+
+/// The window size to set at start for a `window` [points] on `monitor`, or `None` to keep
+/// it: a window that does not fit (with room for the desktop's panels and the title bar) is
+/// cut to 90 % of the monitor; one at most half the monitor both ways (remembered from a
+/// smaller screen) grows to 75 % of it.
+pub fn fitted_window(window: egui::Vec2, monitor: egui::Vec2) -> Option<egui::Vec2> {
+    let room = monitor * 0.95 - egui::vec2(0.0, 40.0);
+    if window.x > room.x || window.y > room.y {
+        Some(window.min(monitor * 0.9))
+    } else if window.x <= monitor.x * 0.5 && window.y <= monitor.y * 0.5 {
+        Some(monitor * 0.75)
+    } else {
+        None
     }
 }

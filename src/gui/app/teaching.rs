@@ -138,7 +138,7 @@ impl SeatTwinApp {
     /// drag takes ([`controls::edit_slider`]), then applies it to the engine.
     pub fn set_slider(&mut self, label: &str, shown: f64) -> Result<(), String> {
         let mut p = self.params;
-        controls::edit_slider(label, shown, &mut p, &mut self.field_errors)?;
+        controls::edit_slider(label, shown, &mut p, self.controls.field_errors_mut())?;
         if p != self.params {
             self.params = p;
             self.apply_params();
@@ -173,7 +173,7 @@ impl SeatTwinApp {
 
     /// Forgets the frame times so far (the web page's API: a measurement from now on).
     pub fn reset_frame_stats(&mut self) {
-        self.frame_stats.clear();
+        self.window.stats.clear();
     }
 
     /// Starts the sine dwell of the twin now, as the Recompute button does.
