@@ -18,11 +18,11 @@ pub use state::{FrameStats, Notice, PresetInfo, WindowState, fitted_window};
 pub use teaching::{PRESENTATION_SCALE, Teaching};
 
 use super::ab::{self, AbView};
+use super::centre::{CentreAction, CentreInput, CentreView};
 use super::controls::{self, ExcitationAction, ExcitationKind, LoadedRecord};
 use super::controls_panel::{ControlsAction, ControlsInput, ControlsPanel};
 use super::files::{self, CsvTable, Purpose};
 use super::files_view::{FileAction, FilesView, Pending};
-use super::centre::{CentreAction, CentreInput, CentreView};
 use super::frequency::{Curves, Dwell};
 use super::job::Waker;
 use super::measured::{MeasuredAction, MeasuredData};
@@ -219,7 +219,9 @@ impl SeatTwinApp {
                 self.traces.reset_metrics();
                 self.engine.watch = None;
             }
-            Err(e) => self.controls.set_param_error(Some(format!("not applied: {e}"))),
+            Err(e) => self
+                .controls
+                .set_param_error(Some(format!("not applied: {e}"))),
         }
     }
 
@@ -280,7 +282,8 @@ impl SeatTwinApp {
     /// Starts tuning the live controller with these options (the Tune button uses
     /// [`super::tune::interactive_options`]).
     pub fn start_tune(&mut self, opts: crate::tune::TuneOptions) {
-        self.tune.start(&self.params, opts, self.engine.waker().clone());
+        self.tune
+            .start(&self.params, opts, self.engine.waker().clone());
     }
 
     /// Sets the controller of a chosen Pareto point on the live twin (the preset is then
@@ -387,8 +390,7 @@ impl SeatTwinApp {
         if !ctx.egui_wants_keyboard_input() && ui.input(|i| i.key_pressed(Key::Space)) {
             self.toggle_running();
         }
-        if ui.input(|i| i.viewport().close_requested())
-            && self.files.hold_close(self.is_modified())
+        if ui.input(|i| i.viewport().close_requested()) && self.files.hold_close(self.is_modified())
         {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
         }

@@ -13,8 +13,8 @@ pub use replay::ReplayView;
 use replay::replay_view;
 
 use super::frequency::TWIN;
-use super::style::{CALIBRATED, MEASURED, RESIDUAL};
 use super::job::{Job, Waker};
+use super::style::{CALIBRATED, MEASURED, RESIDUAL};
 use super::units::MM_PER_M;
 use crate::dataset::{self, Record, RecordKind};
 use crate::identify::replay::{MetricOptions, PreparedRecord};
@@ -26,7 +26,6 @@ use egui::{Color32, RichText};
 use egui_plot::{Line, Plot, PlotPoints};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
-
 
 /// A record loaded in the window, with its metric preparation.
 pub struct LoadedMeasured {

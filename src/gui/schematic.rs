@@ -2,10 +2,10 @@
 //! two chambers coloured by pressure, the valve spool, the springs and the seat, all moving
 //! with the twin's latest sample (motion to scale).
 
+use super::style::rig;
 use super::units::{BAR_PER_PA, MM_PER_M};
 use crate::params::Params;
 use crate::simulation::Sample;
-use super::style::rig;
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
 
 /// Smallest half-width of the colour scale [Pa]: a still rig does not flicker through the

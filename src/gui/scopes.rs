@@ -14,7 +14,6 @@ use egui::Color32;
 use egui_plot::{HLine, Line, Plot, PlotPoint, PlotPoints, PlotUi, Span, VLine};
 use std::collections::BTreeSet;
 
-
 /// Number of scopes stacked in [`scopes_ui`].
 pub const N_SCOPES: usize = 6;
 

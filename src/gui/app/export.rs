@@ -124,72 +124,78 @@ impl SeatTwinApp {
             }
             xy
         };
-        let panels = freq_panels(c, self.centre.dwell(), self.ab.drawn_curves(), dwell_c).map(|fp| {
-            let shown = |name: &str| !crate::gui::plotkit::hidden(self.centre.hidden_curves(), fp.id, name);
-            let title = match fp.id {
-                "t_mag" => "Transmissibility",
-                "bode_mag" => "Valve/actuator (du/dt)/V_in",
-                _ => "",
-            };
-            // The view's short axis title with the full unit.
-            let y_label = if fp.phase {
-                fp.y_label.to_string()
-            } else {
-                let base = fp.y_label.split(" [").next().unwrap_or(fp.y_label);
-                format!("{base} [{}]", fp.unit)
-            };
-            let mut p = Panel::new(title, "frequency [Hz]", y_label);
-            p.x_scale = Scale::Log10;
-            for (style, pts) in fp.lines.iter().filter(|(s, _)| shown(s.name)) {
-                let (x, y) = points(pts, fp.phase);
-                p.series.push(styled(
-                    Series::line(style.name, x, y, rgb(style.color)),
-                    style.width,
-                    style.style,
-                ));
-            }
-            if let Some((name, color, pts)) = fp.dwell.filter(|(n, ..)| shown(n))
-                && !pts.is_empty()
-            {
-                let (x, y) = points(pts, fp.phase);
-                p.series.push(Series::markers(name, x, y, rgb(color)));
-            }
-            if fp.id == "t_mag" {
-                p.hlines = vec![(0.0, "|T| = 1".into())];
-                // As in the view: where |T| rises through 1 (the end of the isolation band)
-                // for the linear model and the twin, and the margins in the title; neither
-                // for an unstable loop, where they mean nothing.
-                if !unstable {
-                    let who = [
-                        ("linear", rgb(crate::gui::style::LINEAR)),
-                        ("twin", rgb(crate::gui::style::TWIN)),
-                    ];
-                    for ((name, color), cs) in who.into_iter().zip(&c.crossings) {
-                        if let Some(x) = cs.iter().find(|x| x.rising) {
-                            p.series.push(Series::markers(
-                                format!("|T| = 1 @ {:.2} Hz ({name})", x.freq_hz),
-                                vec![x.freq_hz],
-                                vec![0.0],
-                                color,
-                            ));
+        let panels =
+            freq_panels(c, self.centre.dwell(), self.ab.drawn_curves(), dwell_c).map(|fp| {
+                let shown = |name: &str| {
+                    !crate::gui::plotkit::hidden(self.centre.hidden_curves(), fp.id, name)
+                };
+                let title = match fp.id {
+                    "t_mag" => "Transmissibility",
+                    "bode_mag" => "Valve/actuator (du/dt)/V_in",
+                    _ => "",
+                };
+                // The view's short axis title with the full unit.
+                let y_label = if fp.phase {
+                    fp.y_label.to_string()
+                } else {
+                    let base = fp.y_label.split(" [").next().unwrap_or(fp.y_label);
+                    format!("{base} [{}]", fp.unit)
+                };
+                let mut p = Panel::new(title, "frequency [Hz]", y_label);
+                p.x_scale = Scale::Log10;
+                for (style, pts) in fp.lines.iter().filter(|(s, _)| shown(s.name)) {
+                    let (x, y) = points(pts, fp.phase);
+                    p.series.push(styled(
+                        Series::line(style.name, x, y, rgb(style.color)),
+                        style.width,
+                        style.style,
+                    ));
+                }
+                if let Some((name, color, pts)) = fp.dwell.filter(|(n, ..)| shown(n))
+                    && !pts.is_empty()
+                {
+                    let (x, y) = points(pts, fp.phase);
+                    p.series.push(Series::markers(name, x, y, rgb(color)));
+                }
+                if fp.id == "t_mag" {
+                    p.hlines = vec![(0.0, "|T| = 1".into())];
+                    // As in the view: where |T| rises through 1 (the end of the isolation band)
+                    // for the linear model and the twin, and the margins in the title; neither
+                    // for an unstable loop, where they mean nothing.
+                    if !unstable {
+                        let who = [
+                            ("linear", rgb(crate::gui::style::LINEAR)),
+                            ("twin", rgb(crate::gui::style::TWIN)),
+                        ];
+                        for ((name, color), cs) in who.into_iter().zip(&c.crossings) {
+                            if let Some(x) = cs.iter().find(|x| x.rising) {
+                                p.series.push(Series::markers(
+                                    format!("|T| = 1 @ {:.2} Hz ({name})", x.freq_hz),
+                                    vec![x.freq_hz],
+                                    vec![0.0],
+                                    color,
+                                ));
+                            }
+                        }
+                        let margins: Vec<String> = ["linear", "twin"]
+                            .iter()
+                            .zip(&c.stability)
+                            .filter_map(|(name, s)| {
+                                s.as_ref().map(|s| {
+                                    format!(
+                                        "{name} {}",
+                                        crate::gui::frequency::margin_text(&s.margins)
+                                    )
+                                })
+                            })
+                            .collect();
+                        if !margins.is_empty() {
+                            p.title = format!("{title} — {}", margins.join("; "));
                         }
                     }
-                    let margins: Vec<String> = ["linear", "twin"]
-                        .iter()
-                        .zip(&c.stability)
-                        .filter_map(|(name, s)| {
-                            s.as_ref().map(|s| {
-                                format!("{name} {}", crate::gui::frequency::margin_text(&s.margins))
-                            })
-                        })
-                        .collect();
-                    if !margins.is_empty() {
-                        p.title = format!("{title} — {}", margins.join("; "));
-                    }
                 }
-            }
-            p
-        });
+                p
+            });
         let mut freq = Figure::new(
             format!(
                 "seat-twin — preset {}{} — {}, {}{}",

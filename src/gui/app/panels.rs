@@ -132,7 +132,11 @@ impl SeatTwinApp {
 
     pub(super) fn toolbar_ui(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            let label = if self.engine.want_running { "Pause" } else { "Run" };
+            let label = if self.engine.want_running {
+                "Pause"
+            } else {
+                "Run"
+            };
             if ui
                 .button(label)
                 .on_hover_text("Run / pause (space bar)")
