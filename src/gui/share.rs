@@ -362,6 +362,17 @@ fn excitation(value: &str) -> Result<ExcitationEditor, String> {
     Ok(e)
 }
 
+/// The page's address without its fragment, plus `#s=link` (web): the link as the web page
+/// shares it.
+#[cfg(target_arch = "wasm32")]
+pub fn page_link(link: &str) -> String {
+    let base = web_sys::window()
+        .and_then(|w| w.location().href().ok())
+        .unwrap_or_default();
+    let base = base.split('#').next().unwrap_or_default().to_string();
+    format!("{base}#s={link}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,17 +9,9 @@
 //!   `seat-twin simulate --scenario random --seed N --duration T`, paused at its end.
 
 use super::SeatTwinApp;
+use super::share::page_link;
 use crate::engine::Speed;
 use wasm_bindgen::prelude::*;
-
-/// The page's address without its fragment, plus `#s=link`.
-pub fn page_link(link: &str) -> String {
-    let base = web_sys::window()
-        .and_then(|w| w.location().href().ok())
-        .unwrap_or_default();
-    let base = base.split('#').next().unwrap_or_default().to_string();
-    format!("{base}#s={link}")
-}
 
 /// The value of `key` in a query string `?a=1&b=2`.
 fn query_value<'a>(query: &'a str, key: &str) -> Option<&'a str> {

@@ -323,7 +323,7 @@ impl SeatTwinApp {
     fn share_text(&self) -> String {
         #[cfg(target_arch = "wasm32")]
         {
-            crate::gui::web::page_link(&self.link())
+            share::page_link(&self.link())
         }
         #[cfg(not(target_arch = "wasm32"))]
         {
