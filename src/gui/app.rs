@@ -1,4 +1,12 @@
-//! The app: state, engine events, layout, presets, dialogs and persistence.
+//! The app: the views, the parameters and the preset, and the one place where the views'
+//! actions are applied.
+//!
+//! Each window and panel owns its state and returns actions (egui's View pattern):
+//! [`CentreView`] (engine banner, scopes, frequency plots), [`ControlsPanel`] (parameters,
+//! Tune, A/B, excitation), [`FilesView`] (dialogs, path prompt, discard question),
+//! [`MeasuredData`], [`AbView`], [`TunePanel`] and the Lessons panel in [`Teaching`]. The app
+//! lends them what they share (parameters, traces, settings), and carries out what comes
+//! back: it alone sends to the engine ([`EngineLink`]) and changes the parameters.
 //!
 //! [`SeatTwinApp::ui`] does all the per-frame work and needs only an `egui::Ui`, so the
 //! kittest tests drive the real app headless; the `eframe::App` impl adds persistence, the

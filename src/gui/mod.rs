@@ -6,8 +6,8 @@
 //!     └──► Analytic (same frame) ──► frequency plots ◄── Dwell (background sine dwell)
 //! ```
 //!
-//! * [`app::SeatTwinApp`] — state and layout; `SeatTwinApp::ui` is the whole per-frame work
-//!   and runs headless under `egui_kittest`.
+//! * [`app::SeatTwinApp`] — the views and the one place their actions are applied;
+//!   `SeatTwinApp::ui` is the whole per-frame work and runs headless under `egui_kittest`.
 //! * [`controls_panel`] — the left panel (parameters, Tune, A/B, excitation), as one view.
 //! * [`centre`] — the engine banner, the scopes and the frequency plots, as one view.
 //! * [`traces`] — bounded sliding windows of the engine's batches (plots borrow them).
