@@ -6,7 +6,6 @@
 //! * the valve/actuator Bode `u̇/V_in` (G(s) for the linear model), open loop, platform still;
 //! * the transmissibility `T = ÿ/ẍ` with the controller `V = Kp·u + (Ki/s)·ẍ` in the loop.
 
-use crate::analysis::stability::Stability;
 use crate::control::ControlLaw;
 use crate::model::linear::{LinearModel, g_of};
 use crate::model::passive::PassiveModel;
@@ -483,24 +482,6 @@ pub fn linearise_linear(params: &Params) -> LinearisedModel {
         &model,
         &model.rest_state(),
         &[1e-2, 1e-1, 1e1],
-        params.linear.tau_s,
-    )
-}
-
-/// The stability verdict of the twin linearised at rest with the parameters' controller.
-pub fn twin_stability(params: &Params) -> Stability {
-    Stability::of(
-        &linearise_twin(params),
-        &ControlLaw::new(params),
-        params.plant.valve.tau_s,
-    )
-}
-
-/// The stability verdict of G(s) with the parameters' controller.
-pub fn linear_stability(params: &Params) -> Stability {
-    Stability::of(
-        &linearise_linear(params),
-        &ControlLaw::new(params),
         params.linear.tau_s,
     )
 }

@@ -143,7 +143,7 @@ pub struct Provenance {
 impl Provenance {
     /// The provenance of `params` from the preset `name`, with the margins of its loop.
     pub fn of(name: &str, params: &Params) -> Self {
-        let s = crate::analysis::frequency_response::twin_stability(params);
+        let s = crate::analysis::stability::twin_stability(params);
         let m = &s.margins;
         Self {
             preset: name.to_string(),

@@ -1,8 +1,8 @@
 //! The data stage: which records can be replayed, whether they can determine the twin at all
 //! (`insufficient_data` otherwise), and the split into fitted and held-out parts.
 
-use super::evaluate::{insufficient_report, part_name, replay_all};
-use super::replay::{PreparedRecord, rms};
+use super::evaluate::{insufficient_report, replay_all};
+use super::replay::{PreparedRecord, part_name, rms};
 use super::result::CalibrationReport;
 use super::result::Split;
 use super::{CalibrationOptions, IdentifyError};

@@ -20,9 +20,9 @@ use super::IdentifyError;
 use super::fit::{self, Evaluator, Knob};
 use super::progress::Monitor;
 use super::replay::PreparedRecord;
+use super::result::Drift;
 use crate::params::Params;
 use rayon::prelude::*;
-use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// Smallest χ²/(k − 1) of the per-record values for a drift [-] (a scatter of 5σ).
@@ -36,25 +36,6 @@ pub const DRIFT_MIN_RECORDS: usize = 3;
 
 /// Jacobians per per-record fit.
 const PER_RECORD_JACOBIANS: usize = 4;
-
-/// A parameter that changes from record to record (`report.json`'s `drifts` list).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Drift {
-    /// The parameter, by preset-key name (`cd`, `effective_bulk_modulus_pa`).
-    pub parameter: String,
-    /// Its value fitted on each record alone [SI], by file name.
-    pub per_record: BTreeMap<String, f64>,
-    /// The 1-σ uncertainty of each per-record value [SI], by file name.
-    pub per_record_uncertainty: BTreeMap<String, f64>,
-    /// Typical (RMS) 1-σ uncertainty of a per-record value [SI].
-    pub uncertainty: f64,
-    /// χ² of the scatter over its degrees of freedom [-].
-    pub chi2_per_dof: f64,
-    /// Spearman rank correlation of the values with the record order [-].
-    pub rank_correlation: f64,
-    /// In words.
-    pub description: String,
-}
 
 /// The parameters tried for a drift in `p`: Cd, and the effective bulk modulus when the
 /// compliance effect is on.

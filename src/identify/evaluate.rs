@@ -3,7 +3,7 @@
 
 use super::IdentifyError;
 use super::diagnose;
-use super::replay::{PreparedRecord, RawChannel, Replay, replay_prepared, rms};
+use super::replay::{PreparedRecord, RawChannel, Replay, part_name, replay_prepared, rms};
 use super::result::{
     CalibrationReport, Diagnostics, ErrorSummary, METRIC, RAW_NRMSE, RawNrmse, Split, StageErrors,
     Verdict,
@@ -96,20 +96,6 @@ pub(super) fn stage_errors(
             .map(|(k, b)| (k.clone(), [*b, ca.get(k).copied().unwrap_or(*b)]))
             .collect(),
         files: recs.iter().map(part_name).collect(),
-    }
-}
-
-/// A record's name, with the part when it is windowed.
-pub(super) fn part_name(r: &PreparedRecord) -> String {
-    if r.window.len() == r.len {
-        r.name.clone()
-    } else {
-        format!(
-            "{} [{:.3}–{:.3} s]",
-            r.name,
-            r.window.start as f64 * r.dt,
-            r.window.end.saturating_sub(1) as f64 * r.dt
-        )
     }
 }
 

@@ -12,11 +12,11 @@
 use super::effects::{SearchContext, best_of, validation_rms};
 use super::fit::{self, FitResult, Knob};
 use super::progress::Stage;
+use super::result::{ProposedScore, ProposedTerm};
 use super::{CalibrationOptions, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::collections::BTreeMap;
 
 /// A correction term beyond the library, one parameter each.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
@@ -149,36 +149,6 @@ impl CorrectionId {
             ),
         }
     }
-}
-
-/// A term proposed beyond the library (`report.json`'s `proposed` list).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ProposedTerm {
-    /// The term's id ([`CorrectionId::name`]).
-    pub name: String,
-    /// What it is, in physical words, with its value and uncertainty.
-    pub description: String,
-    /// Its parameter (SI) by preset-key name (`cd_opening_slope`, …).
-    pub params: BTreeMap<String, f64>,
-    /// 1-σ uncertainty of each parameter (SI).
-    pub uncertainties: BTreeMap<String, f64>,
-    /// Why it was kept: ΔBIC, share of the residual removed, held-out error.
-    pub evidence: String,
-}
-
-/// One candidate correction's score in one round.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ProposedScore {
-    /// The correction.
-    pub name: String,
-    /// Round (1 = first).
-    pub round: usize,
-    /// ΔBIC against the model of the round (negative = better).
-    pub score: f64,
-    /// Share of the residual sum of squares removed [-].
-    pub relative_gain: f64,
-    /// Its fitted parameter (SI).
-    pub value: f64,
 }
 
 /// What the search beyond the library found.

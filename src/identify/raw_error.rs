@@ -24,7 +24,7 @@
 //! the report names the record, the channel, the band and the time window (of
 //! [`window_s`] seconds) that holds most of that band's residual.
 
-use super::replay::{PreparedRecord, SimChannels, rms};
+use super::replay::{PreparedRecord, RESOLUTION, SimChannels, part_name, rms};
 use crate::dsp::{NoiseFloor, band_parts};
 use serde::Serialize;
 
@@ -36,17 +36,6 @@ pub const BANDS_HZ: [[f64; 2]; 4] = [[0.0, 0.5], [0.5, 5.0], [5.0, 25.0], [25.0,
 /// times the noise power. The demo campaign's library effect, found, leaves at most 2.3 on
 /// any record, channel and band; an effect outside the library leaves tens to hundreds.
 pub const DEFAULT_LIMIT: f64 = 3.0;
-
-/// The resolution part of a band's floor, relative to the measured channel's own content in
-/// that band [-]: 0.1 %. The twin is stepped by RK4 at a fixed step, its delay interpolated
-/// and its parameters fitted to finite precision; on the demo campaign's largest sine test
-/// (13 mm at 10 Hz) that leaves 7 µm, 0.06 %, against a white-noise floor of 2 µm in the
-/// 5–25 Hz band. The floor is `√(white² + (0.001·content)²)`, so a residual must be both
-/// above the sensor's noise and above 0.1 % of what was measured in that band. For the band
-/// with DC the content is the whole channel's swing about its mean: the open-loop replay of
-/// an integrating plant turns a relative flow error at any frequency into drift (the same
-/// record's start transient leaves 33 µm there against 9 mm of stroke swing).
-pub const RESOLUTION: f64 = 1e-3;
 
 /// Lower edge of the band above the rig's motion [Hz], where the measured channels hold the
 /// sensor noise and the oil-column mode's ringing (about 77 Hz, almost undamped) after each
@@ -234,7 +223,7 @@ pub fn record_raw_error(rec: &PreparedRecord, sim: &SimChannels) -> RecordRawErr
         }
     }
     RecordRawError {
-        file: super::evaluate::part_name(rec),
+        file: part_name(rec),
         channels,
     }
 }

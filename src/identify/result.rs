@@ -1,5 +1,7 @@
 //! What a calibration found: the [`CalibrationReport`] and its parts (errors per stage,
-//! candidate scores, added effects, the verdict, the split, raw-signal NRMSE).
+//! candidate scores, added effects, the verdict, the split, raw-signal NRMSE, the terms
+//! proposed beyond the library and the parameters that drift). Plain types: the stages that
+//! fill them ([`super::proposed`], [`super::drift`], …) import them from here.
 
 use super::EffectId;
 use super::diagnose;
@@ -121,6 +123,55 @@ pub struct Diagnostics {
     pub high_frequency_share: f64,
 }
 
+/// A term proposed beyond the library (`report.json`'s `proposed` list).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProposedTerm {
+    /// The term's id ([`super::proposed::CorrectionId::name`]).
+    pub name: String,
+    /// What it is, in physical words, with its value and uncertainty.
+    pub description: String,
+    /// Its parameter (SI) by preset-key name (`cd_opening_slope`, …).
+    pub params: BTreeMap<String, f64>,
+    /// 1-σ uncertainty of each parameter (SI).
+    pub uncertainties: BTreeMap<String, f64>,
+    /// Why it was kept: ΔBIC, share of the residual removed, held-out error.
+    pub evidence: String,
+}
+
+/// One candidate correction's score in one round.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProposedScore {
+    /// The correction.
+    pub name: String,
+    /// Round (1 = first).
+    pub round: usize,
+    /// ΔBIC against the model of the round (negative = better).
+    pub score: f64,
+    /// Share of the residual sum of squares removed [-].
+    pub relative_gain: f64,
+    /// Its fitted parameter (SI).
+    pub value: f64,
+}
+
+/// A parameter that changes from record to record (`report.json`'s `drifts` list).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Drift {
+    /// The parameter, by preset-key name (`cd`, `effective_bulk_modulus_pa`).
+    pub parameter: String,
+    /// Its value fitted on each record alone [SI], by file name.
+    pub per_record: BTreeMap<String, f64>,
+    /// The 1-σ uncertainty of each per-record value [SI], by file name.
+    pub per_record_uncertainty: BTreeMap<String, f64>,
+    /// Typical (RMS) 1-σ uncertainty of a per-record value [SI].
+    pub uncertainty: f64,
+    /// χ² of the scatter over its degrees of freedom [-].
+    pub chi2_per_dof: f64,
+    /// Spearman rank correlation of the values with the record order [-].
+    pub rank_correlation: f64,
+    /// In words.
+    pub description: String,
+}
+
 /// Everything a calibration found.
 #[derive(Debug, Clone)]
 pub struct CalibrationReport {
@@ -132,15 +183,15 @@ pub struct CalibrationReport {
     pub params: Params,
     /// Terms beyond the library ([`super::proposed`]), in physical words, empty when none was
     /// kept. The verdict does not count them: it stays the library's.
-    pub proposed: Vec<super::proposed::ProposedTerm>,
+    pub proposed: Vec<ProposedTerm>,
     /// The declared parameters re-fitted with the proposed terms (empty without them).
     pub proposed_calibrated: Vec<FittedValue>,
     /// Every candidate correction's score, per round (empty when the search did not run).
-    pub proposed_candidates: Vec<super::proposed::ProposedScore>,
+    pub proposed_candidates: Vec<ProposedScore>,
     /// The raw error measure with the proposed terms (`calibrated.toml`), if any.
     pub raw_error_proposed: Option<RawErrorReport>,
     /// Parameters that change from record to record ([`super::drift`]), empty when none.
-    pub drifts: Vec<super::drift::Drift>,
+    pub drifts: Vec<Drift>,
     /// Verdict.
     pub verdict: Verdict,
     /// Effects added, most important first.

@@ -317,9 +317,9 @@ fn declared_values(fit: &FitResult) -> Vec<FittedValue> {
 
 /// The proposed fit beyond the library, as the report needs it.
 struct Beyond {
-    terms: Vec<super::proposed::ProposedTerm>,
+    terms: Vec<super::result::ProposedTerm>,
     calibrated: Vec<FittedValue>,
-    candidates: Vec<super::proposed::ProposedScore>,
+    candidates: Vec<super::result::ProposedScore>,
     raw: RawErrorReport,
     nrmse: std::collections::BTreeMap<String, f64>,
     val: std::collections::BTreeMap<String, f64>,
@@ -341,7 +341,7 @@ pub struct Findings {
     /// The corrections proposed beyond the library, if any were kept.
     pub proposal: Option<super::proposed::Proposal>,
     /// Parameters that change from record to record.
-    pub drifts: Vec<super::drift::Drift>,
+    pub drifts: Vec<super::result::Drift>,
     /// BIC counts of the declared fit.
     pub bic: Bic,
     /// Notes of every stage, in order.

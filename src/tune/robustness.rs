@@ -4,8 +4,8 @@
 //! fails.
 
 use super::{Evaluation, MIN_DECAY_RATE_PER_S, TuneOptions, score_rides};
-use crate::analysis::frequency_response as fr;
 use crate::analysis::settle::{Settle, settle_after_bump};
+use crate::analysis::stability::twin_stability;
 use crate::params::{ControllerParams, Params};
 use crate::scenario::PlatformMotion;
 
@@ -154,7 +154,7 @@ pub fn robustness_table(
         .into_iter()
         .map(|mut p| {
             p.controller = c;
-            let stability = fr::twin_stability(&p);
+            let stability = twin_stability(&p);
             let settle = settle_after_bump(&p).ok();
             let (objective, max_u, contacts) =
                 score_rides(&p, rides, opts.duration_s, opts.objective);

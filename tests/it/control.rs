@@ -7,6 +7,7 @@
 
 use seat_twin::analysis::dwell;
 use seat_twin::analysis::frequency_response as fr;
+use seat_twin::analysis::stability;
 use seat_twin::control::ControlLaw;
 use seat_twin::model::ModelKind;
 use seat_twin::params::{ControllerKind, Params};
@@ -118,12 +119,12 @@ fn skyhook_feedback_reduces_body_motion_where_the_feed_forward_leaves_it() {
         );
     }
     // And the loop keeps margins (gain ≥ 6 dB, phase ≥ 45°), on G(s) and on the twin.
-    let m = fr::linear_stability(&sky);
+    let m = stability::linear_stability(&sky);
     assert!(
         m.stable() && m.margins.gain_margin_db() >= 6.0 && m.margins.phase_margin_deg() >= 45.0,
         "{m:?}"
     );
-    let t = fr::twin_stability(&sky);
+    let t = stability::twin_stability(&sky);
     assert!(t.margins.gain_margin_db() >= 6.0, "{t:?}");
 }
 
@@ -133,8 +134,8 @@ fn positive_position_feedback_is_unstable_for_every_kind() {
     for kind in ControllerKind::ALL {
         let mut p = with_kind(kind);
         p.controller.kp_v_per_m = 20.0;
-        assert!(!fr::linear_stability(&p).stable(), "{kind}");
-        assert!(!fr::twin_stability(&p).stable(), "{kind}");
+        assert!(!stability::linear_stability(&p).stable(), "{kind}");
+        assert!(!stability::twin_stability(&p).stable(), "{kind}");
     }
 }
 

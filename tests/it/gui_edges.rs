@@ -265,7 +265,7 @@ fn phase_is_wrapped_by_default_and_unwrapped_on_request() {
 /// stable gains and a running simulation back.
 #[test]
 fn unstable_state_shows_no_stale_results_and_resets_to_stable_gains() {
-    use seat_twin::analysis::frequency_response as fr;
+    use seat_twin::analysis::stability;
     let mut h = harness_at_max_speed();
     step_until(&mut h, "running", |a| a.engine_view().running);
     h.step();
@@ -295,7 +295,7 @@ fn unstable_state_shows_no_stale_results_and_resets_to_stable_gains() {
     let stable_at = |kp: f64| {
         let mut p = *h.state().params();
         p.controller.kp_v_per_m = kp;
-        fr::twin_stability(&p).stable() && fr::linear_stability(&p).stable()
+        stability::twin_stability(&p).stable() && stability::linear_stability(&p).stable()
     };
     assert!(stable_at(-0.97 * limit), "−0.97·{limit} should be stable");
     assert!(

@@ -51,8 +51,8 @@ fn a_preset_survives_a_save_and_load_round_trip() {
 /// 30 mm of stroke, and its linearised loop keeps 6 dB and 45° of margin.
 #[test]
 fn tuned_presets_beat_the_papers_gains_on_a_held_out_ride() {
-    use seat_twin::analysis::frequency_response as fr;
     use seat_twin::analysis::metrics;
+    use seat_twin::analysis::stability;
     use seat_twin::experiments;
     use seat_twin::model::ModelKind;
     use seat_twin::simulation::Drive;
@@ -91,7 +91,7 @@ fn tuned_presets_beat_the_papers_gains_on_a_held_out_ride() {
         );
         assert_eq!(contacts, 0, "{name}");
         assert!(max_u <= tune::MAX_ABS_U_M, "{name}: max |u| {max_u}");
-        let m = fr::twin_stability(&p);
+        let m = stability::twin_stability(&p);
         assert!(
             m.stable()
                 && m.margins.gain_margin_db().abs() >= tune::MIN_GAIN_MARGIN_DB

@@ -3,7 +3,9 @@
 
 use seat_twin::analysis::frequency_response as fr;
 use seat_twin::analysis::settle::settle_after_bump;
-use seat_twin::analysis::stability::{ClosedLoopModes, LoopPlant, MarginGrid, Stability};
+use seat_twin::analysis::stability::{
+    ClosedLoopModes, LoopPlant, MarginGrid, Stability, linear_stability, twin_stability,
+};
 use seat_twin::control::ControlLaw;
 use seat_twin::experiments;
 use seat_twin::model::ModelKind;
@@ -123,7 +125,7 @@ fn crossings_inside_a_narrow_resonance_are_found() {
     for (factor, stable) in [(0.98, true), (1.02, false)] {
         let mut r = q;
         r.plant.valve.tau_s += factor * dm;
-        assert_eq!(fr::twin_stability(&r).stable(), stable, "τ + {factor}·{dm}");
+        assert_eq!(twin_stability(&r).stable(), stable, "τ + {factor}·{dm}");
     }
 }
 
@@ -133,11 +135,11 @@ fn crossings_inside_a_narrow_resonance_are_found() {
 fn the_eigenvalues_do_not_change_with_the_delay_order() {
     for (name, _) in seat_twin::preset::shipped_presets() {
         let p = resolve(&name).unwrap().params;
-        let s = fr::twin_stability(&p);
+        let s = twin_stability(&p);
         let m = s.modes.expect("solves");
         assert!(m.order_change < 1e-8, "{name}: {m:?}");
         assert_eq!(m.neutral_modes, 1, "{name}: the chambers' pressure level");
-        let g = fr::linear_stability(&p).modes.expect("solves");
+        let g = linear_stability(&p).modes.expect("solves");
         assert!(g.order_change < 1e-8, "{name}: {g:?}");
     }
 }
@@ -159,7 +161,7 @@ fn every_tuned_preset_settles_at_every_point_of_its_spread() {
                 q.plant.valve.tau_s * 1e3,
                 q.plant.body.mass_kg
             );
-            assert!(fr::twin_stability(&q).stable(), "{at}: unstable");
+            assert!(twin_stability(&q).stable(), "{at}: unstable");
             let s = settle_after_bump(&q).unwrap_or_else(|e| panic!("{at}: {e}"));
             assert!(s.settled(), "{at}: {s:?}");
         }

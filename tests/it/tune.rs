@@ -2,8 +2,8 @@
 //! re-computed independently (the tuned gains re-simulated from `tuned.toml`, the margins from
 //! the linearised loop), and its outputs have the documented shape.
 
-use seat_twin::analysis::frequency_response as fr;
 use seat_twin::analysis::metrics;
+use seat_twin::analysis::stability;
 use seat_twin::experiments;
 use seat_twin::model::ModelKind;
 use seat_twin::params::{ControllerKind, Params};
@@ -42,7 +42,7 @@ fn tune_improves_the_paper_gains_within_every_constraint() {
     // The constraints, recomputed here: margins of the linearised twin with the tuned law.
     let mut q = p;
     q.controller = r.tuned.controller;
-    let m = fr::twin_stability(&q);
+    let m = stability::twin_stability(&q);
     assert!(m.stable(), "{m:?}");
     assert!(
         m.margins.gain_margin_db().abs() >= tune::MIN_GAIN_MARGIN_DB,
@@ -58,7 +58,7 @@ fn tune_improves_the_paper_gains_within_every_constraint() {
     );
     // Stable at every point of the spread, as the hard constraint says.
     for s in tune::spread(&q) {
-        assert!(fr::twin_stability(&s).stable(), "{s:?}");
+        assert!(stability::twin_stability(&s).stable(), "{s:?}");
     }
     // The objective and stroke, recomputed by an independent run of the tuned gains.
     let trace = experiments::run(

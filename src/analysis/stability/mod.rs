@@ -1,5 +1,6 @@
 //! The stability verdict of a closed loop with delays: one function, [`Stability::of`], used by
-//! the app's Stable line and banner, `tune`, `transmissibility` and the reports.
+//! the app's Stable line and banner, `tune`, `transmissibility` and the reports;
+//! [`twin_stability`] and [`linear_stability`] give it for a parameter set's twin and G(s).
 //!
 //! # The verdict: closed-loop eigenvalues with the delays
 //! The plant is a model linearised at rest ([`LinearisedModel`]: `ẋ = A·x + b·V(t − τ)`), the
@@ -27,9 +28,11 @@ mod margins;
 pub use delay::{DelayBlock, clenshaw_curtis, eigenvalues};
 pub use margins::{GainCrossover, LoopMargins, PhaseCrossover, margin_grid};
 
-use crate::analysis::frequency_response::{LinearisedModel, OpenLoop};
+use crate::analysis::frequency_response::{
+    LinearisedModel, OpenLoop, linearise_linear, linearise_twin,
+};
 use crate::control::ControlLaw;
-use crate::params::ControllerKind;
+use crate::params::{ControllerKind, Params};
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -353,6 +356,24 @@ impl Stability {
             None => "the eigenvalue solve failed".into(),
         }
     }
+}
+
+/// The stability verdict of the twin linearised at rest with the parameters' controller.
+pub fn twin_stability(params: &Params) -> Stability {
+    Stability::of(
+        &linearise_twin(params),
+        &ControlLaw::new(params),
+        params.plant.valve.tau_s,
+    )
+}
+
+/// The stability verdict of G(s) with the parameters' controller.
+pub fn linear_stability(params: &Params) -> Stability {
+    Stability::of(
+        &linearise_linear(params),
+        &ControlLaw::new(params),
+        params.linear.tau_s,
+    )
 }
 
 /// What to change to make both loops stable (`plants`: each loop's plant and command delay),

@@ -40,7 +40,7 @@ impl PlantCache {
         }
     }
 
-    /// The twin's stability verdict for a controller and delay (as [`fr::twin_stability`]).
+    /// The twin's stability verdict for a controller and delay (as [`twin_stability`](crate::analysis::stability::twin_stability)).
     pub fn stability(&self, law: &ControlLaw, tau_s: f64) -> Stability {
         Stability::on_grid(&self.lin0, &self.grid, law, tau_s)
     }
