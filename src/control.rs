@@ -41,10 +41,10 @@
 //! Filters are first-order sections stepped exactly for an input linear between grid points
 //! (first-order hold), so they agree with their transfer functions to round-off at any step.
 //! The Smith model is stepped exactly for a command held over the step (zero-order hold) and
-//! read `τm` back by the cubic interpolation of [`crate::simulation::delay`].
+//! read `τm` back by the cubic interpolation of a [`DelayLine`].
 
 use crate::params::{ControllerKind, ControllerParams, LinearParams, MAX_DELAY_S, Params};
-use crate::simulation::delay::{DelayLine, Tap};
+use crate::simulation::delay::{DelayLine, DelayLineState, RestoreError, Tap};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -333,7 +333,7 @@ pub struct ControllerState {
     pub sent: f64,
     /// The Smith model's state `[ũ, w, ẇ]`, its history of ũ and the grid index of the
     /// newest sample.
-    pub smith: Option<([f64; 3], crate::simulation::delay::DelayLineState, u64)>,
+    pub smith: Option<([f64; 3], DelayLineState, u64)>,
 }
 
 impl Controller {
@@ -355,7 +355,7 @@ impl Controller {
 
     /// Takes the signal states of a controller of the same structure and step; refused,
     /// leaving `self` unchanged, for another structure or history size.
-    pub fn restore(&mut self, s: &ControllerState) -> Result<(), crate::simulation::RestoreError> {
+    pub fn restore(&mut self, s: &ControllerState) -> Result<(), RestoreError> {
         let mut smith = self.smith.clone();
         match (smith.as_mut(), &s.smith) {
             (Some(m), Some((z, history, n))) => {
@@ -365,7 +365,7 @@ impl Controller {
             }
             (None, None) => {}
             (mine, theirs) => {
-                return Err(crate::simulation::RestoreError::Mismatch {
+                return Err(RestoreError::Mismatch {
                     what: "number of Smith models",
                     expected: mine.is_some() as usize,
                     found: theirs.is_some() as usize,

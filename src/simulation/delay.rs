@@ -2,6 +2,23 @@
 //! read back at `t − τ` with cubic Lagrange interpolation (4th-order accurate, so the delay
 //! does not spoil RK4's order on smooth commands).
 
+/// A saved state that does not fit what it is restored into: a delay line, a controller or a
+/// simulation (each one's `restore`). Defined with the delay line, the lowest of the three
+/// (a controller and a simulation hold delay lines), so both take it from below.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RestoreError {
+    /// A part's size differs from the one rebuilt from the parameters.
+    #[error("the saved {what} is {found}, this simulation's is {expected}")]
+    Mismatch {
+        /// Which part.
+        what: &'static str,
+        /// This simulation's.
+        expected: usize,
+        /// The saved state's.
+        found: usize,
+    },
+}
+
 /// Uniformly sampled history of a signal, `value(t_n)` for `t_n = n·h`, `n ≥ 0`.
 /// Before the first sample the signal is `initial` (the rig starts at rest).
 ///
@@ -151,9 +168,9 @@ impl DelayLine {
     }
 
     /// Takes the contents of a line of the same step and size; refused for another size.
-    pub fn restore(&mut self, state: &DelayLineState) -> Result<(), super::RestoreError> {
+    pub fn restore(&mut self, state: &DelayLineState) -> Result<(), RestoreError> {
         if state.ring.len() != self.ring.len() {
-            return Err(super::RestoreError::Mismatch {
+            return Err(RestoreError::Mismatch {
                 what: "delay line size",
                 expected: self.ring.len(),
                 found: state.ring.len(),

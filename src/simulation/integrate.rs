@@ -189,12 +189,44 @@ impl<const N: usize> Etd4<N> {
     /// per-state scales (the exponentials are taken of `D⁻¹·A·D`, `D = diag(scales)`, whose
     /// entries are of similar size) and the right-hand side `f(y)` to probe for its nonlinear
     /// rows, which must include every row an input enters.
+    ///
+    /// The coefficients are a pure function of `(h, A, y_ref, scales)` and the nonlinear rows,
+    /// and their two matrix exponentials (of 4N × 4N and 2N × 2N matrices) cost as much as
+    /// a few percent of a 10 s run of the twin: the last few built in this process are kept
+    /// and a run of the same plant at the same step (every run after the first of a tuning
+    /// search, a sweep of sine dwells, a bench) takes a copy, bit for bit what building them
+    /// gives.
     pub fn new(
         h: f64,
         a: &[[f64; N]; N],
         y_ref: [f64; N],
         scales: &[f64; N],
         probe: impl Fn(&[f64; N]) -> [f64; N],
+    ) -> Result<Self, Etd4Error> {
+        let rows = nonlinear_rows(a, &y_ref, scales, probe);
+        let key: Vec<u64> = [h]
+            .iter()
+            .chain(a.as_flattened())
+            .chain(&y_ref)
+            .chain(scales)
+            .map(|v| v.to_bits())
+            .chain(rows.iter().map(|&r| r as u64))
+            .collect();
+        if let Some(built) = memo::get::<Self>(&key) {
+            return Ok(built);
+        }
+        let built = Self::build(h, a, y_ref, scales, rows)?;
+        memo::put(key, built.clone());
+        Ok(built)
+    }
+
+    /// [`Self::new`] without the kept coefficients, the nonlinear rows found.
+    fn build(
+        h: f64,
+        a: &[[f64; N]; N],
+        y_ref: [f64; N],
+        scales: &[f64; N],
+        rows: Vec<usize>,
     ) -> Result<Self, Etd4Error> {
         use nalgebra::DMatrix;
         let scaled = |i: usize, j: usize| a[i][j] * scales[j] / scales[i];
@@ -217,7 +249,6 @@ impl<const N: usize> Etd4<N> {
         if full.iter().chain(half.iter()).any(|v| !v.is_finite()) {
             return Err(Etd4Error::NotFinite { h });
         }
-        let rows = nonlinear_rows(a, &y_ref, scales, probe);
         if rows.len() > MAX_REMAINDER_ROWS {
             return Err(Etd4Error::TooManyNonlinearRows { rows: rows.len() });
         }
@@ -394,6 +425,36 @@ impl<const N: usize> Etd4<N> {
     }
 }
 
+/// The exponential method's coefficients built last in this process ([`Etd4::new`]), by the
+/// bits of what they were built from.
+mod memo {
+    use std::any::Any;
+    use std::sync::{Arc, Mutex};
+
+    /// How many are kept (a sweep or a search uses one; the app a few).
+    const KEPT: usize = 8;
+
+    type Kept = Vec<(Vec<u64>, Arc<dyn Any + Send + Sync>)>;
+
+    static KEPT_COEFFICIENTS: Mutex<Kept> = Mutex::new(Vec::new());
+
+    /// A copy of the coefficients built from `key`, if kept.
+    pub(super) fn get<T: Any + Clone>(key: &[u64]) -> Option<T> {
+        let kept = KEPT_COEFFICIENTS.lock().unwrap_or_else(|e| e.into_inner());
+        let (_, value) = kept.iter().find(|(k, _)| k.as_slice() == key)?;
+        value.downcast_ref::<T>().cloned()
+    }
+
+    /// Keeps `value`, built from `key`, in place of the oldest when full.
+    pub(super) fn put<T: Any + Send + Sync>(key: Vec<u64>, value: T) {
+        let mut kept = KEPT_COEFFICIENTS.lock().unwrap_or_else(|e| e.into_inner());
+        if kept.len() >= KEPT {
+            kept.remove(0);
+        }
+        kept.push((key, Arc::new(value)));
+    }
+}
+
 /// Rows `i` where `f_i(y) − A_i·(y − y_ref)` is not ≈ 0 for states from 0.3 to 30 scales away
 /// from `y_ref` (far enough to reach saturations and end stops), i.e. the rows that are not
 /// affine with matrix `A` and an equilibrium at `y_ref`.
@@ -434,6 +495,36 @@ fn nonlinear_rows<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What [`Etd4::new`] gives, built afresh or a kept copy, is what building gives, and a
+    /// problem that differs in its step only gets its own coefficients.
+    #[test]
+    fn kept_coefficients_are_the_built_ones_of_the_same_problem() {
+        let a = [[-3.0, 1.0], [0.5, -40.0]];
+        let f = |y: &[f64; 2]| {
+            [
+                a[0][0] * y[0] + a[0][1] * y[1] + y[0].powi(3),
+                a[1][0] * y[0] + a[1][1] * y[1],
+            ]
+        };
+        let (y_ref, scales) = ([0.0, 0.0], [1.0, 2.0]);
+        let rows = nonlinear_rows(&a, &y_ref, &scales, f);
+        assert_eq!(rows, [0]);
+        let built = format!("{:?}", Etd4::build(1e-2, &a, y_ref, &scales, rows).unwrap());
+        for _ in 0..2 {
+            let given = Etd4::new(1e-2, &a, y_ref, &scales, f).unwrap();
+            assert_eq!(format!("{given:?}"), built);
+        }
+        let other = Etd4::new(2e-2, &a, y_ref, &scales, f).unwrap();
+        assert_ne!(format!("{other:?}"), built);
+        assert_eq!(
+            format!("{other:?}"),
+            format!(
+                "{:?}",
+                Etd4::build(2e-2, &a, y_ref, &scales, vec![0]).unwrap()
+            )
+        );
+    }
 
     /// y' = −y, y(0) = 1: the error at t = 1 falls 16× per halving of the step.
     #[test]

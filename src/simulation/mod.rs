@@ -26,11 +26,12 @@ mod sample;
 mod specialised;
 mod state;
 pub use csv::{CsvRunError, SAMPLE_UNITS, SampleColumns, write_csv_streamed};
+pub use delay::RestoreError;
 pub use run::{Run, RunState, RunStateSnapshot, wide_simd};
 pub(crate) use run::{check_bounds, trace_buffer};
 pub use sample::{ContactEvent, RunSummary, Sample, Trace, record_every, sample_count};
 use specialised::{Advance, StepMethod};
-pub use state::{RestoreError, SimulationState};
+pub use state::SimulationState;
 
 /// Where the valve command comes from.
 #[derive(Debug, Clone, PartialEq)]

@@ -296,7 +296,7 @@ fn stream_avx<R: Run + ?Sized>(
 
 /// The loop of [`stream`], for the baseline instruction set.
 #[inline(always)]
-fn stream_portable<R: Run + ?Sized>(
+pub(super) fn stream_portable<R: Run + ?Sized>(
     run: &mut R,
     t_end: f64,
     every: u64,

@@ -3,21 +3,6 @@
 
 use super::*;
 
-/// A state that does not fit the simulation (or controller) it is restored into.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum RestoreError {
-    /// A part's size differs from the one rebuilt from the parameters.
-    #[error("the saved {what} is {found}, this simulation's is {expected}")]
-    Mismatch {
-        /// Which part.
-        what: &'static str,
-        /// This simulation's.
-        expected: usize,
-        /// The saved state's.
-        found: usize,
-    },
-}
-
 /// What of a [`Simulation`] changes while it steps ([`Simulation::snapshot`]): the model's
 /// state, the steps taken, the command history, the controller's signal states, the
 /// platform acceleration now and the work counters. The problem (model, drive, platform,
