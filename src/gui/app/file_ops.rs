@@ -49,6 +49,7 @@ impl SeatTwinApp {
                 ..Default::default()
             },
             params: self.params,
+            per_record: Default::default(),
         }
     }
 
@@ -65,6 +66,7 @@ impl SeatTwinApp {
                 ..Default::default()
             },
             params: self.params,
+            per_record: Default::default(),
         };
         match p.save(path) {
             Ok(()) => {

@@ -10,7 +10,6 @@ use super::rig::{ACC_NOISE, RigEffects, U_NOISE, calibrate_paper, campaign_of};
 use rand::{Rng, SeedableRng};
 use seat_twin::dataset::Record;
 use seat_twin::identify::{self, CalibrationReport, EffectId, Verdict};
-use seat_twin::params::Params;
 use seat_twin::preset::Preset;
 
 /// What a rig is, for judging a calibration.
@@ -240,11 +239,14 @@ fn checked_parameters(c: &Case, r: &CalibrationReport) -> Vec<(String, f64, f64,
 }
 
 /// RMS above the sensor noise of the raw `u` and `ÿ`, pooled over `recs`, replayed with
-/// `params` as `seat-twin replay --preset` replays them.
-fn above_noise(params: &Params, recs: &[Record]) -> [f64; 2] {
+/// `preset` as `seat-twin replay --preset` replays them (a record listed in the preset's
+/// `[per_record]` with its own values).
+fn above_noise(preset: &Preset, recs: &[Record]) -> [f64; 2] {
     let (mut eu, mut ey, mut n) = (0.0, 0.0, 0.0);
     for rec in recs {
-        let rep = identify::replay(params, rec).expect("replay");
+        let file = rec.path.file_name().expect("file name").to_string_lossy();
+        let (params, _) = preset.per_record.params_for(&preset.params, &file);
+        let rep = identify::replay(&params, rec).expect("replay");
         let raw = &rep.errors.raw;
         let k = rep.errors.samples as f64;
         eu += k * raw.u.rms_error.powi(2);
@@ -326,8 +328,8 @@ fn randomised_rigs_confusion_table() {
         identify::report::calibrated_preset(&r)
             .save(&path)
             .expect("save");
-        let cal = Preset::load(&path).expect("load").params;
-        let nominal = above_noise(&Params::paper(), &recs);
+        let cal = Preset::load(&path).expect("load");
+        let nominal = above_noise(&Preset::paper(), &recs);
         let after = above_noise(&cal, &recs);
         let halved = (0..2).all(|k| after[k] <= 0.5 * nominal[k]);
         replay_ok += usize::from(halved);
