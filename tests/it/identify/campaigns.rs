@@ -2,21 +2,28 @@
 //! to record, sample rates from 200 Hz to 10 kHz, an accelerometer with an offset and a
 //! scale error.
 
-use super::rig::{ACC_NOISE, RigEffects, U_NOISE, calibrate_paper, campaign, campaign_at, summary};
-use seat_twin::identify::{self, Verdict};
+use super::rig::{RigEffects, above_noise, calibrate_paper, campaign, campaign_at, summary};
+use seat_twin::dataset::Record;
+use seat_twin::identify::{self, CalibrationReport, Verdict};
 use seat_twin::preset::Preset;
 
-/// Oil warming up through a campaign: the rig's Cd grows 3 % from each test to the next. The
-/// report lists a drift of `cd` with its per-record values (each within 1.5 % of the rig's),
-/// rising through the campaign; it is not averaged away into one value without a word.
-#[test]
-fn cd_warming_up_through_the_campaign_is_reported_as_a_drift() {
+/// The campaign of a rig whose Cd grows 3 % from each test to the next, and its calibration.
+fn warming_campaign() -> (Vec<Record>, CalibrationReport) {
     let fx = RigEffects {
         cd_drift_per_test: Some(0.03),
         ..Default::default()
     };
     let recs = campaign(fx, 31, false);
     let r = calibrate_paper(&recs);
+    (recs, r)
+}
+
+/// Oil warming up through a campaign: the rig's Cd grows 3 % from each test to the next. The
+/// report lists a drift of `cd` with its per-record values (each within 1.5 % of the rig's),
+/// rising through the campaign; it is not averaged away into one value without a word.
+#[test]
+fn cd_warming_up_through_the_campaign_is_reported_as_a_drift() {
+    let (recs, r) = warming_campaign();
     let s = summary(&r);
     eprintln!("drift: {s}; drifts {:?}; notes {:?}", r.drifts, r.notes);
     let d = r
@@ -56,12 +63,7 @@ fn cd_warming_up_through_the_campaign_is_reported_as_a_drift() {
 /// noise on u and ÿ. The verdict stays `unexplained`: a drift is not a library effect.
 #[test]
 fn a_drifting_cd_is_calibrated_per_record_and_replayed_with_each_records_value() {
-    let fx = RigEffects {
-        cd_drift_per_test: Some(0.03),
-        ..Default::default()
-    };
-    let recs = campaign(fx, 31, false);
-    let r = calibrate_paper(&recs);
+    let (recs, r) = warming_campaign();
     let s = summary(&r);
     assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
     assert!(
@@ -94,23 +96,10 @@ fn a_drifting_cd_is_calibrated_per_record_and_replayed_with_each_records_value()
     let (p, listed) = cal.per_record.params_for(&cal.params, "other.csv");
     assert!(!listed && p.plant.valve.cd == cal.params.plant.valve.cd);
     // Each record replayed with its own value against the paper preset.
-    let above = |preset: &Preset| {
-        let (mut eu, mut ey, mut n) = (0.0, 0.0, 0.0);
-        for rec in &recs {
-            let file = rec.path.file_name().unwrap().to_string_lossy();
-            let (params, _) = preset.per_record.params_for(&preset.params, &file);
-            let rep = identify::replay(&params, rec).unwrap();
-            let k = rep.errors.samples as f64;
-            eu += k * rep.errors.raw.u.rms_error.powi(2);
-            ey += k * rep.errors.raw.ydd.unwrap().rms_error.powi(2);
-            n += k;
-        }
-        [
-            (eu / n - U_NOISE * U_NOISE).max(0.0).sqrt(),
-            (ey / n - ACC_NOISE * ACC_NOISE).max(0.0).sqrt(),
-        ]
-    };
-    let (nominal, after) = (above(&Preset::paper()), above(&cal));
+    let (nominal, after) = (
+        above_noise(&Preset::paper(), &recs),
+        above_noise(&cal, &recs),
+    );
     assert!(
         after[0] <= 0.5 * nominal[0] && after[1] <= 0.5 * nominal[1],
         "above noise: u {:.1} → {:.1} µm, ÿ {:.3} → {:.3} m/s²: {s}",

@@ -6,9 +6,8 @@
 //! nominal one. Slow (minutes): run it with
 //! `cargo test --no-default-features --test it identify::survey -- --ignored --nocapture`.
 
-use super::rig::{ACC_NOISE, RigEffects, U_NOISE, calibrate_paper, campaign_of};
+use super::rig::{RigEffects, above_noise, calibrate_paper, campaign_of};
 use rand::{Rng, SeedableRng};
-use seat_twin::dataset::Record;
 use seat_twin::identify::{self, CalibrationReport, EffectId, Verdict};
 use seat_twin::preset::Preset;
 
@@ -236,27 +235,6 @@ fn checked_parameters(c: &Case, r: &CalibrationReport) -> Vec<(String, f64, f64,
         }
     }
     out
-}
-
-/// RMS above the sensor noise of the raw `u` and `ÿ`, pooled over `recs`, replayed with
-/// `preset` as `seat-twin replay --preset` replays them (a record listed in the preset's
-/// `[per_record]` with its own values).
-fn above_noise(preset: &Preset, recs: &[Record]) -> [f64; 2] {
-    let (mut eu, mut ey, mut n) = (0.0, 0.0, 0.0);
-    for rec in recs {
-        let file = rec.path.file_name().expect("file name").to_string_lossy();
-        let (params, _) = preset.per_record.params_for(&preset.params, &file);
-        let rep = identify::replay(&params, rec).expect("replay");
-        let raw = &rep.errors.raw;
-        let k = rep.errors.samples as f64;
-        eu += k * raw.u.rms_error.powi(2);
-        ey += k * raw.ydd.map_or(0.0, |c| c.rms_error.powi(2));
-        n += k;
-    }
-    [
-        (eu / n - U_NOISE * U_NOISE).max(0.0).sqrt(),
-        (ey / n - ACC_NOISE * ACC_NOISE).max(0.0).sqrt(),
-    ]
 }
 
 fn effects_right(c: &Case, r: &CalibrationReport) -> bool {
