@@ -12,6 +12,7 @@ use crate::params::{
     SensorParams, SupplyParams, ValveParams,
 };
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Current preset format version.
@@ -46,6 +47,52 @@ pub struct Preset {
     pub meta: PresetMeta,
     /// Parameters (validated when loaded).
     pub params: Params,
+    /// Values that a calibration found to change from record to record (empty otherwise).
+    pub per_record: PerRecord,
+}
+
+/// Parameters a calibration found to drift from record to record (issue 20: oil warming up
+/// through a campaign), each with its value per record, by the record's file name: the
+/// `[per_record.cd]` table of a calibrated preset. `seat-twin replay` replays a listed record
+/// with its own value and any other record with the preset's (`[valve]`'s `cd`, the campaign
+/// value), and says which.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PerRecord {
+    /// The valve's discharge coefficient per record file name [-], each in `valve.cd`'s
+    /// range.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub cd: BTreeMap<String, f64>,
+}
+
+impl PerRecord {
+    /// Whether nothing is listed.
+    pub fn is_empty(&self) -> bool {
+        self.cd.is_empty()
+    }
+
+    /// `params` with the values listed for the record file `file` (its name, without the
+    /// folder), and whether any was listed for it.
+    pub fn params_for(&self, params: &Params, file: &str) -> (Params, bool) {
+        let mut p = *params;
+        match self.cd.get(file) {
+            Some(cd) => {
+                p.plant.valve.cd = *cd;
+                (p, true)
+            }
+            None => (p, false),
+        }
+    }
+
+    /// Checks every value against its parameter's range, naming it `per_record.cd."file"`.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let (min, max) =
+            crate::params::spec("valve.cd").map_or((f64::MIN, f64::MAX), |s| (s.min, s.max));
+        for (file, cd) in &self.cd {
+            crate::params::check(&format!("per_record.cd.\"{file}\""), *cd, min, max, "-")?;
+        }
+        Ok(())
+    }
 }
 
 /// The file layout (one table per parameter group).
@@ -68,6 +115,9 @@ struct PresetFile {
     sensors: SensorParams,
     /// Terms beyond the effect library a calibration proposed (zero unless it did).
     corrections: CorrectionParams,
+    /// Values per record, when a calibration found a drift (absent otherwise).
+    #[serde(skip_serializing_if = "PerRecord::is_empty")]
+    per_record: PerRecord,
 }
 
 impl From<&Preset> for PresetFile {
@@ -88,6 +138,7 @@ impl From<&Preset> for PresetFile {
             effects: q.plant.effects,
             sensors: q.sensors,
             corrections: q.plant.corrections,
+            per_record: p.per_record.clone(),
         }
     }
 }
@@ -113,6 +164,7 @@ impl From<PresetFile> for Preset {
                 numerics: f.numerics,
                 sensors: f.sensors,
             },
+            per_record: f.per_record,
         }
     }
 }
@@ -239,6 +291,7 @@ impl Preset {
                 ..Default::default()
             },
             params: Params::paper(),
+            per_record: PerRecord::default(),
         }
     }
 
@@ -272,6 +325,7 @@ impl Preset {
         preset
             .params
             .validate()
+            .and_then(|()| preset.per_record.validate())
             .map_err(|error| PresetError::Invalid {
                 file: file.to_path_buf(),
                 error,
@@ -459,6 +513,7 @@ mod tests {
             let preset = Preset {
                 meta: Default::default(),
                 params: p,
+                per_record: Default::default(),
             };
             let doc: toml::Value = toml::from_str(&preset.to_toml()).unwrap();
             for s in PARAMS.iter().filter(|s| s.applies_to(p.controller.kind)) {

@@ -181,13 +181,19 @@ pub fn run(cmd: &Command) -> anyhow::Result<Outcome> {
 
 /// The parameters of a preset given as a file or a shipped preset's name.
 pub fn load_params(name: &str) -> anyhow::Result<Params> {
+    Ok(load_preset(name)?.params)
+}
+
+/// The preset `--preset` names (a file or a shipped preset's name), whole: its parameters and
+/// its per-record values.
+pub fn load_preset(name: &str) -> anyhow::Result<crate::preset::Preset> {
     if name.trim().is_empty() {
         anyhow::bail!(
             "--preset is empty: give a preset file or the name of a shipped preset ({})",
             shipped_names()
         );
     }
-    Ok(crate::preset::resolve(name)?.params)
+    Ok(crate::preset::resolve(name)?)
 }
 
 /// "paper, paper-initial, …": the shipped presets' names.

@@ -1,7 +1,7 @@
 //! `seat-twin replay`: a measured record replayed through the twin into one CSV file.
 
 use super::{
-    Outcome, RowCost, Run, check_output_is_not_an_input, check_record_memory, load_params,
+    Outcome, RowCost, Run, check_output_is_not_an_input, check_record_memory, load_preset,
     preset_file,
 };
 use crate::dataset::{self, CsvWriter, RecordKind};
@@ -24,7 +24,8 @@ pub struct ReplayArgs {
     /// Measured record (CSV: t, v_in, u; optional x, xdd, ydd, p1, p2).
     #[arg(long)]
     pub data: PathBuf,
-    /// Preset file or shipped preset name.
+    /// Preset file or shipped preset name. A calibrated preset that lists this record's file
+    /// name in `[per_record.cd]` (a drift of Cd) replays it with that Cd.
     #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
     /// Output file (CSV).
@@ -40,7 +41,7 @@ impl Run for ReplayArgs {
         inputs.extend(preset_file.as_deref().map(|p| ("--preset", p)));
         check_output_is_not_an_input(out, &inputs)?;
         check_record_memory("replay", &[data], MEMORY)?;
-        let params = load_params(preset)?;
+        let loaded = load_preset(preset)?;
         // The pressures are not replayed: not storing them saves 16 bytes a row.
         let rec = dataset::read_record_with(
             data,
@@ -53,7 +54,31 @@ impl Run for ReplayArgs {
         for w in &rec.warnings {
             eprintln!("warning: {}: {w}", data.display());
         }
-        let comments = [
+        // A calibration that found Cd drifting through the campaign lists each record's own
+        // value ([per_record.cd]): the record replayed is matched by its file name.
+        let file = data
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let (params, listed) = loaded.per_record.params_for(&loaded.params, &file);
+        let per_record = if loaded.per_record.is_empty() {
+            None
+        } else if listed {
+            Some(format!(
+                "cd = {} for {file}, its own value from the preset's [per_record.cd]",
+                params.plant.valve.cd
+            ))
+        } else {
+            Some(format!(
+                "{file} is not in the preset's [per_record.cd]: replayed with the campaign \
+                 value valve.cd = {}",
+                params.plant.valve.cd
+            ))
+        };
+        if let Some(n) = &per_record {
+            eprintln!("note: {n}");
+        }
+        let mut comments = vec![
             ("model".into(), "twin".into()),
             ("preset".into(), preset.clone()),
             ("replayed".into(), data.display().to_string()),
@@ -63,6 +88,7 @@ impl Run for ReplayArgs {
             ),
             ("units".into(), identify::SimChannels::CSV_UNITS.into()),
         ];
+        comments.extend(per_record.map(|n| ("per_record".into(), n)));
         // The twin's samples are written as they are made (into a temporary file renamed at
         // the end): the replay holds the record and a few values a row, not every channel.
         let mut errors = None;

@@ -192,6 +192,7 @@ impl Session {
                 ..Default::default()
             },
             params: *params,
+            per_record: Default::default(),
         }
         .to_toml()
     }

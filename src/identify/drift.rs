@@ -125,7 +125,10 @@ pub fn find(
                     monitor,
                 };
                 let f = fit::fit(&ev, params, &[knob], PER_RECORD_JACOBIANS, n_eff_ratio)?;
-                Ok((f.values[0].value, f.values[0].std))
+                // A record replayed with its own Cd ([`give_records_their_cd`]) has the fitted
+                // value times its factor.
+                let k = if knob == Knob::Cd { rec.cd_factor } else { 1.0 };
+                Ok((k * f.values[0].value, k * f.values[0].std))
             })
             .collect();
         let mut values = Vec::with_capacity(fits.len());
@@ -191,6 +194,28 @@ pub fn find(
         }
     }
     Ok((drifts, notes))
+}
+
+/// Gives every record of `campaign` (whole, fit and held-out parts alike, matched by file
+/// name) its own Cd from a drift's `per_record` values: the factor
+/// [`PreparedRecord::cd_factor`] = value / `campaign_cd`, so that a replay at the campaign
+/// value `campaign_cd` uses the record's value; 1 for a record not listed.
+pub fn give_records_their_cd(
+    campaign: &mut super::data::Campaign,
+    per_record: &BTreeMap<String, f64>,
+    campaign_cd: f64,
+) {
+    let parts = [
+        &mut campaign.all,
+        &mut campaign.fit,
+        &mut campaign.validation,
+    ];
+    for rec in parts.into_iter().flat_map(|p| p.iter_mut()) {
+        rec.cd_factor = per_record
+            .get(&rec.name)
+            .filter(|_| campaign_cd > 0.0)
+            .map_or(1.0, |v| v / campaign_cd);
+    }
 }
 
 #[cfg(test)]

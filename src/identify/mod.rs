@@ -42,7 +42,11 @@
 //!    residual, held-out records). What is kept is *proposed*: described in physical words,
 //!    carried by `calibrated.toml`, never counted by the verdict. Then each drift candidate
 //!    ([`drift`]) is fitted on every record alone and reported when it changes with the
-//!    record order beyond its uncertainty.
+//!    record order beyond its uncertainty. A drift of Cd calibrates the campaign again with
+//!    each record at its own Cd ([`replay::PreparedRecord::cd_factor`], taken at the declared
+//!    fit), so that no library effect is added to follow the drift; `calibrated.toml` carries
+//!    the per-record values ([`crate::preset::PerRecord`]) and the verdict stays
+//!    `unexplained`.
 //! 7. Errors are reported on all records, on the fit part and on the held-out part
 //!    (`error_validation`), weighted and as raw-signal NRMSE ([`RawNrmse`]), every stage
 //!    replayed exactly as `seat-twin replay` replays its preset.
@@ -333,11 +337,7 @@ pub fn calibrate_with(
         return Ok(data::insufficient_data(params, checked));
     }
     let mut notes = checked.notes;
-    let campaign = data::split(checked.records);
-    let ev = Evaluator {
-        records: &campaign.fit,
-        monitor: &monitor,
-    };
+    let mut campaign = data::split(checked.records);
     let nominal = stages::nominal(params, &campaign, &monitor)?;
     let paper = stages::paper(
         params,
@@ -348,17 +348,121 @@ pub fn calibrate_with(
     if paper.baseline.is_none() {
         notes.push("no open-loop sine test found: the fit starts from the nominal Cd and τ".into());
     }
-    let declared = stages::declared_fit(&ev, &paper.start, params.plant.body.mass_kg, options)?;
-    notes.extend(declared.notes.iter().cloned());
-    if !declared.undetermined.is_empty() {
-        return Ok(evaluate::insufficient_report(
-            params,
-            campaign.all,
-            nominal.replays,
-            declared.undetermined,
-            notes,
-        ));
+    let mut pass = match library_pass(params, &campaign, &paper.start, options, &monitor)? {
+        Pass::Done(p) => p,
+        Pass::Undetermined(declared) => {
+            notes.extend(declared.notes.iter().cloned());
+            return Ok(evaluate::insufficient_report(
+                params,
+                campaign.all,
+                nominal.replays,
+                declared.undetermined,
+                notes,
+            ));
+        }
+    };
+    // A Cd drifting through the campaign: the library fitted one Cd to every record and may
+    // have added an effect to follow the drift. Calibrated again with each record's own Cd
+    // (the campaign value times the record's factor), the library judges what the drift
+    // leaves.
+    if let Some(d) = pass.drifts.iter().find(|d| d.parameter == Knob::Cd.name()) {
+        // Each record's own Cd is taken where no effect was added yet (the declared fit): an
+        // effect added to follow the drift bends the per-record values towards itself (the
+        // 20 Hz test's Cd read 5 % low beside `compliance`).
+        monitor.enter(Stage::Drifts, 1);
+        let declared_params = pass.declared.fit.params;
+        let (plain, _) = drift::find(&declared_params, &campaign.all, pass.bic.ratio(), &monitor)?;
+        monitor.advance();
+        let (per_record, campaign_cd) = match plain.iter().find(|p| p.parameter == d.parameter) {
+            Some(p) => (&p.per_record, declared_params.plant.valve.cd),
+            None => (&d.per_record, pass.final_params.plant.valve.cd),
+        };
+        let mut own = campaign.clone();
+        drift::give_records_their_cd(&mut own, per_record, campaign_cd);
+        if let Pass::Done(again) = library_pass(params, &own, &paper.start, options, &monitor)?
+            && let Some(d2) = again.drifts.iter().find(|d| d.parameter == Knob::Cd.name())
+        {
+            // The replays of the report use the per-record values reported (and written to
+            // calibrated.toml), each relative to the campaign value fitted beside them.
+            drift::give_records_their_cd(
+                &mut own,
+                &d2.per_record,
+                again.final_params.plant.valve.cd,
+            );
+            let dropped: Vec<&str> = pass
+                .search
+                .added
+                .iter()
+                .filter(|a| !again.search.added.iter().any(|b| b.effect == a.effect))
+                .map(|a| a.effect.name())
+                .collect();
+            notes.push(format!(
+                "`cd` drifts through the campaign: calibrated again with each record's own Cd                  (calibrated.toml's [per_record.cd]; the campaign value is `valve.cd`){}",
+                if dropped.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        "; with one Cd for all records the library had added {}, which only                          followed the drift",
+                        dropped.join(", ")
+                    )
+                }
+            ));
+            campaign = own;
+            pass = again;
+        }
     }
+    notes.extend(pass.notes);
+    let found = stages::Findings {
+        campaign,
+        nominal,
+        paper,
+        declared: pass.declared,
+        search: pass.search,
+        proposal: pass.proposal,
+        drifts: pass.drifts,
+        bic: pass.bic,
+        notes,
+    };
+    let report = stages::report(params, found, options, &monitor)?;
+    Ok(refuse_undetermined(report))
+}
+
+/// One calibration of the campaign by the library from `start`: the declared fit, the effect
+/// search, the search beyond the library and the drifts.
+struct LibraryPass {
+    declared: stages::Declared,
+    bic: fit::Bic,
+    search: effects::EffectSearch,
+    proposal: Option<proposed::Proposal>,
+    /// The parameters the drifts were judged at (the proposal's, else the search's).
+    final_params: Params,
+    drifts: Vec<drift::Drift>,
+    notes: Vec<String>,
+}
+
+/// A [`LibraryPass`], or the declared fit that left Cd or τ undetermined.
+enum Pass {
+    Done(Box<LibraryPass>),
+    Undetermined(Box<stages::Declared>),
+}
+
+/// Runs a [`LibraryPass`] on `campaign` (its records with the Cd factors they carry).
+fn library_pass(
+    params: &Params,
+    campaign: &data::Campaign,
+    start: &Params,
+    options: &CalibrationOptions,
+    monitor: &progress::Monitor<'_>,
+) -> Result<Pass, IdentifyError> {
+    let ev = Evaluator {
+        records: &campaign.fit,
+        monitor,
+    };
+    let declared = stages::declared_fit(&ev, start, params.plant.body.mass_kg, options)?;
+    if !declared.undetermined.is_empty() {
+        return Ok(Pass::Undetermined(Box::new(declared)));
+    }
+    let mut notes = declared.notes.clone();
     let bic = fit::Bic::at(&ev, &declared.fit)?;
     let cx = effects::SearchContext {
         ev: &ev,
@@ -366,9 +470,9 @@ pub fn calibrate_with(
         validation: &campaign.validation,
         options,
     };
-    let search = effects::search(&cx, &campaign, params, &declared.fit, &declared.knobs)?;
+    let search = effects::search(&cx, campaign, params, &declared.fit, &declared.knobs)?;
     notes.extend(search.notes.iter().cloned());
-    let proposal = beyond_the_library(params, &cx, &campaign, &search)?;
+    let proposal = beyond_the_library(params, &cx, campaign, &search)?;
     if let Some(p) = &proposal {
         notes.extend(p.notes.iter().cloned());
     }
@@ -376,22 +480,18 @@ pub fn calibrate_with(
     let final_params = proposal
         .as_ref()
         .map_or(search.current.params, |p| p.fit.params);
-    let (drifts, drift_notes) = drift::find(&final_params, &campaign.all, bic.ratio(), &monitor)?;
+    let (drifts, drift_notes) = drift::find(&final_params, &campaign.all, bic.ratio(), monitor)?;
     monitor.advance();
     notes.extend(drift_notes);
-    let found = stages::Findings {
-        campaign,
-        nominal,
-        paper,
+    Ok(Pass::Done(Box::new(LibraryPass {
         declared,
+        bic,
         search,
         proposal,
+        final_params,
         drifts,
-        bic,
         notes,
-    };
-    let report = stages::report(params, found, options, &monitor)?;
-    Ok(refuse_undetermined(report))
+    })))
 }
 
 /// The search beyond the library ([`proposed`]), run only when the library's final twin,

@@ -365,6 +365,7 @@ mod tests {
         Preset {
             meta: PresetMeta::default(),
             params: p,
+            per_record: Default::default(),
         }
         .save(&path)
         .unwrap();

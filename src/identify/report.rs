@@ -144,6 +144,15 @@ pub fn calibrated_preset(r: &CalibrationReport) -> Preset {
             ..PresetMeta::default()
         },
         params: r.params,
+        // A drift of Cd: each record's own value, which `seat-twin replay` applies.
+        per_record: crate::preset::PerRecord {
+            cd: r
+                .drifts
+                .iter()
+                .find(|d| d.parameter == super::fit::Knob::Cd.name())
+                .map(|d| d.per_record.clone())
+                .unwrap_or_default(),
+        },
     }
 }
 

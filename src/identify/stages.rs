@@ -407,7 +407,15 @@ pub fn report(
     let fit_before = replay(&before_params, fit_recs)?;
     let fit_after = replay(&current.params, fit_recs)?;
     let error_training = stage_errors(fit_recs, &fit_before, &fit_after);
-    let val_nominal = replay(params, val_recs)?;
+    // Nominal is the preset as it is: without the per-record Cd of a drift.
+    let plain: Vec<_> = val_recs
+        .iter()
+        .map(|r| super::replay::PreparedRecord {
+            cd_factor: 1.0,
+            ..r.clone()
+        })
+        .collect();
+    let val_nominal = replay(params, &plain)?;
     let val_before = replay(&before_params, val_recs)?;
     let val_after = replay(&current.params, val_recs)?;
     let error_validation = stage_errors(val_recs, &val_before, &val_after);
@@ -430,11 +438,17 @@ pub fn report(
     let sims_after: Vec<_> = replays_after.iter().map(|r| &r.sim).collect();
     let raw_error_before = raw_error_report(all, &sims_before, options.raw_error_limit);
     let raw_error_after = raw_error_report(all, &sims_after, options.raw_error_limit);
-    let verdict = verdict(
-        !found.search.added.is_empty(),
-        &raw_error_before,
-        &raw_error_after,
-    );
+    // A parameter that drifts through the campaign is not in the library, however well the
+    // twin follows each record with its own value.
+    let verdict = if found.drifts.is_empty() {
+        verdict(
+            !found.search.added.is_empty(),
+            &raw_error_before,
+            &raw_error_after,
+        )
+    } else {
+        Verdict::Unexplained
+    };
     let residual_left = (verdict == Verdict::Unexplained).then(|| {
         let mut left = diagnose::residual_left(all, &replays_after, options.noise_level_record);
         left.summary = format!(

@@ -381,6 +381,7 @@ pub fn write_outputs(
                 ..PresetMeta::default()
             },
             params: tuned,
+            per_record: Default::default(),
         };
         let path = dir.join("tuned.toml");
         preset.save(&path)?;

@@ -179,6 +179,7 @@ fn preset_controller_table_by_kind() {
         let mut q = Preset {
             meta: Default::default(),
             params: with_kind(kind),
+            per_record: Default::default(),
         };
         q.params.controller.kp_v_per_m = -12.5;
         let text = q.to_toml();

@@ -106,3 +106,30 @@ fn tuned_presets_beat_the_papers_gains_on_a_held_out_ride() {
         );
     }
 }
+
+/// Issue 20: the per-record values of a drift survive a save and a load, a record not
+/// listed takes the campaign value, and a value out of range is refused naming its key.
+#[test]
+fn per_record_values_round_trip_and_are_checked() {
+    let mut p = Preset::paper();
+    p.per_record.cd.insert("sine_2hz.csv".into(), 0.1431);
+    p.per_record.cd.insert("ride.csv".into(), 0.1552);
+    let text = p.to_toml();
+    assert!(text.contains("[per_record.cd]"), "{text}");
+    let back = Preset::from_toml(&text, "c.toml".as_ref()).unwrap();
+    assert_eq!(back, p);
+    let (q, listed) = back.per_record.params_for(&back.params, "ride.csv");
+    assert!(listed && q.plant.valve.cd == 0.1552);
+    let (q, listed) = back.per_record.params_for(&back.params, "bump.csv");
+    assert!(!listed && q.plant.valve.cd == back.params.plant.valve.cd);
+    // Without a drift nothing is written.
+    assert!(!Preset::paper().to_toml().contains("per_record"));
+    let bad = text.replace("0.1552", "3.0");
+    let e = Preset::from_toml(&bad, "c.toml".as_ref())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("per_record.cd.\"ride.csv\"") && e.contains("c.toml"),
+        "{e}"
+    );
+}

@@ -48,6 +48,7 @@ impl SeatTwinApp {
                 ..Default::default()
             },
             params: self.params,
+            per_record: Default::default(),
         }
     }
 
@@ -64,6 +65,7 @@ impl SeatTwinApp {
                 ..Default::default()
             },
             params: self.params,
+            per_record: Default::default(),
         };
         match p.save(path) {
             Ok(()) => {

@@ -315,6 +315,11 @@ pub struct PreparedRecord {
     /// The samples whose residuals count (the whole record unless the record is split in
     /// time for validation, see [`Self::windowed`]); the replay always covers the whole record.
     pub window: std::ops::Range<usize>,
+    /// The record's discharge coefficient relative to the campaign's [-]: 1, unless a drift of
+    /// Cd through the campaign was established ([`super::drift`]); then the record's own value
+    /// over the campaign value, so that every replay of the record (fits, verdict, report)
+    /// uses its own Cd while the fitted `valve.cd` stays the campaign value.
+    pub cd_factor: f64,
 }
 
 impl PreparedRecord {
@@ -408,6 +413,7 @@ impl PreparedRecord {
             lowpass_hz,
             p_raw,
             window: 0..record.len(),
+            cd_factor: 1.0,
         })
     }
 
@@ -452,7 +458,9 @@ impl PreparedRecord {
             q2: Vec::with_capacity(n),
         };
         let (v_in, platform) = (self.v_in.clone(), self.platform.clone());
-        replay_samples(params, self.dt, v_in, platform, n, &self.name, |s| {
+        let mut own = *params;
+        own.plant.valve.cd *= self.cd_factor;
+        replay_samples(&own, self.dt, v_in, platform, n, &self.name, |s| {
             out.t.push(s.t);
             out.u.push(s.u);
             out.du.push(s.du);

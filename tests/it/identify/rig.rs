@@ -5,6 +5,7 @@ use rand_distr::{Distribution, Normal};
 use seat_twin::dataset::Record;
 use seat_twin::identify::{self, CalibrationOptions, CalibrationReport, EffectId, Verdict};
 use seat_twin::params::Params;
+use seat_twin::preset::Preset;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
@@ -586,4 +587,25 @@ pub(super) fn check_pair(
     let v = r.error_validation.as_ref().expect("validation");
     assert!(v.after < v.before, "{s}");
     r
+}
+
+/// RMS above the sensor noise of the raw `u` and `ÿ`, pooled over `recs`, replayed with
+/// `preset` as `seat-twin replay --preset` replays them (a record listed in the preset's
+/// `[per_record]` with its own values).
+pub(super) fn above_noise(preset: &Preset, recs: &[Record]) -> [f64; 2] {
+    let (mut eu, mut ey, mut n) = (0.0, 0.0, 0.0);
+    for rec in recs {
+        let file = rec.path.file_name().expect("file name").to_string_lossy();
+        let (params, _) = preset.per_record.params_for(&preset.params, &file);
+        let rep = identify::replay(&params, rec).expect("replay");
+        let raw = &rep.errors.raw;
+        let k = rep.errors.samples as f64;
+        eu += k * raw.u.rms_error.powi(2);
+        ey += k * raw.ydd.map_or(0.0, |c| c.rms_error.powi(2));
+        n += k;
+    }
+    [
+        (eu / n - U_NOISE * U_NOISE).max(0.0).sqrt(),
+        (ey / n - ACC_NOISE * ACC_NOISE).max(0.0).sqrt(),
+    ]
 }

@@ -6,11 +6,9 @@
 //! nominal one. Slow (minutes): run it with
 //! `cargo test --no-default-features --test it identify::survey -- --ignored --nocapture`.
 
-use super::rig::{ACC_NOISE, RigEffects, U_NOISE, calibrate_paper, campaign_of};
+use super::rig::{RigEffects, above_noise, calibrate_paper, campaign_of};
 use rand::{Rng, SeedableRng};
-use seat_twin::dataset::Record;
 use seat_twin::identify::{self, CalibrationReport, EffectId, Verdict};
-use seat_twin::params::Params;
 use seat_twin::preset::Preset;
 
 /// What a rig is, for judging a calibration.
@@ -239,24 +237,6 @@ fn checked_parameters(c: &Case, r: &CalibrationReport) -> Vec<(String, f64, f64,
     out
 }
 
-/// RMS above the sensor noise of the raw `u` and `ÿ`, pooled over `recs`, replayed with
-/// `params` as `seat-twin replay --preset` replays them.
-fn above_noise(params: &Params, recs: &[Record]) -> [f64; 2] {
-    let (mut eu, mut ey, mut n) = (0.0, 0.0, 0.0);
-    for rec in recs {
-        let rep = identify::replay(params, rec).expect("replay");
-        let raw = &rep.errors.raw;
-        let k = rep.errors.samples as f64;
-        eu += k * raw.u.rms_error.powi(2);
-        ey += k * raw.ydd.map_or(0.0, |c| c.rms_error.powi(2));
-        n += k;
-    }
-    [
-        (eu / n - U_NOISE * U_NOISE).max(0.0).sqrt(),
-        (ey / n - ACC_NOISE * ACC_NOISE).max(0.0).sqrt(),
-    ]
-}
-
 fn effects_right(c: &Case, r: &CalibrationReport) -> bool {
     let mut found: Vec<EffectId> = r.effects.iter().map(|e| e.effect).collect();
     found.sort();
@@ -326,8 +306,8 @@ fn randomised_rigs_confusion_table() {
         identify::report::calibrated_preset(&r)
             .save(&path)
             .expect("save");
-        let cal = Preset::load(&path).expect("load").params;
-        let nominal = above_noise(&Params::paper(), &recs);
+        let cal = Preset::load(&path).expect("load");
+        let nominal = above_noise(&Preset::paper(), &recs);
         let after = above_noise(&cal, &recs);
         let halved = (0..2).all(|k| after[k] <= 0.5 * nominal[k]);
         replay_ok += usize::from(halved);
