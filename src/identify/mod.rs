@@ -436,7 +436,7 @@ struct LibraryPass {
     proposal: Option<proposed::Proposal>,
     /// The parameters the drifts were judged at (the proposal's, else the search's).
     final_params: Params,
-    drifts: Vec<drift::Drift>,
+    drifts: Vec<result::Drift>,
     notes: Vec<String>,
 }
 
