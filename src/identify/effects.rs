@@ -27,7 +27,8 @@ fn confounding_hint(a: EffectId, b: EffectId, recs: &[PreparedRecord]) -> &'stat
 }
 
 /// Coarse start for a candidate effect: its first parameter on a log grid (both signs for a
-/// signed one), the others at 0; returns the best of the grid and "off".
+/// signed one), the others at 0; returns the best of the grid and "off". For friction, the
+/// best of that and a Stribeck peak at a few Stribeck velocities.
 pub fn multi_start(
     ev: &Evaluator<'_>,
     current: &Params,
@@ -55,7 +56,22 @@ pub fn multi_start(
             p
         })
         .collect();
-    Ok(best_of(ev, &starts)?.unwrap_or(off))
+    let best = best_of(ev, &starts)?.unwrap_or(off);
+    if e != EffectId::Friction {
+        return Ok(best);
+    }
+    // The Stribeck velocity does nothing while the Stribeck force is 0, so a fit started
+    // there leaves it where the parameters hold it: also start from a Stribeck peak of half
+    // the Coulomb force found above, at velocities spread over a decade.
+    let mut starts = vec![best];
+    for velocity in [0.002, 0.005, 0.01, 0.02] {
+        let mut p = best;
+        let friction = &mut p.plant.effects.friction;
+        friction.stribeck_n = 0.5 * friction.coulomb_n;
+        friction.stribeck_velocity_m_s = velocity;
+        starts.push(p);
+    }
+    Ok(best_of(ev, &starts)?.unwrap_or(best))
 }
 
 /// The parameter set of `starts` with the smallest residual sum of squares on the fit
