@@ -107,7 +107,7 @@ impl Run for CalibrateArgs {
             let params: Vec<String> = e
                 .params
                 .iter()
-                .map(|(k, v)| format!("{k} = {}", identify::report::format_value(k, *v)))
+                .map(|(k, v)| format!("{k} = {}", identify::units::format_value(k, *v)))
                 .collect();
             println!("effect {}: {}", e.effect.name(), params.join(", "));
         }
@@ -127,7 +127,7 @@ impl Run for CalibrateArgs {
         for v in report.calibrated.iter().filter(|_| calibrated) {
             println!(
                 "{}",
-                identify::report::format_parameter(&v.name, v.value, v.std)
+                identify::units::format_parameter(&v.name, v.value, v.std)
             );
         }
         println!(

@@ -8,7 +8,7 @@ use crate::params::Params;
 /// Symbol, display scale (display = SI × scale), unit of a fitted parameter by its report
 /// name (`tau_s`, `effective_bulk_modulus_pa`, …). Unknown names pass through unchanged.
 pub fn display_of(name: &str) -> (&str, f64, &'static str) {
-    match crate::identify::report::display_unit(name) {
+    match crate::identify::units::display_unit(name) {
         ("", _, _) => (name, 1.0, ""),
         known => known,
     }

@@ -154,7 +154,7 @@ pub fn find(
                 format!(
                     "{} {}",
                     r.name,
-                    super::report::format_parameter(&name, *v, *s)
+                    super::units::format_parameter(&name, *v, *s)
                 )
             })
             .collect();

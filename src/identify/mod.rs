@@ -90,6 +90,7 @@ pub mod result;
 pub mod stages;
 #[cfg(test)]
 mod testdata;
+pub mod units;
 
 use crate::dataset::Record;
 use crate::params::{ParamError, Params};
@@ -531,7 +532,7 @@ fn refuse_undetermined(mut report: CalibrationReport) -> CalibrationReport {
                 "excitation: the final fit does not determine `{}` ({}); nothing is \
                  calibrated: record longer or larger command and platform motions",
                 v.name,
-                report::format_parameter(&v.name, v.value, v.std)
+                units::format_parameter(&v.name, v.value, v.std)
             )
         })
         .collect();

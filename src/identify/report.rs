@@ -5,6 +5,7 @@
 //! in [`super::figures`].
 
 pub use super::figures::write_plots;
+use super::units::{display_unit, format_parameter, format_value};
 use super::{CalibrationReport, ErrorSummary, Verdict};
 use crate::output::{OutputError, json_number};
 use crate::preset::{Preset, PresetMeta, write_atomic};
@@ -158,71 +159,7 @@ pub fn calibrated_preset(r: &CalibrationReport) -> Preset {
 
 /// A number with `decimals` decimals, or `—` when it is not finite.
 fn num(v: f64, decimals: usize) -> String {
-    if v.is_finite() {
-        format!("{v:.decimals$}")
-    } else {
-        "—".into()
-    }
-}
-
-/// Decimals that show two significant digits of `std` (at least `min`, at most 9).
-fn decimals_for(std: f64, min: usize) -> usize {
-    if !(std.is_finite() && std > 0.0) {
-        return min;
-    }
-    let d = 1 - std.log10().floor() as i64;
-    (d.max(min as i64).min(9)) as usize
-}
-
-/// Display form of a fitted parameter by its report name (the last part of its preset key:
-/// `cd`, `tau_s`, `coulomb_n`): `(symbol, scale from SI, unit)`, display = SI × scale, read
-/// from the parameter table [`crate::params::PARAMS`] (the first key ending in the name, so
-/// `tau_s` is the valve's delay); `("", 1, "")` for a name it does not know. Used by the
-/// report, the CLI and the app.
-pub fn display_unit(name: &str) -> (&'static str, f64, &'static str) {
-    crate::params::PARAMS
-        .iter()
-        .find(|s| s.key.rsplit('.').next() == Some(name))
-        .map_or(("", 1.0, ""), |s| {
-            (s.symbol, s.display.scale, s.display.unit)
-        })
-}
-
-/// `τ = 17.50 ± 0.01 ms`: the parameter in its display unit with its 1-σ uncertainty.
-pub fn format_parameter(name: &str, value: f64, std: f64) -> String {
-    let (sym, k, unit) = display_unit(name);
-    let sym = if sym.is_empty() { name } else { sym };
-    let (v, u) = (value * k, std * k.abs());
-    let d = decimals_for(u, if v.abs() >= 100.0 { 0 } else { 2 });
-    let unit = if unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {unit}")
-    };
-    if u.is_finite() {
-        format!("{sym} = {} ± {}{unit}", num(v, d), num(u, d))
-    } else {
-        format!("{sym} = {}{unit} (uncertainty not determined)", num(v, d))
-    }
-}
-
-/// A parameter value alone in its display unit (`0.596 GPa`).
-pub fn format_value(name: &str, value: f64) -> String {
-    let (_, k, unit) = display_unit(name);
-    let v = value * k;
-    let d = if v.abs() >= 100.0 {
-        1
-    } else if v.abs() >= 1.0 {
-        3
-    } else {
-        4
-    };
-    let unit = if unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {unit}")
-    };
-    format!("{}{unit}", num(v, d))
+    crate::format::fixed_or(v, decimals, "—")
 }
 
 fn channel_list(m: &std::collections::BTreeMap<String, f64>) -> String {
