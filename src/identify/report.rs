@@ -413,20 +413,27 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
     for e in &r.sensors {
         let text = match e.kind.as_str() {
             "lag" => format!(
-                "the {} sensor lags by {:.2} ± {:.2} ms",
+                "the {} sensor lags: a first-order filter on its samples of time constant \
+                 {:.2} ± {:.2} ms (it reads about half a sample less late than that)",
                 e.channel,
                 1e3 * e.value,
                 1e3 * e.uncertainty
             ),
             "scale" => format!(
-                "the {} sensor reads {:+.2} ± {:.2} % of the true value",
+                "the {} sensor reads {:.2} ± {:.2} % {} (scale {:.4} ± {:.4})",
                 e.channel,
-                100.0 * (e.value - 1.0),
-                100.0 * e.uncertainty
+                100.0 * (e.value - 1.0).abs(),
+                100.0 * e.uncertainty,
+                if e.value < 1.0 { "low" } else { "high" },
+                e.value,
+                e.uncertainty
             ),
             _ => format!(
-                "the {} sensor has an offset of {:.4} ± {:.4} (SI)",
-                e.channel, e.value, e.uncertainty
+                "the {} sensor has an offset of {:.4} ± {:.4} {}",
+                e.channel,
+                e.value,
+                e.uncertainty,
+                if e.channel == "ydd" { "m/s²" } else { "(SI)" }
             ),
         };
         let _ = writeln!(

@@ -203,9 +203,15 @@ pub fn declared_fit(
         let mut sensors = Knob::SENSORS.to_vec();
         let mut with = knobs.clone();
         with.extend(&sensors);
+        // The stroke filter starts at 2 ms: it runs on the samples, and a time constant well
+        // under a sample interval hardly changes them, so from 0 the fit could not move it.
+        let mut sensor_start = fit.params;
+        if sensor_start.sensors.u_lag_s == 0.0 {
+            sensor_start.sensors.u_lag_s = SENSOR_LAG_START_S;
+        }
         let mut s = fit::fit(
             ev,
-            &fit.params,
+            &sensor_start,
             &with,
             options.max_iterations,
             n_eff0 / n as f64,
@@ -231,7 +237,7 @@ pub fn declared_fit(
             sensors.retain(|k| !drop.contains(k));
             with = knobs.clone();
             with.extend(&sensors);
-            let mut start = fit.params;
+            let mut start = sensor_start;
             for k in &drop {
                 if let Some((_, _, exact)) = k.sensor() {
                     k.spec().set_unchecked(&mut start, exact);
@@ -263,6 +269,10 @@ pub fn declared_fit(
         undetermined,
     })
 }
+
+/// Where the fit of the stroke sensor's filter time constant starts [s]: a few samples at the
+/// usual 0.5–2 kHz, where the sampled filter's effect on the record is clearly non-zero.
+const SENSOR_LAG_START_S: f64 = 2e-3;
 
 /// The verdict from the raw error measure ([`super::raw_error`]) before and after the
 /// effects: `explained` when effects were added and after them every record's every raw

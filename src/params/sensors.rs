@@ -5,8 +5,10 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Sensor properties: `ÿ_read = scale·ÿ + offset`; `u_read` is `u` through a first-order lag
-/// of time constant `lag` (at low frequency, `u(t − lag)`).
+/// Sensor properties: `ÿ_read = scale·ÿ + offset`; `u_read` is `u` through a first-order
+/// low-pass of time constant `lag` run on the record's samples (a data-acquisition filter):
+/// `u_read[n] = a·u_read[n−1] + (1 − a)·u[n]` with `a = e^(−Δt/lag)`, Δt the record's
+/// sample interval. At low frequency it delays `u` by `Δt·a/(1 − a) ≈ lag − Δt/2`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SensorParams {
@@ -14,7 +16,7 @@ pub struct SensorParams {
     pub ydd_scale: f64,
     /// Offset of the body accelerometer [m/s^2], -50 ..= 50.
     pub ydd_offset_m_s2: f64,
-    /// Lag of the stroke sensor [s], 0 ..= 0.05.
+    /// Time constant of the stroke sensor's first-order filter on the samples [s], 0 ..= 0.05.
     pub u_lag_s: f64,
 }
 
@@ -61,10 +63,13 @@ impl SensorParams {
         }
     }
 
-    /// The stroke sensor's reading of `u` sampled every `dt` [s], in place: `u` through a
-    /// first-order lag of time constant `u_lag_s` (a sensor's or its amplifier's filter),
-    /// exact for `u` linear between samples and started at rest at the first sample. At low
-    /// frequency it is a delay of `u_lag_s`.
+    /// The stroke sensor's reading of `u` sampled every `dt` [s], in place: the samples
+    /// through a first-order low-pass of time constant `u_lag_s`, `y[n] = a·y[n−1] +
+    /// (1 − a)·u[n]`, `a = e^(−dt/u_lag_s)`, started settled at the first sample. Why this
+    /// form and not a continuous-time lag: a rig's stroke filter runs in its data
+    /// acquisition, on the samples, and the two read differently by half a sample at low
+    /// frequency (the sampled filter delays by `dt·a/(1 − a) ≈ u_lag_s − dt/2`), which at
+    /// 200 Hz is more than a small lag itself.
     pub fn read_u(&self, u: &mut [f64], dt: f64) {
         let mut reader = self.u_reader(dt);
         for v in u {
@@ -73,14 +78,14 @@ impl SensorParams {
     }
 }
 
-/// The stroke sensor's first-order lag, sample by sample ([`SensorParams::u_reader`]).
+/// The stroke sensor's first-order filter, sample by sample ([`SensorParams::u_reader`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StrokeReader {
     lag_s: f64,
     dt: f64,
     a: f64,
-    /// Last output and last input; `None` before the first sample (started at rest there).
-    state: Option<(f64, f64)>,
+    /// Last output; `None` before the first sample (settled there).
+    state: Option<f64>,
 }
 
 impl StrokeReader {
@@ -91,17 +96,17 @@ impl StrokeReader {
         }
         let y = match self.state {
             None => u,
-            Some((y, prev)) => lag_step(y, prev, u, self.dt, self.lag_s, self.a),
+            Some(y) => self.a * y + (1.0 - self.a) * u,
         };
-        self.state = Some((y, u));
+        self.state = Some(y);
         y
     }
 }
 
 /// One step of a first-order lag `T·ẏ = x − y` of time constant `lag_s` [s] over `dt` [s],
 /// exact for an input linear from `prev` to `x` over the step: `y` the output at its start,
-/// `a = e^(−dt/T)`. Shared by the stroke sensor's lag and the valve command's
-/// ([`crate::params::CorrectionParams::lagged_command`]).
+/// `a = e^(−dt/T)`: the valve command's lag
+/// ([`crate::params::CorrectionParams::lagged_command`]), a continuous-time servo filter.
 #[inline]
 pub fn lag_step(y: f64, prev: f64, x: f64, dt: f64, lag_s: f64, a: f64) -> f64 {
     let slope = (x - prev) / dt;
@@ -112,9 +117,9 @@ pub fn lag_step(y: f64, prev: f64, x: f64, dt: f64, lag_s: f64, a: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// A first-order lag of 2.5 ms: a ramp comes out 2.5 ms late once settled (exactly, as
-    /// the discretisation is exact for a ramp), and a step rises to 1 − e⁻¹ in one time
-    /// constant; scale and offset are affine.
+    /// A sampled first-order filter of 2.5 ms at 1 ms samples: a ramp comes out
+    /// `a/(1 − a)` samples late once settled (a = e^(−0.4): 2.03 ms, about 2.5 − ½ ms), and
+    /// a step rises by `1 − aⁿ` after n samples; scale and offset are affine.
     #[test]
     fn sensors_read_as_documented() {
         let s = SensorParams {
@@ -124,8 +129,11 @@ mod tests {
         };
         let mut u: Vec<f64> = (0..200).map(|i| i as f64).collect();
         s.read_u(&mut u, 1e-3);
+        let a = (-0.4f64).exp();
+        let late = a / (1.0 - a);
+        assert!((late - 2.0332).abs() < 1e-4, "{late}");
         for (i, v) in u.iter().enumerate().skip(60) {
-            assert!((v - (i as f64 - 2.5)).abs() < 1e-9, "{i} {v}");
+            assert!((v - (i as f64 - late)).abs() < 1e-9, "{i} {v}");
         }
         let mut step = vec![0.0, 1.0, 1.0, 1.0, 1.0, 1.0];
         let lag = SensorParams {
@@ -133,10 +141,10 @@ mod tests {
             ..Default::default()
         };
         lag.read_u(&mut step, 1e-3);
-        // Linear between the samples 0 and 1 (the only form a sampled record gives), then
-        // held: at t = 1 ms + 2 ms the response is near 1 − e⁻¹ of the way past the ramp.
-        assert!(step[3] > 0.5 && step[3] < 0.8, "{step:?}");
-        assert!(step.windows(2).all(|w| w[1] >= w[0]));
+        let a = (-0.5f64).exp();
+        for (n, v) in step.iter().enumerate().skip(1) {
+            assert!((v - (1.0 - a.powi(n as i32))).abs() < 1e-12, "{step:?}");
+        }
         let mut y = vec![10.0, -5.0];
         s.read_ydd(&mut y);
         assert!((y[0] - 9.7).abs() < 1e-12 && (y[1] + 4.7).abs() < 1e-12);

@@ -55,8 +55,9 @@ pub(super) struct RigEffects {
     pub(super) ydd_scale: Option<f64>,
     /// Sensor, not plant: the body accelerometer's offset [m/s²].
     pub(super) ydd_offset: Option<f64>,
-    /// Sensor, not plant: the stroke sensor's first-order lag [s], integrated at the rig's
-    /// step.
+    /// Sensor, not plant: the time constant [s] of the stroke sensor's first-order low-pass,
+    /// run by the data acquisition on the samples (`y[n] = a·y[n−1] + (1 − a)·u[n]`,
+    /// `a = e^(−Δt/T)`), as a rig's digital filter is.
     pub(super) u_lag_s: Option<f64>,
 }
 
@@ -265,10 +266,17 @@ impl Rig {
             let (x, _, xdd) = plat(t);
             t_col.push(s as f64 * dt_s);
             v_col.push(hist[hist.len() - 1]);
-            let u_true = if self.fx.u_lag_s.is_some() {
-                u_sensed
-            } else {
-                y[0]
+            let u_true = match self.fx.u_lag_s {
+                Some(lag) if s > 0 => {
+                    let a = (-dt_s / lag).exp();
+                    u_sensed = a * u_sensed + (1.0 - a) * y[0];
+                    u_sensed
+                }
+                Some(_) => {
+                    u_sensed = y[0];
+                    u_sensed
+                }
+                None => y[0],
             };
             let un = u_true + pos_noise.sample(&mut rng);
             u_col.push(lsb * ((un + 0.0375) / lsb).round() - 0.0375);
@@ -310,9 +318,6 @@ impl Rig {
                     y[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
                 }
                 y[8] = y[8].clamp(-0.8e-3, 0.8e-3);
-                if let Some(lag) = self.fx.u_lag_s {
-                    u_sensed += h / lag * (y[0] - u_sensed);
-                }
                 t += h;
                 let c = cmd(t, &y);
                 if let Some(lag) = self.fx.command_lag_s {
