@@ -540,7 +540,11 @@ pub enum CommandSignal {
         /// Sweep duration [s].
         duration_s: f64,
     },
-    /// A sampled command, linearly interpolated (replayed records).
+    /// A sampled command (replayed records), read between its samples by the same cubic
+    /// (Catmull–Rom) interpolation as sampled platform motion, held after the last. Why not
+    /// linear: a rig's command is smooth between its samples (a cosine computed at the
+    /// controller's rate, a filtered drive), and at 200 Hz a linear read of a 20 Hz sine test
+    /// loses 3.3 % of its amplitude (Catmull–Rom 0.2 %), which a fit then blames on the plant.
     Sampled {
         /// Sample step [s].
         dt: f64,
@@ -613,15 +617,7 @@ impl CommandSignal {
                     amplitude_v * (2.0 * PI * phase).cos()
                 }
             }
-            CommandSignal::Sampled { dt, values } => {
-                let s = t / dt;
-                let i = s.floor() as usize;
-                match (values.get(i), values.get(i + 1)) {
-                    (Some(a), Some(b)) => a + (s - i as f64) * (b - a),
-                    (Some(a), None) => *a,
-                    _ => values.last().copied().unwrap_or(0.0),
-                }
-            }
+            CommandSignal::Sampled { dt, values } => catmull_rom(values, t / dt),
             CommandSignal::Streamed(c) => c.at(t),
         }
     }

@@ -120,32 +120,20 @@ fn a_steady_campaign_has_no_drift() {
 }
 
 /// The rig sampled at 200 Hz and at 10 kHz (the ends of the range the reader accepts): both
-/// are calibrated, the declared mismatch found (Cd −5 %, τ +1.5 ms). At 10 kHz nothing is
-/// added. Known limitation at 200 Hz: the 20 Hz sine test has ten samples per period, and
-/// the replay's reconstruction of the command between samples differs enough from the rig's
-/// continuous one that `compliance` is added (ΔBIC ≈ −56) and the verdict reads `explained`
-/// instead of `no_missing_effect`; Cd and τ are still right.
+/// are calibrated, the declared mismatch found (Cd −5 %, τ +1.5 ms), and nothing is added:
+/// `no_missing_effect` at both. At 200 Hz the 20 Hz sine test has ten samples per period,
+/// which the replay's cubic read of the command between samples follows to 0.2 %.
 #[test]
 fn campaigns_at_200_hz_and_10_khz_are_calibrated() {
     for rate in [10_000.0, 200.0] {
         let r = calibrate_paper(&campaign_at(RigEffects::default(), 33, false, rate));
         let s = summary(&r);
         eprintln!("{rate} Hz: {s}");
-        assert!(
-            matches!(r.verdict, Verdict::NoMissingEffect | Verdict::Explained),
-            "{rate} Hz: {s}"
-        );
-        let found: Vec<_> = r.effects.iter().map(|e| e.effect).collect();
-        if rate > 1000.0 {
-            assert!(found.is_empty(), "{rate} Hz: {s}");
-        } else {
-            assert!(
-                found
-                    .iter()
-                    .all(|e| *e == seat_twin::identify::EffectId::Compliance),
-                "{rate} Hz: {s}"
-            );
-        }
+        // The rig has no hidden effect: at both rates nothing is added. (At 200 Hz, while the
+        // replay read the command linearly between samples, a 20 Hz test's command lost 3.3 %
+        // and `compliance` was added for it.)
+        assert_eq!(r.verdict, Verdict::NoMissingEffect, "{rate} Hz: {s}");
+        assert!(r.effects.is_empty(), "{rate} Hz: {s}");
         assert!(
             (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.02,
             "{rate} Hz: {s}"
