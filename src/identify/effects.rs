@@ -26,14 +26,16 @@ fn confounding_hint(a: EffectId, b: EffectId, recs: &[PreparedRecord]) -> &'stat
     }
 }
 
-/// Coarse start for a candidate effect: its first parameter on a log grid (both signs for a
-/// signed one), the others at 0; returns the best of the grid and "off". For friction, the
-/// best of that and a Stribeck peak at a few Stribeck velocities.
+/// Coarse starts for a candidate effect's fit: its first parameter on a log grid (both signs
+/// for a signed one), the others at 0, gives the best of the grid and "off". For friction
+/// also the best of a Stribeck peak at a few Stribeck velocities from there: a friction law
+/// with and without its peak are different valleys of the fit (a peak's start can look worse
+/// before the fit and end better, or the other way round), so both are fitted.
 pub fn multi_start(
     ev: &Evaluator<'_>,
     current: &Params,
     e: EffectId,
-) -> Result<Params, IdentifyError> {
+) -> Result<Vec<Params>, IdentifyError> {
     let mut off = *current;
     for k in e.knobs() {
         // A shape knob starts where the parameters hold it (see `Knob::is_shape`).
@@ -58,20 +60,25 @@ pub fn multi_start(
         .collect();
     let best = best_of(ev, &starts)?.unwrap_or(off);
     if e != EffectId::Friction {
-        return Ok(best);
+        return Ok(vec![best]);
     }
     // The Stribeck velocity does nothing while the Stribeck force is 0, so a fit started
     // there leaves it where the parameters hold it: also start from a Stribeck peak of half
     // the Coulomb force found above, at velocities spread over a decade.
-    let mut starts = vec![best];
-    for velocity in [0.002, 0.005, 0.01, 0.02] {
-        let mut p = best;
-        let friction = &mut p.plant.effects.friction;
-        friction.stribeck_n = 0.5 * friction.coulomb_n;
-        friction.stribeck_velocity_m_s = velocity;
-        starts.push(p);
+    let peaks: Vec<Params> = [0.002, 0.005, 0.01, 0.02]
+        .iter()
+        .map(|&velocity| {
+            let mut p = best;
+            let friction = &mut p.plant.effects.friction;
+            friction.stribeck_n = 0.5 * friction.coulomb_n;
+            friction.stribeck_velocity_m_s = velocity;
+            p
+        })
+        .collect();
+    match best_of(ev, &peaks)? {
+        Some(peak) if peak != best => Ok(vec![best, peak]),
+        _ => Ok(vec![best]),
     }
-    Ok(best_of(ev, &starts)?.unwrap_or(best))
 }
 
 /// The parameter set of `starts` with the smallest residual sum of squares on the fit
@@ -138,10 +145,16 @@ pub fn rank_candidates(
         .map(|&e| {
             let mut ks = screen_knobs.clone();
             ks.extend_from_slice(e.knobs());
-            let p0 = multi_start(ev, &current.params, e)?;
-            let f = fit::fit(ev, &p0, &ks, options.screen_iterations, bic.ratio())?;
+            // From each start, keeping the fit with the smallest residual.
+            let mut best: Option<FitResult> = None;
+            for p0 in multi_start(ev, &current.params, e)? {
+                let f = fit::fit(ev, &p0, &ks, options.screen_iterations, bic.ratio())?;
+                if best.as_ref().is_none_or(|b| f.rss < b.rss) {
+                    best = Some(f);
+                }
+            }
             ev.monitor.advance();
-            Ok((e, f))
+            best.map(|f| (e, f)).ok_or(IdentifyError::Cancelled)
         })
         .collect();
     ev.monitor.check()?;
