@@ -114,12 +114,14 @@ pub enum DatasetError {
         row: String,
     },
     /// Times not strictly increasing, not uniformly sampled, or too few samples.
-    #[error("{file}: line {line}: {reason}")]
+    #[error("{file}: line {line}{}: {reason}", column.map(|c| format!(", column \"{c}\"")).unwrap_or_default())]
     Time {
         /// The file.
         file: PathBuf,
         /// 1-based line of the offending sample.
         line: usize,
+        /// The time column's name where the fault is in its values (`t`), else `None`.
+        column: Option<&'static str>,
         /// What is wrong, naming the times involved.
         reason: String,
     },

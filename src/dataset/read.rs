@@ -544,6 +544,7 @@ fn parse_lines(
                     return Err(DatasetError::Time {
                         file: file(),
                         line: n,
+                        column: Some("t"),
                         reason: format!(
                             "t = {} s is not after the previous sample's t = {} s (line {prev_line}); \
                              t must be strictly increasing",
@@ -602,6 +603,7 @@ fn parse_lines(
         return Err(DatasetError::Time {
             file: file(),
             line: map.line_of(0),
+            column: None,
             reason: "only one data row; at least two are needed to find the sample rate".into(),
         });
     }

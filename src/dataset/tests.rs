@@ -253,13 +253,13 @@ fn time_errors() {
     assert!(matches!(e, DatasetError::Time { .. }));
     assert_eq!(
         e.to_string(),
-        "ride.csv: line 5: t = 0.1 s is not after the previous sample's t = 0.1 s (line 4); \
+        "ride.csv: line 5, column \"t\": t = 0.1 s is not after the previous sample's t = 0.1 s (line 4); \
          t must be strictly increasing"
     );
     let e = err("t,x\n0.2,0\n0.1,0\n", RecordKind::Excitation);
     assert!(
         e.to_string()
-            .starts_with("ride.csv: line 3: t = 0.1 s is not after"),
+            .starts_with("ride.csv: line 3, column \"t\": t = 0.1 s is not after"),
         "{e}"
     );
 
@@ -271,7 +271,7 @@ fn time_errors() {
     assert!(matches!(e, DatasetError::Time { line: 9, .. }), "{e:?}");
     assert_eq!(
         e.to_string(),
-        "ride.csv: line 9: the step from t = 0.003 s (line 7) to t = 0.005 s is 0.002 s, \
+        "ride.csv: line 9, column \"t\": the step from t = 0.003 s (line 7) to t = 0.005 s is 0.002 s, \
          but the record's step (the median) is 0.001 s ± 1 %: the record is not uniformly \
          sampled (a missing, repeated or shifted sample?)"
     );

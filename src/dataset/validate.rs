@@ -34,6 +34,7 @@ pub(super) fn sample_step(
         return Err(DatasetError::Time {
             file: path.to_path_buf(),
             line: map.line_of(i + 1),
+            column: Some("t"),
             reason: format!(
                 "the step from t = {} s (line {}) to t = {} s is {} s, but the record's step \
                  (the median) is {} s ± 1 %: the record is not uniformly sampled \
