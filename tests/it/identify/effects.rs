@@ -69,7 +69,7 @@ fn friction_is_found() {
 /// a step away from τ; with the start integrated exactly the library's friction leaves that
 /// start window. With pressure sensors, and beside an overlap, friction is `explained`.
 #[test]
-#[ignore = "known failure: one start band at 3.4× its floor (README, What fails)"]
+#[ignore = "known failure: one start band at 3.1× its floor (README, What fails)"]
 fn friction_alone_is_explained() {
     let fx = RigEffects {
         friction: Some((40.0, 20.0, 0.01, 80.0)),
