@@ -10,7 +10,7 @@
 //! of, and the delay line is read, once its window is full, by four masked loads without the
 //! edge cases of [`DelayLine::value_at_tap`]. The arithmetic is [`Simulation::hold_step`] and
 //! [`Simulation::finish_step`]'s, operation for operation (the tests of
-//! [`super::specialised`] check every sample bit for bit against [`Run::step`](super::Run::step)).
+//! [`super::specialised`] check every sample bit for bit against [`Run::step`]).
 
 use super::delay::{DelayLine, Tap};
 use super::run::{RunState, check_bounds};
@@ -19,8 +19,10 @@ use crate::control::{Measurement, PaperLaw};
 use crate::model::{CommandPath, Inputs, Model};
 use crate::scenario::{PlatformMotion, PlatformSample};
 use crate::simulation::lti::ExactHold;
+#[cfg(doc)]
+use {super::Run, crate::scenario::SampledMotion};
 
-/// The loop of [`Run::stream_steps`](super::Run::stream_steps) for an exact-hold run of `sim` with the paper controller
+/// The loop of [`Run::stream_steps`] for an exact-hold run of `sim` with the paper controller
 /// and a settled tap on a record the grid lands on; `None`, with `sim` untouched, for any
 /// other run. `sim` must be one that `HoldRun::fits` in [`super::specialised`] (closed loop,
 /// the command at the valve kept between steps).
@@ -114,14 +116,14 @@ struct Problem<'a, M, const N: usize> {
 }
 
 impl<M: Model<N> + CommandPath, const N: usize> Problem<'_, M, N> {
-    /// The record's sample index at grid index `n` ([`SampledMotion::at_sample`](crate::scenario::SampledMotion::at_sample)'s, held at
+    /// The record's sample index at grid index `n` ([`SampledMotion::at_sample`]'s, held at
     /// the last sample after the end).
     #[inline(always)]
     fn index(&self, n: u64) -> usize {
         (n as usize * self.stride).min(self.xdd.len() - 1)
     }
 
-    /// [`SampledMotion::xdd_at_sample`](crate::scenario::SampledMotion::xdd_at_sample) at grid index `n` [m/s²].
+    /// [`SampledMotion::xdd_at_sample`] at grid index `n` [m/s²].
     #[inline(always)]
     fn xdd_at(&self, n: u64) -> f64 {
         self.xdd.get(self.index(n)).copied().unwrap_or(0.0)
