@@ -315,6 +315,66 @@ impl Controller {
     }
 }
 
+/// The paper law's changing states held apart from its [`Controller`] by a stepping loop, so
+/// that they can stay in registers ([`Controller::paper_law`]): the same arithmetic as
+/// [`Controller::advance`] and [`Controller::output`] for [`ControllerKind::Paper`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PaperLaw {
+    /// `Kp` [V/m].
+    kp: f64,
+    /// `Ki` [V·s/m].
+    ki: f64,
+    /// `∫ẍ dt` since the start [m/s].
+    xd: f64,
+    /// The previous measurement.
+    last: Measurement,
+    /// The command last sent, after saturation [V].
+    sent: f64,
+}
+
+impl PaperLaw {
+    /// [`Controller::advance`] of the paper law.
+    #[inline(always)]
+    pub(crate) fn advance(&mut self, m: Measurement) {
+        self.xd += m.dxd;
+        self.last = m;
+    }
+
+    /// [`Controller::output`] of the paper law [V], before saturation.
+    #[inline(always)]
+    pub(crate) fn output(&self, u: f64) -> f64 {
+        // `+ 0.0` as `output_with(u, 0.0)` adds it (it turns −0 into +0).
+        let xd = self.xd + 0.0;
+        self.kp * u + self.ki * xd
+    }
+
+    /// [`Controller::sent`].
+    #[inline(always)]
+    pub(crate) fn sent(&mut self, v: f64) {
+        self.sent = v;
+    }
+}
+
+impl Controller {
+    /// Its states as a [`PaperLaw`], for the paper structure (`None` for the others).
+    pub(crate) fn paper_law(&self) -> Option<PaperLaw> {
+        (self.params.kind == ControllerKind::Paper).then_some(PaperLaw {
+            kp: self.params.kp_v_per_m,
+            ki: self.params.ki_v_s_per_m,
+            xd: self.xd,
+            last: self.last,
+            sent: self.sent,
+        })
+    }
+
+    /// Takes back the states of a [`PaperLaw`] from [`Self::paper_law`].
+    pub(crate) fn set_paper_law(&mut self, law: &PaperLaw) {
+        self.xd = law.xd;
+        self.last = law.last;
+        self.sent = law.sent;
+    }
+}
+
 /// A controller's signal states ([`Controller::snapshot`]); its gains and discretisation are
 /// rebuilt from the parameters.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

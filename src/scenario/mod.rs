@@ -271,6 +271,12 @@ impl SampledMotion {
         }
     }
 
+    /// The samples of `x` [m], `ẋ` [m/s] and `ẍ` [m/s²], for a loop that reads them in place
+    /// as [`Self::at_sample`] does.
+    pub(crate) fn channels(&self) -> (&[f64], &[f64], &[f64]) {
+        (&self.x, &self.xd, &self.xdd)
+    }
+
     /// Acceleration at sample `i` (held after the end).
     #[inline(always)]
     pub fn xdd_at_sample(&self, i: usize) -> f64 {

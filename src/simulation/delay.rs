@@ -64,6 +64,26 @@ impl DelayLine {
         self.len as f64 * self.h - self.h
     }
 
+    /// The line, leaving in its place an empty one of the same step (whose reads would panic)
+    /// until it is put back: a stepping loop holds it as a local of its own.
+    pub(crate) fn take(&mut self) -> DelayLine {
+        let empty = DelayLine {
+            h: self.h,
+            inv_h: self.inv_h,
+            len: 0,
+            ring: Vec::new(),
+            mask: 0,
+            initial: self.initial,
+        };
+        std::mem::replace(self, empty)
+    }
+
+    /// Samples pushed so far.
+    #[inline]
+    pub(crate) fn pushed(&self) -> u64 {
+        self.len
+    }
+
     /// Newest sample (or the initial value).
     #[inline]
     pub fn last_value(&self) -> f64 {
@@ -121,6 +141,27 @@ impl DelayLine {
     #[inline(always)]
     pub fn value_at_tap(&self, n: u64, tap: &Tap) -> f64 {
         self.interpolate(n as i64 - tap.back, tap.f, &tap.w)
+    }
+
+    /// The first grid index from which a read through `tap` is inside the window for a line
+    /// that holds the samples up to the one before the read (`len` equal to the read's index,
+    /// as in a loop that pushes one sample per step and reads the step's end before pushing):
+    /// from there on [`Self::value_at_interior_tap`] reads what [`Self::value_at_tap`] reads.
+    /// `None` for a tap that never reads inside (one not settled, or longer than the ring).
+    pub(crate) fn interior_from(&self, tap: &Tap) -> Option<u64> {
+        (tap.is_settled() && (tap.back as usize) < self.ring.len()).then_some(tap.back as u64 + 1)
+    }
+
+    /// [`Self::value_at_tap`] at grid index `n` for a read inside the window (`n` at least
+    /// [`Self::interior_from`], and `len == n`): the four masked loads and the weighted sum
+    /// only, without the edge cases.
+    #[inline(always)]
+    pub(crate) fn value_at_interior_tap(&self, n: u64, tap: &Tap) -> f64 {
+        debug_assert!(self.len == n && n > tap.back as u64);
+        let base = n - tap.back as u64;
+        let at = |i: u64| self.ring[(i & self.mask) as usize];
+        let w = &tap.w;
+        w[0] * at(base - 1) + w[1] * at(base) + w[2] * at(base + 1) + w[3] * at(base + 2)
     }
 
     /// Value at `base + f` (grid units, `0 ≤ f < 1`) with the cubic weights `w` of `f`.

@@ -425,9 +425,10 @@ impl<const N: usize> Etd4<N> {
     }
 }
 
-/// The exponential method's coefficients built last in this process ([`Etd4::new`]), by the
+/// The exponential method's coefficients and the exact hold's transitions built last in this
+/// process ([`Etd4::new`], [`ExactHold::new`](crate::simulation::lti::ExactHold::new)), by the
 /// bits of what they were built from.
-mod memo {
+pub(super) mod memo {
     use std::any::Any;
     use std::sync::{Arc, Mutex};
 
@@ -439,14 +440,14 @@ mod memo {
     static KEPT_COEFFICIENTS: Mutex<Kept> = Mutex::new(Vec::new());
 
     /// A copy of the coefficients built from `key`, if kept.
-    pub(super) fn get<T: Any + Clone>(key: &[u64]) -> Option<T> {
+    pub(in crate::simulation) fn get<T: Any + Clone>(key: &[u64]) -> Option<T> {
         let kept = KEPT_COEFFICIENTS.lock().unwrap_or_else(|e| e.into_inner());
         let (_, value) = kept.iter().find(|(k, _)| k.as_slice() == key)?;
         value.downcast_ref::<T>().cloned()
     }
 
     /// Keeps `value`, built from `key`, in place of the oldest when full.
-    pub(super) fn put<T: Any + Send + Sync>(key: Vec<u64>, value: T) {
+    pub(in crate::simulation) fn put<T: Any + Send + Sync>(key: Vec<u64>, value: T) {
         let mut kept = KEPT_COEFFICIENTS.lock().unwrap_or_else(|e| e.into_inner());
         if kept.len() >= KEPT {
             kept.remove(0);

@@ -19,6 +19,7 @@ use crate::simulation::lti::{ExactHold, LinearTimeInvariant};
 
 mod csv;
 pub mod delay;
+mod hold_paper;
 pub mod integrate;
 pub mod lti;
 mod run;

@@ -52,6 +52,12 @@ impl RunState {
         &self.contacts
     }
 
+    /// Whether the body is in an end-stop contact (an event still open).
+    #[inline(always)]
+    pub(crate) fn in_contact(&self) -> bool {
+        self.in_contact
+    }
+
     /// Opens, extends or closes the end-stop contact event at the current time for stroke
     /// `u` [m]. Called every step: the usual step (no contact before or after) writes nothing.
     #[inline(always)]

@@ -8,6 +8,7 @@
 //! for bit (this module's test checks it on every model and stepper).
 
 use super::delay::{DelayLine, Tap};
+use super::hold_paper::stream_hold_paper;
 use super::run::{RunState, check_bounds, stream, stream_portable, wide_simd};
 use super::{Method, Run, Sample, SimError, Simulation};
 use crate::control::{Controller, Measurement};
@@ -322,8 +323,11 @@ fn stream_hold_portable<M: Model<N> + CommandPath, const N: usize>(
     hold: &ExactHold<N>,
     t_end: f64,
     every: u64,
-    record: impl FnMut(Sample) -> bool,
+    mut record: impl FnMut(Sample) -> bool,
 ) -> Result<(u64, bool), SimError> {
+    if let Some(result) = stream_hold_paper(sim, hold, t_end, every, &mut record) {
+        return result;
+    }
     let mut run = HoldRun::new(sim, hold);
     let result = stream_portable(&mut run, t_end, every, record);
     let HoldRun {
@@ -466,6 +470,20 @@ mod tests {
                 Simulation::exact_hold(LinearModel::new(&q), 1e-3, drive, ride()).expect("τ ≥ h");
             assert_same_runs(sim, 2);
         }
+        // End-stop overruns opening and closing (a stroke far shorter than the ride's), which
+        // the paper controller's own loop tracks as the general one does.
+        let mut tight = p;
+        tight.plant.cylinder.stroke_m = 2e-5;
+        let sim = Simulation::exact_hold(LinearModel::new(&tight), 1e-3, closed.clone(), ride())
+            .expect("τ ≥ h");
+        let mut probe = sim.clone();
+        probe.run_until(1.5, 1, |_| {}).expect("no divergence");
+        assert!(
+            probe.contacts().len() > 2,
+            "{} overruns",
+            probe.contacts().len()
+        );
+        assert_same_runs(sim, 1);
         // A delay of between one and two steps: its tap is not settled, so the general loop.
         let mut near = p;
         near.linear.tau_s = 1.5e-3;
