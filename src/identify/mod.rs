@@ -4,7 +4,7 @@
 //! parallelises the replays):
 //!
 //! 1. [`replay`]: a [`crate::dataset::Record`] drives the twin in open loop with its `v_in` and
-//!    platform motion (the measured platform acceleration conditioned by a zero-phase 30 Hz
+//!    platform motion (the measured platform acceleration conditioned by a zero-phase 20 Hz
 //!    low-pass, [`replay::EXCITATION_CONDITIONING`]); the twin's channels come back aligned
 //!    with the record, with residuals. The error metric ([`replay`] module docs) compares the
 //!    relative velocity and the body acceleration through the same zero-phase filter, weighted

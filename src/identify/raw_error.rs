@@ -40,7 +40,7 @@ pub const DEFAULT_LIMIT: f64 = 3.0;
 /// Lower edge of the band above the rig's motion [Hz], where the measured channels hold the
 /// sensor noise and the oil-column mode's ringing (about 77 Hz, almost undamped) after each
 /// command step. The replay does not carry the platform's content there (its excitation is
-/// low-passed at 30 Hz, [`super::replay::EXCITATION_CONDITIONING`]), and it times a ringing
+/// low-passed at 20 Hz, [`super::replay::EXCITATION_CONDITIONING`]), and it times a ringing
 /// started by a command step only to within its RK4 step (0.1 ms, 5 % of a 77 Hz period: with
 /// the right model the first second of a sine test leaves 6× the white floor there). So in
 /// this band the measure holds the twin's own RMS against the measured channel's RMS (never
