@@ -9,7 +9,9 @@
 
 use super::delay::{DelayLine, Tap};
 use super::hold_paper::stream_hold_paper;
-use super::run::{RunState, check_bounds, stream, stream_portable, wide_simd};
+#[cfg(target_arch = "x86_64")]
+use super::run::wide_simd;
+use super::run::{RunState, check_bounds, stream, stream_portable};
 use super::{Method, Run, Sample, SimError, Simulation};
 use crate::control::{Controller, Measurement};
 use crate::model::{CommandPath, Inputs, Model, ModelKind};
