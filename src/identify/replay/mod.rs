@@ -8,14 +8,17 @@
 //! **Conditioning of the measured excitation** ([`EXCITATION_CONDITIONING`]). The recorded
 //! platform acceleration is not fed raw: it is low-passed at [`EXCITATION_LOWPASS_HZ`] with a
 //! zero-phase 6th-order Butterworth filter (run forward and backward, so
-//! `|H|² = 1/(1 + (f/20 Hz)¹²)`: flat to 1 % up to 13 Hz, −43 dB at 46 Hz, −70 dB at 77 Hz).
-//! The twin's oil column is a mass on a fluid spring with almost no damping (about 77 Hz,
-//! ζ ≈ 3·10⁻⁴ with the paper's parameters; about 46 Hz once a calibration lowers the effective
-//! bulk modulus to 0.5 GPa): the accelerometer's white noise has power there, and fed raw it
-//! makes the replayed `ÿ` ring at a hundred times the measured one. The cut-off was 30 Hz
-//! until 2026-11-27 (−22 dB at 46 Hz): a calibrated twin with compliance then rang on the
-//! noise of a closed-loop record's platform accelerometer (the demo campaign's bump: raw ÿ
-//! error 0.094 m/s² calibrated against 0.088 nominal, 0.080 noise; at 20 Hz 0.080 both). A
+//! `|H|² = 1/(1 + (f/20 Hz)¹²)`: flat to 1 % up to 13 Hz, −87 dB at 46 Hz, −140 dB at
+//! 77 Hz). The twin's oil column is a mass on a fluid spring with almost no damping (about
+//! 77 Hz, ζ ≈ 3·10⁻⁴ with the paper's parameters; about 46 Hz once a calibration lowers the
+//! effective bulk modulus to 0.5 GPa): the accelerometer's white noise has power there, and
+//! fed raw it makes the replayed `ÿ` ring at a hundred times the measured one. The cut-off was
+//! 30 Hz until 2026-11-27 (flat to 20 Hz, −6 dB at 30 Hz, −44 dB at 46 Hz): the platform
+//! accelerometer's noise between 20 and 40 Hz passed into the twin, and a calibrated twin with
+//! compliance, its mode at 46 Hz, amplified it and rang there (the demo campaign's bump: the
+//! replayed ÿ's content from 20 to 50 Hz 0.037 m/s² nominal, 0.049 calibrated, 0.018 of it
+//! at the mode; raw ÿ error 0.094 m/s² calibrated against 0.088 nominal, noise 0.080; with
+//! the 20 Hz cut-off 0.080 both). A
 //! seat rig's platform motion (the ISO 7096, ISO 5007 and EN 13490 classes, a ride, a bump)
 //! lies below 13 Hz, so the filter removes noise, not motion. A record with `x` but no `xdd`
 //! is filtered the same way before its double difference.
@@ -64,7 +67,7 @@ pub const EXCITATION_LOWPASS_HZ: f64 = 20.0;
 /// How the measured excitation is conditioned, and why (for file headers and reports).
 pub const EXCITATION_CONDITIONING: &str = "platform xdd (or x) low-passed before it drives the \
 twin: zero-phase 6th-order Butterworth at 20 Hz, run forward and backward (|H|^2 = \
-1/(1+(f/20 Hz)^12); flat within 1 % to 13 Hz, -43 dB at 46 Hz, -70 dB at 77 Hz); xd and x are \
+1/(1+(f/20 Hz)^12); flat within 1 % to 13 Hz, -87 dB at 46 Hz, -140 dB at 77 Hz); xd and x are \
 its trapezoidal integrals. Why: the twin's oil-column mode (about 77 Hz, 46 Hz with an \
 effective bulk modulus of 0.5 GPa; damping ratio about 3e-4) is almost undamped, and the \
 accelerometer's white noise, fed raw, makes the replayed ydd ring far above the measured one; \
@@ -598,8 +601,8 @@ mod tests {
     }
 
     /// The excitation filter does what its documentation states: flat within 1 % to 13 Hz,
-    /// −6 dB at 20 Hz (the combined gain of both passes, |H|²), −43 dB at the 46 Hz mode of a
-    /// twin with compliance, −70 dB at the paper twin's 77 Hz mode.
+    /// −6 dB at 20 Hz (the combined gain of both passes, |H|²), −87 dB at the 46 Hz mode of a
+    /// twin with compliance, −140 dB at the paper twin's 77 Hz mode.
     #[test]
     fn excitation_filter_passes_the_rig_band_and_kills_the_oil_column_mode() {
         let dt = 1e-3;
