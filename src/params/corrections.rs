@@ -90,7 +90,7 @@ impl CorrectionParams {
         let mut v = 0.0;
         out.push(v);
         for w in v_in.windows(2) {
-            v = super::sensors::lag_step(v, w[0], w[1], dt, t, a);
+            v = lag_step(v, w[0], w[1], dt, t, a);
             out.push(v);
         }
         out
@@ -102,6 +102,16 @@ impl CorrectionParams {
     pub fn body_force(&self, u: f64, du: f64) -> f64 {
         -self.spring_n_per_m * u - self.quadratic_damping_n_s2_per_m2 * du * du.abs()
     }
+}
+
+/// One step of a first-order lag `T·ẏ = x − y` of time constant `lag_s` [s] over `dt` [s],
+/// exact for an input linear from `prev` to `x` over the step: `y` the output at its start,
+/// `a = e^(−dt/T)`: the valve command's lag ([`CorrectionParams::lagged_command`]), a
+/// continuous-time servo filter.
+#[inline]
+fn lag_step(y: f64, prev: f64, x: f64, dt: f64, lag_s: f64, a: f64) -> f64 {
+    let slope = (x - prev) / dt;
+    a * y + (1.0 - a) * prev + slope * (dt - lag_s * (1.0 - a))
 }
 
 #[cfg(test)]

@@ -52,8 +52,6 @@ impl SensorParams {
     /// time (a streamed replay); [`Self::read_u`] is it over a whole channel.
     pub fn u_reader(&self, dt: f64) -> StrokeReader {
         StrokeReader {
-            lag_s: self.u_lag_s,
-            dt,
             a: if self.u_lag_s > 0.0 && dt > 0.0 {
                 (-dt / self.u_lag_s).exp()
             } else {
@@ -81,8 +79,7 @@ impl SensorParams {
 /// The stroke sensor's first-order filter, sample by sample ([`SensorParams::u_reader`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StrokeReader {
-    lag_s: f64,
-    dt: f64,
+    /// `e^(−dt/u_lag_s)`; 0 without a lag (the reading is then the sample itself).
     a: f64,
     /// Last output; `None` before the first sample (settled there).
     state: Option<f64>,
@@ -91,7 +88,7 @@ pub struct StrokeReader {
 impl StrokeReader {
     /// The reading of the next sample of `u` [m].
     pub fn read(&mut self, u: f64) -> f64 {
-        if self.lag_s <= 0.0 || self.dt <= 0.0 {
+        if self.a == 0.0 {
             return u;
         }
         let y = match self.state {
@@ -101,16 +98,6 @@ impl StrokeReader {
         self.state = Some(y);
         y
     }
-}
-
-/// One step of a first-order lag `T·ẏ = x − y` of time constant `lag_s` [s] over `dt` [s],
-/// exact for an input linear from `prev` to `x` over the step: `y` the output at its start,
-/// `a = e^(−dt/T)`: the valve command's lag
-/// ([`crate::params::CorrectionParams::lagged_command`]), a continuous-time servo filter.
-#[inline]
-pub fn lag_step(y: f64, prev: f64, x: f64, dt: f64, lag_s: f64, a: f64) -> f64 {
-    let slope = (x - prev) / dt;
-    a * y + (1.0 - a) * prev + slope * (dt - lag_s * (1.0 - a))
 }
 
 #[cfg(test)]
