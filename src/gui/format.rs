@@ -137,7 +137,10 @@ pub fn active_effects(p: &Params) -> Vec<String> {
         (
             e.leakage.enabled,
             "leakage",
-            &[("coefficient_m3_per_s_pa", e.leakage.coefficient_m3_per_s_pa)],
+            &[
+                ("coefficient_m3_per_s_pa", e.leakage.coefficient_m3_per_s_pa),
+                ("growth_per_pa", e.leakage.growth_per_pa),
+            ],
         ),
         (
             e.compliance.enabled,

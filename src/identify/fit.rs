@@ -55,6 +55,9 @@ pub enum Knob {
     SensorULag,
     /// `effects.leakage.coefficient_m3_per_s_pa` [m³/(s·Pa)] = 1e-12·|θ|.
     Leakage,
+    /// `effects.leakage.growth_per_pa` [1/Pa] = 1e-8·|θ|: the leakage coefficient's growth
+    /// with the pressure across the piston.
+    LeakageGrowth,
     /// `effects.compliance.effective_bulk_modulus_pa` [Pa] = β_fluid/(1 + |θ|).
     Compliance,
     /// `effects.supply_sag.droop_pa_per_m3_s` [Pa/(m³/s)] = 1e10·|θ|.
@@ -135,6 +138,7 @@ impl Knob {
 
             Knob::Offset if e.valve_offset.enabled => e.valve_offset.bias_v / 0.02,
             Knob::Leakage if e.leakage.enabled => e.leakage.coefficient_m3_per_s_pa / 1e-12,
+            Knob::LeakageGrowth if e.leakage.enabled => e.leakage.growth_per_pa / 1e-8,
             Knob::Compliance if e.compliance.enabled => {
                 (p.plant.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0)
                     .max(0.0)
@@ -171,6 +175,7 @@ impl Knob {
 
             Knob::Offset => "effects.valve_offset.bias_v",
             Knob::Leakage => "effects.leakage.coefficient_m3_per_s_pa",
+            Knob::LeakageGrowth => "effects.leakage.growth_per_pa",
             Knob::Compliance => "effects.compliance.effective_bulk_modulus_pa",
             Knob::SupplySag => "effects.supply_sag.droop_pa_per_m3_s",
             Knob::CdSlope => "corrections.cd_opening_slope",
@@ -207,6 +212,7 @@ impl Knob {
 
             Knob::Offset => 0.02 * theta,
             Knob::Leakage => 1e-12 * a,
+            Knob::LeakageGrowth => 1e-8 * a,
             Knob::Compliance => p.plant.fluid.bulk_modulus_pa / (1.0 + a),
             Knob::SupplySag => 1e10 * a,
             Knob::CdSlope => 0.1 * theta,
@@ -232,7 +238,7 @@ impl Knob {
             | Knob::FrictionSmoothing => e.friction.enabled = true,
             Knob::Overlap | Knob::OverlapEdge => e.valve_overlap.enabled = true,
             Knob::Offset => e.valve_offset.enabled = true,
-            Knob::Leakage => e.leakage.enabled = true,
+            Knob::Leakage | Knob::LeakageGrowth => e.leakage.enabled = true,
             Knob::Compliance => e.compliance.enabled = true,
             Knob::SupplySag => e.supply_sag.enabled = true,
             // Corrections have no switch: zero is off.

@@ -199,7 +199,7 @@ impl EffectId {
             ],
             EffectId::ValveOverlap => &[Knob::Overlap, Knob::OverlapEdge],
             EffectId::ValveOffset => &[Knob::Offset],
-            EffectId::Leakage => &[Knob::Leakage],
+            EffectId::Leakage => &[Knob::Leakage, Knob::LeakageGrowth],
             EffectId::Compliance => &[Knob::Compliance],
             EffectId::SupplySag => &[Knob::SupplySag],
         }

@@ -281,12 +281,7 @@ impl Twin {
     /// Internal leakage flow chamber 1 → chamber 2 [m³/s].
     #[inline(always)]
     fn leakage(&self, s: &TwinState) -> f64 {
-        let l = &self.params.plant.effects.leakage;
-        let laminar = if l.enabled {
-            l.coefficient_m3_per_s_pa * (s.p1 - s.p2)
-        } else {
-            0.0
-        };
+        let laminar = self.params.plant.effects.leakage.flow(s.p1 - s.p2);
         let c_t = self
             .params
             .plant

@@ -113,14 +113,21 @@ impl Default for OffsetEffect {
     }
 }
 
-/// Laminar internal leakage from the upper to the lower chamber: `Ql = Cl·(p1 − p2)`.
+/// Internal leakage from the upper to the lower chamber across the piston:
+/// `Ql = Cl·Δp·(1 + g·|Δp|)` with `Δp = p1 − p2`. The flow through the piston's clearance is
+/// laminar (`g = 0`: a fixed gap); on real pistons the gap widens with the pressure across it
+/// (the seal lifts, the bore and piston deform), so the coefficient grows with `|Δp|`: `g` is
+/// that growth, the fraction by which `Cl` rises per pascal.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LeakageEffect {
     /// Effect active.
     pub enabled: bool,
-    /// Leakage coefficient `Cl` [m³/(s·Pa)], 0 ..= 1e-9.
+    /// Leakage coefficient `Cl` at small `|Δp|` [m³/(s·Pa)], 0 ..= 1e-9.
     pub coefficient_m3_per_s_pa: f64,
+    /// Growth `g` of the coefficient with `|Δp|` [1/Pa], 0 ..= 1e-6 (0: a fixed gap; 5e-8
+    /// doubles the leakage coefficient at 200 bar).
+    pub growth_per_pa: f64,
 }
 
 impl Default for LeakageEffect {
@@ -128,6 +135,22 @@ impl Default for LeakageEffect {
         Self {
             enabled: false,
             coefficient_m3_per_s_pa: 0.0,
+            growth_per_pa: 0.0,
+        }
+    }
+}
+
+impl LeakageEffect {
+    /// The leakage flow [m³/s] from chamber 1 to chamber 2 at `dp = p1 − p2` [Pa] (0 when
+    /// the effect is off).
+    #[inline(always)]
+    pub fn flow(&self, dp: f64) -> f64 {
+        if !self.enabled {
+            0.0
+        } else if self.growth_per_pa == 0.0 {
+            self.coefficient_m3_per_s_pa * dp
+        } else {
+            self.coefficient_m3_per_s_pa * dp * (1.0 + self.growth_per_pa * dp.abs())
         }
     }
 }

@@ -120,7 +120,7 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
-pub static PARAMS: [ParamSpec; 58] = [
+pub static PARAMS: [ParamSpec; 59] = [
     entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
     entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
@@ -221,6 +221,9 @@ pub static PARAMS: [ParamSpec; 58] = [
     entry!("effects.leakage.coefficient_m3_per_s_pa", plant.effects.leakage.coefficient_m3_per_s_pa,
         "C_leak", "m³/(s·Pa)", [0.0, 1e-9], None, (BAR / L_PER_MIN, "(L/min)/bar"),
         "internal leakage coefficient across the piston"),
+    entry!("effects.leakage.growth_per_pa", plant.effects.leakage.growth_per_pa, "g_leak", "1/Pa",
+        [0.0, 1e-6], None, (1e9, "% per 100 bar"),
+        "growth of the leakage coefficient with the pressure across the piston"),
     entry!("effects.compliance.effective_bulk_modulus_pa",
         plant.effects.compliance.effective_bulk_modulus_pa, "β", "Pa", [1e6, 1e10], None, (1e-9, "GPa"),
         "effective bulk modulus with air and hose walls"),

@@ -211,6 +211,9 @@ fn checked_parameters(c: &Case, r: &CalibrationReport) -> Vec<(String, f64, f64,
             let truth = match k.as_str() {
                 "bias_v" => c.fx.offset.map(|o| -o / 8e-5),
                 "droop_pa_per_m3_s" => c.fx.sag,
+                // The rig's leakage grows by |Δp|/200 bar (rig.rs): g = 5e-8 /Pa.
+                "coefficient_m3_per_s_pa" => c.fx.leakage,
+                "growth_per_pa" => c.fx.leakage.map(|_| 5e-8),
                 _ => None,
             };
             if let Some(t) = truth {
