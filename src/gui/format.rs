@@ -145,10 +145,13 @@ pub fn active_effects(p: &Params) -> Vec<String> {
         (
             e.compliance.enabled,
             "compliance",
-            &[(
-                "effective_bulk_modulus_pa",
-                e.compliance.effective_bulk_modulus_pa,
-            )],
+            &[
+                (
+                    "effective_bulk_modulus_pa",
+                    e.compliance.effective_bulk_modulus_pa,
+                ),
+                ("hose_bulk_modulus_pa", e.compliance.hose_bulk_modulus_pa),
+            ],
         ),
         (
             e.supply_sag.enabled,

@@ -27,7 +27,8 @@ fn confounding_hint(a: EffectId, b: EffectId, recs: &[PreparedRecord]) -> &'stat
 }
 
 /// Coarse starts for a candidate effect's fit: its first parameter on a log grid (both signs
-/// for a signed one), the others at 0, gives the best of the grid and "off". For friction
+/// for a signed one), the others at 0, gives the best of the grid and "off". For compliance
+/// also the best of hoses softer than the chambers from there. For friction
 /// also the best of a Stribeck peak at a few Stribeck velocities from there: a friction law
 /// with and without its peak are different valleys of the fit (a peak's start can look worse
 /// before the fit and end better, or the other way round), so both are fitted.
@@ -59,6 +60,22 @@ pub fn multi_start(
         })
         .collect();
     let best = best_of(ev, &starts)?.unwrap_or(off);
+    if e == EffectId::Compliance {
+        // Hoses softer than the chambers are another valley: their mode sits elsewhere. Also
+        // start from the hoses at 1/1.25 … 1/3 of the chambers' modulus found above.
+        let softer: Vec<Params> = [0.25, 0.5, 1.0, 2.0]
+            .iter()
+            .map(|&t| {
+                let mut p = best;
+                Knob::HoseCompliance.set(&mut p, t);
+                p
+            })
+            .collect();
+        return Ok(match best_of(ev, &softer)? {
+            Some(hose) if hose != best => vec![best, hose],
+            _ => vec![best],
+        });
+    }
     if e != EffectId::Friction {
         return Ok(vec![best]);
     }

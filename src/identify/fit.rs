@@ -60,6 +60,9 @@ pub enum Knob {
     LeakageGrowth,
     /// `effects.compliance.effective_bulk_modulus_pa` [Pa] = β_fluid/(1 + |θ|).
     Compliance,
+    /// `effects.compliance.hose_bulk_modulus_pa` [Pa] = β_chambers/(1 + |θ|): hoses softer
+    /// than the chambers (set after [`Knob::Compliance`], whose value it divides).
+    HoseCompliance,
     /// `effects.supply_sag.droop_pa_per_m3_s` [Pa/(m³/s)] = 1e10·|θ|.
     SupplySag,
     /// `corrections.cd_opening_slope` [-] = 0.1·θ.
@@ -143,6 +146,9 @@ impl Knob {
                 (p.plant.fluid.bulk_modulus_pa / e.compliance.effective_bulk_modulus_pa - 1.0)
                     .max(0.0)
             }
+            Knob::HoseCompliance if e.compliance.enabled => {
+                (p.effective_bulk_modulus_pa() / p.hose_bulk_modulus_pa() - 1.0).max(0.0)
+            }
             Knob::SupplySag if e.supply_sag.enabled => e.supply_sag.droop_pa_per_m3_s / 1e10,
             Knob::CdSlope => c.cd_opening_slope / 0.1,
             Knob::FlowDirection => c.flow_gain_direction / 0.05,
@@ -177,6 +183,7 @@ impl Knob {
             Knob::Leakage => "effects.leakage.coefficient_m3_per_s_pa",
             Knob::LeakageGrowth => "effects.leakage.growth_per_pa",
             Knob::Compliance => "effects.compliance.effective_bulk_modulus_pa",
+            Knob::HoseCompliance => "effects.compliance.hose_bulk_modulus_pa",
             Knob::SupplySag => "effects.supply_sag.droop_pa_per_m3_s",
             Knob::CdSlope => "corrections.cd_opening_slope",
             Knob::FlowDirection => "corrections.flow_gain_direction",
@@ -214,6 +221,9 @@ impl Knob {
             Knob::Leakage => 1e-12 * a,
             Knob::LeakageGrowth => 1e-8 * a,
             Knob::Compliance => p.plant.fluid.bulk_modulus_pa / (1.0 + a),
+            // 0 stands for "as the chambers" (θ = 0).
+            Knob::HoseCompliance if a == 0.0 => 0.0,
+            Knob::HoseCompliance => p.effective_bulk_modulus_pa() / (1.0 + a),
             Knob::SupplySag => 1e10 * a,
             Knob::CdSlope => 0.1 * theta,
             Knob::FlowDirection | Knob::ReturnEdge => 0.05 * theta,
@@ -226,8 +236,17 @@ impl Knob {
             Knob::TurbulentLeakage => 1e-9 * a,
             Knob::CommandLag => 1e-3 * a,
         };
+        // The hoses' modulus is the chambers' divided by (1 + θ_hose): a new chambers' modulus
+        // keeps that ratio, so the two knobs can be set in either order.
+        let hose_ratio =
+            (self == Knob::Compliance && p.plant.effects.compliance.enabled).then(|| {
+                p.plant.effects.compliance.hose_bulk_modulus_pa / p.effective_bulk_modulus_pa()
+            });
         s.set_unchecked(p, value.clamp(s.min, s.max));
         let e = &mut p.plant.effects;
+        if let Some(r) = hose_ratio {
+            e.compliance.hose_bulk_modulus_pa = r * e.compliance.effective_bulk_modulus_pa;
+        }
         match self {
             Knob::Cd | Knob::Tau | Knob::Mass => {}
             Knob::SensorYddScale | Knob::SensorYddOffset | Knob::SensorULag => {}
@@ -239,7 +258,7 @@ impl Knob {
             Knob::Overlap | Knob::OverlapEdge => e.valve_overlap.enabled = true,
             Knob::Offset => e.valve_offset.enabled = true,
             Knob::Leakage | Knob::LeakageGrowth => e.leakage.enabled = true,
-            Knob::Compliance => e.compliance.enabled = true,
+            Knob::Compliance | Knob::HoseCompliance => e.compliance.enabled = true,
             Knob::SupplySag => e.supply_sag.enabled = true,
             // Corrections have no switch: zero is off.
             Knob::CdSlope
@@ -257,6 +276,7 @@ impl Knob {
     pub fn value(self, p: &Params) -> f64 {
         match self {
             Knob::Compliance => p.effective_bulk_modulus_pa(),
+            Knob::HoseCompliance => p.hose_bulk_modulus_pa(),
             _ => self.spec().get(p),
         }
     }

@@ -200,7 +200,7 @@ impl EffectId {
             EffectId::ValveOverlap => &[Knob::Overlap, Knob::OverlapEdge],
             EffectId::ValveOffset => &[Knob::Offset],
             EffectId::Leakage => &[Knob::Leakage, Knob::LeakageGrowth],
-            EffectId::Compliance => &[Knob::Compliance],
+            EffectId::Compliance => &[Knob::Compliance, Knob::HoseCompliance],
             EffectId::SupplySag => &[Knob::SupplySag],
         }
     }

@@ -155,14 +155,19 @@ impl LeakageEffect {
     }
 }
 
-/// Reduced effective bulk modulus of the oil in chambers and hoses.
+/// Reduced effective bulk modulus of the oil (entrained air, elastic walls) in chambers and
+/// hoses. A hose's wall stretches far more than a steel cylinder's, so the hoses may have a
+/// softer modulus of their own (`hose_bulk_modulus_pa`; 0: the chambers' for both).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ComplianceEffect {
     /// Effect active.
     pub enabled: bool,
-    /// Effective bulk modulus [Pa], 1e6 ..= 1e10 (replaces `fluid.bulk_modulus_pa`).
+    /// Effective bulk modulus [Pa] of the chambers (and of the hoses when
+    /// `hose_bulk_modulus_pa` is 0), 1e6 ..= 1e10 (replaces `fluid.bulk_modulus_pa`).
     pub effective_bulk_modulus_pa: f64,
+    /// Effective bulk modulus of the hoses [Pa], 0 or 1e6 ..= 1e10 (0: as the chambers).
+    pub hose_bulk_modulus_pa: f64,
 }
 
 impl Default for ComplianceEffect {
@@ -170,6 +175,7 @@ impl Default for ComplianceEffect {
         Self {
             enabled: false,
             effective_bulk_modulus_pa: 1.2e9,
+            hose_bulk_modulus_pa: 0.0,
         }
     }
 }

@@ -176,6 +176,17 @@ impl Params {
         }
     }
 
+    /// Bulk modulus in use in the hoses [Pa]: the compliance effect's hose modulus if
+    /// enabled and set, else [`Self::effective_bulk_modulus_pa`].
+    pub fn hose_bulk_modulus_pa(&self) -> f64 {
+        let c = &self.plant.effects.compliance;
+        if c.enabled && c.hose_bulk_modulus_pa > 0.0 {
+            c.hose_bulk_modulus_pa
+        } else {
+            self.effective_bulk_modulus_pa()
+        }
+    }
+
     /// Largest stable step of the configured integrator [s].
     pub fn step_limit_s(&self) -> f64 {
         match self.numerics.integrator {
@@ -246,16 +257,17 @@ pub struct Derived {
 }
 
 /// Computes the lumped hose and chamber quantities of Eqs. (8)–(11), with the effective bulk
-/// modulus (compliance effect) applied to hoses and chambers alike.
+/// moduli (compliance effect) of the hoses and the chambers.
 pub fn derived(p: &Params) -> Derived {
     let beta = p.effective_bulk_modulus_pa();
+    let beta_hose = p.hose_bulk_modulus_pa();
     let (l, d) = (p.plant.hose.length_m, p.plant.hose.diameter_m);
     let area = p.plant.cylinder.piston_area_m2();
     Derived {
         area,
         resistance: 128.0 * p.plant.fluid.viscosity_pa_s * l / (PI * d.powi(4)),
         inertance: 4.0 * p.plant.fluid.density_kg_m3 * l / (PI * d * d),
-        c_hose: PI * l * d * d / (4.0 * beta),
+        c_hose: PI * l * d * d / (4.0 * beta_hose),
         c_chamber: PI
             * p.plant.cylinder.stroke_m
             * (p.plant.cylinder.bore_m.powi(2) - p.plant.cylinder.rod_m.powi(2))

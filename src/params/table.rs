@@ -120,7 +120,7 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
-pub static PARAMS: [ParamSpec; 59] = [
+pub static PARAMS: [ParamSpec; 60] = [
     entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
     entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
@@ -227,6 +227,9 @@ pub static PARAMS: [ParamSpec; 59] = [
     entry!("effects.compliance.effective_bulk_modulus_pa",
         plant.effects.compliance.effective_bulk_modulus_pa, "β", "Pa", [1e6, 1e10], None, (1e-9, "GPa"),
         "effective bulk modulus with air and hose walls"),
+    entry!("effects.compliance.hose_bulk_modulus_pa", plant.effects.compliance.hose_bulk_modulus_pa,
+        "β_hose", "Pa", [0.0, 1e10], None, (1e-9, "GPa"),
+        "effective bulk modulus of the hoses (0: as the chambers)"),
     entry!("effects.supply_sag.droop_pa_per_m3_s", plant.effects.supply_sag.droop_pa_per_m3_s, "droop",
         "Pa/(m³/s)", [0.0, 1e12], None, (L_PER_MIN / BAR, "bar/(L/min)"),
         "supply pressure droop per drawn flow"),

@@ -3,7 +3,8 @@
 //! null case — each with its own declared mismatch (Cd ± 6 %, τ ± 2 ms) and noise seed.
 //! It prints the verdict/effects confusion table, the share of fitted parameters whose
 //! truth lies within 3σ, and the replayed raw error of each calibrated.toml against the
-//! nominal one. Slow (minutes): run it with
+//! nominal one, and fails below the bars (see the end of the test). Slow (about two
+//! minutes): run it with
 //! `cargo test --no-default-features --test it identify::survey -- --ignored --nocapture`.
 
 use super::rig::{RigEffects, above_noise, calibrate_paper, campaign_of};
@@ -214,6 +215,9 @@ fn checked_parameters(c: &Case, r: &CalibrationReport) -> Vec<(String, f64, f64,
                 // The rig's leakage grows by |Δp|/200 bar (rig.rs): g = 5e-8 /Pa.
                 "coefficient_m3_per_s_pa" => c.fx.leakage,
                 "growth_per_pa" => c.fx.leakage.map(|_| 5e-8),
+                // The rig's chambers and hoses have moduli of their own (rig.rs).
+                "effective_bulk_modulus_pa" => c.fx.compliance.map(|(_, chambers)| chambers),
+                "hose_bulk_modulus_pa" => c.fx.compliance.map(|(hose, _)| hose),
                 _ => None,
             };
             if let Some(t) = truth {
@@ -395,8 +399,26 @@ fn randomised_rigs_confusion_table() {
         started.elapsed().as_secs_f64(),
         misses.join("\n")
     );
-    // The survey measures; it asserts only what must never happen: a rig with an effect
-    // outside the library called `explained`.
+    // A rig with an effect outside the library must never be called `explained`; over the
+    // whole survey, the bars: at least 90 % of the fitted parameters within 3σ of
+    // the truth, and (what the survey reached on 2026-11-27: 30/30, 76 of 78, 30/30) at most
+    // one wrong verdict and one calibrated.toml that does not halve the nominal error.
+    if only.is_none() {
+        assert!(
+            10 * params_in >= 9 * params_total,
+            "truth within 3σ: {params_in}/{params_total}"
+        );
+        assert!(
+            right + 1 >= rows.len(),
+            "verdict right: {right}/{}",
+            rows.len()
+        );
+        assert!(
+            replay_ok + 1 >= rows.len(),
+            "replay halved: {replay_ok}/{}",
+            rows.len()
+        );
+    }
     for r in &rows {
         assert!(
             !(r.0 == Class::Outside && r.1 == Verdict::Explained),
