@@ -222,8 +222,13 @@ fn replay_samples(
     name: &str,
     mut sink: impl FnMut(Sample),
 ) -> Result<(), IdentifyError> {
+    // Within the method's stability limit, and short enough to resolve the friction.
     let h = step_for_rate(
-        params.numerics.max_step_s.min(0.9 * params.step_limit_s()),
+        params
+            .numerics
+            .max_step_s
+            .min(0.9 * params.step_limit_s())
+            .min(params.friction_resolving_step_s()),
         1.0 / dt,
     );
     // A proposed lag of the valve command filters the command as sent.

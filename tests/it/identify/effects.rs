@@ -64,12 +64,15 @@ fn friction_is_found() {
 }
 
 /// KNOWN FAILURE (README, "What fails"): friction alone, no pressure sensors, reads
-/// `unexplained` by one band, ÿ of the 20 Hz / 0.72 V test in 0.5–5 Hz over its first
-/// 1.5 s at 3.4× its floor (limit 3). It passed while the replay opened the valve up to half
-/// a step away from τ; with the start integrated exactly the library's friction leaves that
-/// start window. With pressure sensors, and beside an overlap, friction is `explained`.
+/// `unexplained` by two bands: ÿ in 0.5–5 Hz of the 20 Hz / 0.72 V test over its 1.5 s at
+/// 3.8× its floor and of the 5 Hz test at 3.5× (limit 3). The library holds the rig's law: at
+/// the rig's own values (Cd and τ re-fitted) every band is at 1.35× or below, since replays
+/// resolve the friction's time constant (`Params::friction_resolving_step_s`; at the 0.5 ms
+/// step that law left 2.8×). The fit settles elsewhere (Coulomb 35.9 ± 1.9 N against 40,
+/// Stribeck velocity 12.2 ± 0.7 mm/s against 10) and 8 or 20 Jacobians end at the same point.
+/// With pressure sensors, and beside an overlap, friction is `explained`.
 #[test]
-#[ignore = "known failure: one start band at 3.1× its floor (README, What fails)"]
+#[ignore = "known failure: two start bands at 3.5–3.8× their floor (README, What fails)"]
 fn friction_alone_is_explained() {
     let fx = RigEffects {
         friction: Some((40.0, 20.0, 0.01, 80.0)),
