@@ -379,12 +379,15 @@ impl<M: Model<N> + CommandPath, const N: usize> Problem<'_, M, N> {
         // The law's `∫ẍ`, and the last step's `∫ẍ dt` for its last measurement at the end.
         let mut xd = law.platform_velocity();
         let mut dxd_last = 0.0;
+        // On a divergence: the measurement of the step before it, if in this phase.
+        let mut last_before_divergence = None;
         while !stopped && n < n_stop {
             // Simulation::hold_step.
             let xdd0 = xdd_now;
             let xdd1 = self.xdd_at(n + 1);
             let v0 = valve;
             let v1 = line.read_end(n + 1, &self.tap);
+            let y_prev = y;
             let mut y1 = y;
             self.hold.step(&mut y1, [v0, xdd0], [v1, xdd1]);
             let dxd = 0.5 * h * (xdd0 + xdd1);
@@ -401,6 +404,16 @@ impl<M: Model<N> + CommandPath, const N: usize> Problem<'_, M, N> {
                 .fold(true, |ok, (v, b)| ok & (v.abs() <= *b));
             if !within && let Err(e) = check_bounds::<M, N>(&y, n as f64 * h, |i| self.bounds[i]) {
                 diverged = Some(e);
+                // The law was last advanced by the step before (none in this phase when this
+                // was its first step).
+                if n - 1 > n_enter {
+                    last_before_divergence = Some(Measurement {
+                        u: model.relative_position(&y_prev),
+                        ydd: 0.0,
+                        xdd: xdd0,
+                        dxd: dxd_last,
+                    });
+                }
                 break;
             }
             let u = model.relative_position(&y);
@@ -434,15 +447,20 @@ impl<M: Model<N> + CommandPath, const N: usize> Problem<'_, M, N> {
                 }
             }
         }
-        if n > n_enter {
-            // What PaperLaw::advance and PaperLaw::sent left after the last step: its
-            // measurement (`u` of the state as it is, ẍ now) and the command it pushed.
-            let last = Measurement {
+        // What Controller::advance and Controller::sent left after the last step that
+        // advanced the law: its measurement (`u` of the state as it is, ẍ now, unless the
+        // run diverged) and the command it pushed.
+        let last = if diverged.is_some() {
+            last_before_divergence
+        } else {
+            (n > n_enter).then(|| Measurement {
                 u: model.relative_position(&y),
                 ydd: 0.0,
                 xdd: xdd_now,
                 dxd: dxd_last,
-            };
+            })
+        };
+        if let Some(last) = last {
             law = law.stepped(xd, last, line.newest());
         }
         *carry = Carry {
