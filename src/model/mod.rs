@@ -119,19 +119,6 @@ pub trait Model<const N: usize>: Clone + Send + Sync {
     /// State derivatives `dy/dt` at time `t` [SI per second].
     fn derivatives(&self, t: f64, y: &[f64; N], inputs: &Inputs) -> [f64; N];
 
-    /// The rows that [`Self::nonlinear_derivatives`] computes (`None`: it is
-    /// [`Self::derivatives`] itself).
-    fn nonlinear_rows(&self) -> Option<[bool; N]> {
-        None
-    }
-
-    /// [`Self::derivatives`] in the rows of [`Self::nonlinear_rows`] only, the same values
-    /// there bit for bit, and 0 in the others: for a stepper that reads no other row (the
-    /// exponential method reads only the rows it treats explicitly, the nonlinear ones).
-    fn nonlinear_derivatives(&self, t: f64, y: &[f64; N], inputs: &Inputs) -> [f64; N] {
-        self.derivatives(t, y, inputs)
-    }
-
     /// The rest state (body at mid-stroke, everything still).
     fn rest_state(&self) -> [f64; N];
 

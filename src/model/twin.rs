@@ -92,10 +92,6 @@ pub struct Twin {
     /// Reciprocals of m, C_chamber, C_hose and I_hose: the right-hand side multiplies instead
     /// of dividing (divisions share the square-root unit, the twin's bottleneck).
     inv: Reciprocals,
-    /// The spool's `ωn²` [1/s²] and `2ζs·ωn` [1/s], the products Eq. (14) multiplies by, in
-    /// the order it forms them (so the same values bit for bit).
-    spool_wn2: f64,
-    spool_damping: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -171,8 +167,6 @@ impl Twin {
                 c_hose: 1.0 / d.c_hose,
                 inertance: 1.0 / d.inertance,
             },
-            spool_wn2: params.plant.valve.omega_n_rad_s * params.plant.valve.omega_n_rad_s,
-            spool_damping: 2.0 * params.plant.valve.zeta * params.plant.valve.omega_n_rad_s,
         }
     }
 
@@ -341,7 +335,9 @@ impl Model<10> for Twin {
         let ydd = self.body_force(&s) * inv.mass;
         let flows = self.valve_flows(s.xv, s.p1v, s.p2v);
         let q_leak = self.leakage(&s);
-        let target = self.params.plant.valve.kv_m_per_v * self.spool_command(inputs.v_valve);
+        let v = &self.params.plant.valve;
+        let wn = v.omega_n_rad_s;
+        let target = v.kv_m_per_v * self.spool_command(inputs.v_valve);
         TwinState {
             u: s.du,
             du: ydd - inputs.xdd,
@@ -352,39 +348,7 @@ impl Model<10> for Twin {
             p1v: (s.q1 - flows.q1v) * inv.c_hose,
             p2v: (flows.q2v - s.q2) * inv.c_hose,
             xv: s.dxv,
-            dxv: self.spool_wn2 * (target - s.xv) - self.spool_damping * s.dxv,
-        }
-        .to_array()
-    }
-
-    /// Rows `u̇`, `ṗ1v`, `ṗ2v` and `ẍv`: the body's, the valve ports' and the spool's, those
-    /// that are not affine in the state (the orifices, the end stops, friction and the
-    /// corrections' body force) and those the inputs enter. The others are affine for every
-    /// setting of the effects but the turbulent leakage; the exponential method finds the
-    /// nonlinear rows by probing, and takes this form only when these include them.
-    fn nonlinear_rows(&self) -> Option<[bool; 10]> {
-        let mut rows = [false; 10];
-        for i in [1, 6, 7, 9] {
-            rows[i] = true;
-        }
-        Some(rows)
-    }
-
-    /// [`Self::derivatives`]'s rows of [`Self::nonlinear_rows`], the same operations (no
-    /// leakage, chamber or hose-flow rows).
-    #[inline]
-    fn nonlinear_derivatives(&self, _t: f64, y: &[f64; 10], inputs: &Inputs) -> [f64; 10] {
-        let s = TwinState::from_array(y);
-        let inv = &self.inv;
-        let ydd = self.body_force(&s) * inv.mass;
-        let flows = self.valve_flows(s.xv, s.p1v, s.p2v);
-        let target = self.params.plant.valve.kv_m_per_v * self.spool_command(inputs.v_valve);
-        TwinState {
-            du: ydd - inputs.xdd,
-            p1v: (s.q1 - flows.q1v) * inv.c_hose,
-            p2v: (flows.q2v - s.q2) * inv.c_hose,
-            dxv: self.spool_wn2 * (target - s.xv) - self.spool_damping * s.dxv,
-            ..TwinState::default()
+            dxv: wn * wn * (target - s.xv) - 2.0 * v.zeta * wn * s.dxv,
         }
         .to_array()
     }
@@ -472,41 +436,6 @@ mod tests {
             assert!((signed_sqrt(-dp, core) / -(dp.sqrt()) - 1.0).abs() < 1e-4);
         }
         assert_eq!(signed_sqrt(0.0, core), 0.0);
-    }
-
-    #[test]
-    fn the_nonlinear_rows_form_is_the_derivatives_in_those_rows_bit_for_bit() {
-        let mut p = Params::paper();
-        // With every optional effect on too (each keeps these rows the nonlinear ones).
-        for effects in [false, true] {
-            if effects {
-                p.plant.effects.friction.enabled = true;
-                p.plant.effects.valve_overlap.enabled = true;
-                p.plant.effects.valve_offset.enabled = true;
-                p.plant.effects.leakage.enabled = true;
-                p.plant.effects.supply_sag.enabled = true;
-            }
-            let twin = Twin::new(p);
-            let rows = twin.nonlinear_rows().expect("the twin has the form");
-            let (rest, scales) = (twin.rest_state(), twin.state_scales());
-            for k in 0..400u32 {
-                // States from rest to tens of scales away (saturations, end stops).
-                let y: [f64; 10] = std::array::from_fn(|i| {
-                    let r = ((k * 7919 + i as u32 * 104_729) % 1000) as f64 / 500.0 - 1.0;
-                    rest[i] + r * scales[i] * [0.1, 3.0, 30.0][(k % 3) as usize]
-                });
-                let inputs = Inputs {
-                    v_valve: (k as f64 * 0.37).sin() * 12.0,
-                    xdd: (k as f64 * 0.11).cos() * 5.0,
-                };
-                let full = twin.derivatives(0.0, &y, &inputs);
-                let part = twin.nonlinear_derivatives(0.0, &y, &inputs);
-                for i in 0..10 {
-                    let expected = if rows[i] { full[i] } else { 0.0 };
-                    assert_eq!(part[i].to_bits(), expected.to_bits(), "row {i}, state {k}");
-                }
-            }
-        }
     }
 
     #[test]

@@ -57,13 +57,6 @@ pub trait Stepper<const N: usize> {
 
     /// One step from `(t, y)`, in place; `f(t, y)` returns `dy/dt`.
     fn step(&self, t: f64, y: &mut [f64; N], f: impl FnMut(f64, &[f64; N]) -> [f64; N]);
-
-    /// Whether the step reads only the rows of `f` of its model's
-    /// [`Model::nonlinear_rows`](crate::model::Model::nonlinear_rows), so that `f` may be the
-    /// model's [`Model::nonlinear_derivatives`](crate::model::Model::nonlinear_derivatives).
-    fn reads_nonlinear_rows_only(&self) -> bool {
-        false
-    }
 }
 
 /// Classical RK4 at a fixed step ([`rk4_step`]).
@@ -92,11 +85,6 @@ impl<const N: usize> Stepper<N> for Etd4<N> {
     #[inline(always)]
     fn step(&self, t: f64, y: &mut [f64; N], f: impl FnMut(f64, &[f64; N]) -> [f64; N]) {
         Etd4::step(self, t, y, f)
-    }
-
-    #[inline(always)]
-    fn reads_nonlinear_rows_only(&self) -> bool {
-        self.model_rows_only
     }
 }
 
@@ -177,10 +165,6 @@ pub struct Etd4<const N: usize> {
     /// Weights of the update: columns `rows` of `h·(φ1 − 3φ2 + 4φ3)(hA)` (first stage), of
     /// `h·(2φ2 − 4φ3)(hA)` (the two middle stages) and of `h·(4φ3 − φ2)(hA)` (last stage).
     c4: Vec<[f64; N]>,
-    /// Whether the model's [`Model::nonlinear_derivatives`](crate::model::Model::nonlinear_derivatives)
-    /// computes every row in `rows` (set by the simulation that uses the coefficients,
-    /// [`Self::set_model_rows`]; the step reads no other row of `f`).
-    model_rows_only: bool,
 }
 
 /// Why [`Etd4::new`] could not build its coefficients.
@@ -317,16 +301,7 @@ impl<const N: usize> Etd4<N> {
             c3,
             c4,
             rows,
-            model_rows_only: false,
         })
-    }
-
-    /// Takes the rows a model's
-    /// [`Model::nonlinear_derivatives`](crate::model::Model::nonlinear_derivatives) computes
-    /// (`None`: none apart): when they include every row this step reads, the step is given
-    /// that form of the right-hand side, the same values in those rows bit for bit.
-    pub fn set_model_rows(&mut self, computed: Option<&[bool; N]>) {
-        self.model_rows_only = computed.is_some_and(|c| self.rows.iter().all(|&i| c[i]));
     }
 
     /// Rows of the right-hand side handled explicitly.

@@ -248,10 +248,9 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             v_valve: 1.0,
             xdd: 1.0,
         };
-        let mut etd = Etd4::new(self.run.h, &a, rest, &scales, |y| {
+        let etd = Etd4::new(self.run.h, &a, rest, &scales, |y| {
             self.model.derivatives(0.0, y, &inputs)
         })?;
-        etd.set_model_rows(self.model.nonlinear_rows().as_ref());
         self.method = Method::Exponential(Box::new(etd));
         Ok(())
     }
@@ -418,7 +417,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
             ]),
             _ => None,
         };
-        let inputs = |ts: f64, ys: &[f64; N]| {
+        let rhs = |ts: f64, ys: &[f64; N]| {
             // The stage's place in the step: its start, its middle or its end (the index of
             // its read in `pre`: an integer, not converted from `side` at every stage).
             let (xdds, side, read) = if ts == t {
@@ -432,19 +431,10 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
                 Some(v) => v[read],
                 None => self.valve_command(ts, side, ys, xdd0, xdds),
             };
-            Inputs { v_valve, xdd: xdds }
+            let inputs = Inputs { v_valve, xdd: xdds };
+            self.model.derivatives(ts, ys, &inputs)
         };
-        // The exponential method reads the right-hand side's nonlinear rows only: the model's
-        // form that computes just those, when it has one that covers them.
-        if method.reads_nonlinear_rows_only() {
-            method.step(t, &mut y, |ts, ys| {
-                self.model.nonlinear_derivatives(ts, ys, &inputs(ts, ys))
-            });
-        } else {
-            method.step(t, &mut y, |ts, ys| {
-                self.model.derivatives(ts, ys, &inputs(ts, ys))
-            });
-        }
+        method.step(t, &mut y, rhs);
         Advance {
             y,
             xdd1,

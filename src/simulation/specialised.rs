@@ -502,29 +502,6 @@ mod tests {
     }
 
     #[test]
-    fn the_twin_steps_bit_for_bit_the_same_with_its_nonlinear_rows_only() {
-        use crate::simulation::Method;
-        use crate::simulation::integrate::Stepper;
-        let p = Params::paper();
-        let sim = Simulation::twin(&p, 5e-4, Drive::closed_loop(&p), ride());
-        let Method::Exponential(e) = &sim.method else {
-            panic!("the preset steps the twin by the exponential method");
-        };
-        assert!(e.reads_nonlinear_rows_only());
-        let mut full = sim.clone();
-        if let Method::Exponential(e) = &mut full.method {
-            e.set_model_rows(None);
-            assert!(!e.reads_nonlinear_rows_only());
-        }
-        let a = sim.clone().run_trace(1.5, 2000.0).expect("no divergence");
-        let b = full.run_trace(1.5, 2000.0).expect("no divergence");
-        assert_eq!(a.samples.len(), b.samples.len());
-        for (a, b) in a.samples.iter().zip(&b.samples) {
-            assert_eq!(bits(a), bits(b), "at t = {}", b.t);
-        }
-    }
-
-    #[test]
     fn the_exact_hold_loop_stops_on_a_divergence_as_one_step_at_a_time_stops() {
         // Position feedback of the wrong sign pushes the seat away until u leaves its bound.
         let mut p = Params::paper();
