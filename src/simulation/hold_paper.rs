@@ -8,9 +8,12 @@
 //! (a store and a load on the recurrence `y ← Φ·y + …`), and so did the delay line's length,
 //! the controller's `∫ẍ` and the clock. Here each is a local that nothing takes the address
 //! of, and the delay line is read, once its window is full, by four masked loads without the
-//! edge cases of [`DelayLine::value_at_tap`]. The arithmetic is [`Simulation::hold_step`] and
-//! [`Simulation::finish_step`]'s, operation for operation (the tests of
-//! [`super::specialised`] check every sample bit for bit against [`Run::step`]).
+//! edge cases of [`DelayLine::value_at_tap`], from a copy of its newest samples in a ring of
+//! the loop's own ([`LocalRing`]: a constant mask, no bounds checks). The paper law's `∫ẍ` is a
+//! local too, and its last measurement is set once after the loop instead of stored at every
+//! step; a run recorded at every step records without the countdown. The arithmetic is
+//! [`Simulation::hold_step`] and [`Simulation::finish_step`]'s, operation for operation (the
+//! tests of [`super::specialised`] check every sample bit for bit against [`Run::step`]).
 
 use super::delay::{DelayLine, LocalRing, Tap};
 use super::run::{RunState, check_bounds};
