@@ -318,7 +318,7 @@ impl Controller {
 /// The paper law's changing states held apart from its [`Controller`] by a stepping loop, so
 /// that they can stay in registers ([`Controller::paper_law`]): the same arithmetic as
 /// [`Controller::advance`] and [`Controller::output`] for [`ControllerKind::Paper`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct PaperLaw {
     /// `Kp` [V/m].
     kp: f64,
@@ -333,25 +333,33 @@ pub(crate) struct PaperLaw {
 }
 
 impl PaperLaw {
-    /// [`Controller::advance`] of the paper law.
+    /// `∫ẍ dt` since the start [m/s].
     #[inline(always)]
-    pub(crate) fn advance(&mut self, m: Measurement) {
-        self.xd += m.dxd;
-        self.last = m;
+    pub(crate) fn platform_velocity(&self) -> f64 {
+        self.xd
     }
 
-    /// [`Controller::output`] of the paper law [V], before saturation.
+    /// The law as steps of [`Controller::advance`] and [`Controller::sent`] leave it, from a
+    /// loop that kept `∫ẍ` as `xd` [m/s] itself (`xd += m.dxd` a step): the last step's
+    /// measurement `last` and command `sent` [V]. The same values as those calls give,
+    /// without a store of the measurement at every step.
     #[inline(always)]
-    pub(crate) fn output(&self, u: f64) -> f64 {
+    pub(crate) fn stepped(&self, xd: f64, last: Measurement, sent: f64) -> Self {
+        Self {
+            xd,
+            last,
+            sent,
+            ..*self
+        }
+    }
+
+    /// [`Controller::output`] of the paper law [V], before saturation, with `∫ẍ` given as
+    /// `xd` [m/s] (the loop's own, see [`Self::stepped`]).
+    #[inline(always)]
+    pub(crate) fn output_at(&self, u: f64, xd: f64) -> f64 {
         // `+ 0.0` as `output_with(u, 0.0)` adds it (it turns −0 into +0).
-        let xd = self.xd + 0.0;
+        let xd = xd + 0.0;
         self.kp * u + self.ki * xd
-    }
-
-    /// [`Controller::sent`].
-    #[inline(always)]
-    pub(crate) fn sent(&mut self, v: f64) {
-        self.sent = v;
     }
 }
 

@@ -164,6 +164,32 @@ impl DelayLine {
         w[0] * at(base - 1) + w[1] * at(base) + w[2] * at(base + 1) + w[3] * at(base + 2)
     }
 
+    /// The newest samples of the line in a ring of `R` samples held by a stepping loop
+    /// ([`LocalRing`]), for a line no longer than `R` (`None` for a longer one). `R` is a power
+    /// of two, so that the ring's index is a mask by a constant and its reads and writes need
+    /// no bounds check.
+    pub(crate) fn local_ring<const R: usize>(&self) -> Option<LocalRing<R>> {
+        const { assert!(R.is_power_of_two()) };
+        if self.ring.len() > R {
+            return None;
+        }
+        let mut buf = [self.initial; R];
+        for i in self.len.saturating_sub(self.ring.len() as u64)..self.len {
+            buf[i as usize & (R - 1)] = self.ring[(i & self.mask) as usize];
+        }
+        Some(LocalRing { buf, len: self.len })
+    }
+
+    /// Takes back the samples that `local` (from [`Self::local_ring`] of this line) was pushed
+    /// from grid index `from` on: the line is then as the same pushes would have left it.
+    pub(crate) fn put_back<const R: usize>(&mut self, local: &LocalRing<R>, from: u64) {
+        let first = from.max(local.len.saturating_sub(self.ring.len() as u64));
+        for i in first..local.len {
+            self.ring[(i & self.mask) as usize] = local.buf[i as usize & (R - 1)];
+        }
+        self.len = local.len;
+    }
+
     /// Value at `base + f` (grid units, `0 ≤ f < 1`) with the cubic weights `w` of `f`.
     #[inline(always)]
     fn interpolate(&self, base: i64, f: f64, w: &[f64; 4]) -> f64 {
@@ -186,6 +212,47 @@ impl DelayLine {
             let (b, c) = (self.at_index(base), self.at_index(base + 1));
             b + f * (c - b)
         }
+    }
+}
+
+/// The newest samples of a [`DelayLine`] in a ring of `R` (a power of two) held by a stepping
+/// loop ([`DelayLine::local_ring`], given back by [`DelayLine::put_back`]): its reads of a
+/// settled tap are [`DelayLine::value_at_interior_tap`]'s, with the ring's index masked by a
+/// constant instead of the line's mask (measured: about a dozen instructions fewer a step in
+/// the linear model's loop, the bounds checks of the five accesses).
+#[derive(Debug, Clone)]
+pub(crate) struct LocalRing<const R: usize> {
+    buf: [f64; R],
+    /// Samples pushed so far (the next sample has index `len`).
+    len: u64,
+}
+
+impl<const R: usize> LocalRing<R> {
+    /// [`DelayLine::push`].
+    #[inline(always)]
+    pub(crate) fn push(&mut self, v: f64) {
+        self.buf[self.len as usize & (R - 1)] = v;
+        self.len += 1;
+    }
+
+    /// The newest sample (the ring's initial value before any push).
+    pub(crate) fn newest(&self) -> f64 {
+        self.buf[(self.len as usize).wrapping_sub(1) & (R - 1)]
+    }
+
+    /// [`DelayLine::value_at_interior_tap`], under the same conditions (`n` at least
+    /// [`DelayLine::interior_from`] of the line this came from, and `len == n`), the same
+    /// operations in the same order.
+    #[inline(always)]
+    pub(crate) fn value_at_interior_tap(&self, n: u64, tap: &Tap) -> f64 {
+        debug_assert!(self.len == n && n > tap.back as u64);
+        let base = (n - tap.back as u64) as usize;
+        let at = |i: usize| self.buf[i & (R - 1)];
+        let w = &tap.w;
+        w[0] * at(base.wrapping_sub(1))
+            + w[1] * at(base)
+            + w[2] * at(base + 1)
+            + w[3] * at(base + 2)
     }
 }
 

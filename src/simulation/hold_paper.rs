@@ -8,11 +8,14 @@
 //! (a store and a load on the recurrence `y ← Φ·y + …`), and so did the delay line's length,
 //! the controller's `∫ẍ` and the clock. Here each is a local that nothing takes the address
 //! of, and the delay line is read, once its window is full, by four masked loads without the
-//! edge cases of [`DelayLine::value_at_tap`]. The arithmetic is [`Simulation::hold_step`] and
-//! [`Simulation::finish_step`]'s, operation for operation (the tests of
-//! [`super::specialised`] check every sample bit for bit against [`Run::step`]).
+//! edge cases of [`DelayLine::value_at_tap`], from a copy of its newest samples in a ring of
+//! the loop's own ([`LocalRing`]: a constant mask, no bounds checks). The paper law's `∫ẍ` is a
+//! local too, and its last measurement is set once after the loop instead of stored at every
+//! step; a run recorded at every step records without the countdown. The arithmetic is
+//! [`Simulation::hold_step`] and [`Simulation::finish_step`]'s, operation for operation (the
+//! tests of [`super::specialised`] check every sample bit for bit against [`Run::step`]).
 
-use super::delay::{DelayLine, Tap};
+use super::delay::{DelayLine, LocalRing, Tap};
 use super::run::{RunState, check_bounds};
 use super::{Sample, SimError, Simulation};
 use crate::control::{Measurement, PaperLaw};
@@ -97,6 +100,103 @@ struct Local<const N: usize> {
     stats_steps: u64,
 }
 
+/// The loop's changing values between its phases ([`Problem::steps`]).
+struct Carry<const N: usize> {
+    y: [f64; N],
+    valve: f64,
+    xdd_now: f64,
+    law: PaperLaw,
+    run: RunState,
+    /// Steps taken (the grid index of the current time).
+    n: u64,
+    /// Steps until the next sample.
+    to_record: u64,
+    /// Samples passed to the recorder.
+    samples: u64,
+    /// Whether the recorder stopped the run.
+    stopped: bool,
+}
+
+impl<const N: usize> Carry<N> {
+    /// A value to leave in a `Carry` while its values are held as locals.
+    fn stand_in() -> Self {
+        Self {
+            y: [0.0; N],
+            valve: 0.0,
+            xdd_now: 0.0,
+            law: PaperLaw::default(),
+            run: RunState::new(1.0),
+            n: 0,
+            to_record: 0,
+            samples: 0,
+            stopped: false,
+        }
+    }
+}
+
+/// Samples in the loop's own ring of the command's history ([`LocalRing`]): the size of the
+/// line's own ring at a 1 ms step (room for the longest delay, 0.1 s, and 8 spare, rounded up
+/// to a power of two). A line of a shorter step keeps its own ring.
+const LOCAL_RING: usize = 128;
+
+/// The command's history as the loop reads and writes it.
+trait CommandLine {
+    /// The delayed command at the end of step `n1 - 1` (grid index `n1`), read through `tap`.
+    fn read_end(&self, n1: u64, tap: &Tap) -> f64;
+    /// Appends the command sent at the current grid time.
+    fn push(&mut self, v: f64);
+    /// The newest command (what the last [`Self::push`] appended).
+    fn newest(&self) -> f64;
+}
+
+/// A delay line read at its edge ([`DelayLine::value_at_tap`]).
+struct Edge<'a>(&'a mut DelayLine);
+
+impl CommandLine for Edge<'_> {
+    #[inline(always)]
+    fn read_end(&self, n1: u64, tap: &Tap) -> f64 {
+        self.0.value_at_tap(n1, tap)
+    }
+    #[inline(always)]
+    fn push(&mut self, v: f64) {
+        self.0.push(v);
+    }
+    fn newest(&self) -> f64 {
+        self.0.last_value()
+    }
+}
+
+/// A delay line read inside its window ([`DelayLine::value_at_interior_tap`]).
+struct Interior<'a>(&'a mut DelayLine);
+
+impl CommandLine for Interior<'_> {
+    #[inline(always)]
+    fn read_end(&self, n1: u64, tap: &Tap) -> f64 {
+        self.0.value_at_interior_tap(n1, tap)
+    }
+    #[inline(always)]
+    fn push(&mut self, v: f64) {
+        self.0.push(v);
+    }
+    fn newest(&self) -> f64 {
+        self.0.last_value()
+    }
+}
+
+impl<const R: usize> CommandLine for LocalRing<R> {
+    #[inline(always)]
+    fn read_end(&self, n1: u64, tap: &Tap) -> f64 {
+        self.value_at_interior_tap(n1, tap)
+    }
+    #[inline(always)]
+    fn push(&mut self, v: f64) {
+        LocalRing::push(self, v);
+    }
+    fn newest(&self) -> f64 {
+        LocalRing::newest(self)
+    }
+}
+
 /// What the loop only reads.
 struct Problem<'a, M, const N: usize> {
     model: &'a M,
@@ -156,6 +256,12 @@ impl<M: Model<N> + CommandPath, const N: usize> Problem<'_, M, N> {
     /// [`super::run::stream_portable`]'s countdown with the step and the sample of `HoldRun`
     /// written out, from the state `start` (returned as the loop leaves it, also after a
     /// divergence, as a step leaves it).
+    ///
+    /// The steps whose end read is at the delay line's edge (the first `τ/h` or so) go through
+    /// [`DelayLine::value_at_tap`]; the rest read the settled tap inside the window, from a
+    /// [`LocalRing`] of the line's newest samples when the line fits one (it is given back to
+    /// the line at the end), and recording every step without the countdown when `every` is 1
+    /// (the bench's and the usual 1 kHz runs at 1 ms).
     #[inline(always)]
     fn stream(
         &self,
@@ -165,83 +271,69 @@ impl<M: Model<N> + CommandPath, const N: usize> Problem<'_, M, N> {
         record: &mut impl FnMut(Sample) -> bool,
     ) -> (Local<N>, Result<(u64, bool), SimError>) {
         let Local {
-            mut y,
-            mut valve,
-            mut xdd_now,
-            mut law,
+            y,
+            valve,
+            xdd_now,
+            law,
             mut history,
-            mut run,
+            run,
             mut stats_steps,
         } = start;
-        let (h, model, half_stroke) = (run.h, self.model, self.model.half_stroke());
-        let mut n = run.steps;
+        let h = run.h;
+        let n = run.steps;
         let n_start = n;
         let every = every.max(1);
-        let mut samples = 0u64;
-        let mut stopped = false;
-        let mut diverged = None;
+        let mut carry = Carry {
+            y,
+            valve,
+            xdd_now,
+            law,
+            run,
+            n,
+            to_record: every - n % every,
+            samples: 0,
+            stopped: false,
+        };
         if n == 0 {
-            samples += 1;
+            carry.samples += 1;
             let first = self.sample(h, n, &y, valve, self.xdd_at(n), history.last_value());
-            stopped = !record(first);
+            carry.stopped = !record(first);
         }
         let n_end = (t_end / h - 1e-9).ceil() as u64;
-        let mut to_record = every - n % every;
-        while !stopped && n < n_end {
-            // Simulation::hold_step.
-            let xdd0 = xdd_now;
-            let xdd1 = self.xdd_at(n + 1);
-            let v0 = valve;
-            let v1 = if n + 1 >= self.interior_from {
-                history.value_at_interior_tap(n + 1, &self.tap)
+        // Steps n with n + 1 < interior_from read at the line's edge.
+        let edge_end = n_end.min(self.interior_from.saturating_sub(1));
+        let mut diverged =
+            self.steps::<_, false>(&mut carry, &mut Edge(&mut history), edge_end, every, record);
+        if diverged.is_none() && !carry.stopped && carry.n < n_end {
+            let from = history.pushed();
+            if let Some(mut ring) = history.local_ring::<LOCAL_RING>() {
+                diverged = if every == 1 {
+                    self.steps::<_, true>(&mut carry, &mut ring, n_end, every, record)
+                } else {
+                    self.steps::<_, false>(&mut carry, &mut ring, n_end, every, record)
+                };
+                history.put_back(&ring, from);
             } else {
-                history.value_at_tap(n + 1, &self.tap)
-            };
-            let mut y1 = y;
-            self.hold.step(&mut y1, [v0, xdd0], [v1, xdd1]);
-            let dxd = 0.5 * h * (xdd0 + xdd1);
-            // Simulation::finish_step.
-            valve = v1;
-            y = y1;
-            model.project(&mut y);
-            n += 1;
-            xdd_now = xdd1;
-            if !y.iter().zip(&self.bounds).all(|(v, b)| v.abs() <= *b)
-                && let Err(e) = check_bounds::<M, N>(&y, n as f64 * h, |i| self.bounds[i])
-            {
-                diverged = Some(e);
-                break;
-            }
-            let u = model.relative_position(&y);
-            law.advance(Measurement {
-                u,
-                ydd: 0.0,
-                xdd: xdd_now,
-                dxd,
-            });
-            // `f64::clamp` without its check of the limits' order, done once (v_max > 0).
-            let v = law.output(u);
-            let v = if v < -self.v_max {
-                -self.v_max
-            } else if v > self.v_max {
-                self.v_max
-            } else {
-                v
-            };
-            law.sent(v);
-            history.push(v);
-            // `RunState::track_contact` writes nothing without a contact before or after.
-            if u.abs() - half_stroke > 0.0 || run.in_contact() {
-                run.steps = n;
-                run.track_contact(u, half_stroke);
-            }
-            to_record -= 1;
-            if to_record == 0 {
-                to_record = every;
-                samples += 1;
-                stopped = !record(self.sample(h, n, &y, valve, xdd_now, v));
+                diverged = self.steps::<_, false>(
+                    &mut carry,
+                    &mut Interior(&mut history),
+                    n_end,
+                    every,
+                    record,
+                );
             }
         }
+        let Carry {
+            y,
+            valve,
+            xdd_now,
+            law,
+            mut run,
+            n,
+            samples,
+            stopped,
+            ..
+        } = carry;
         run.steps = n;
         stats_steps += n - n_start;
         let end = Local {
@@ -258,5 +350,133 @@ impl<M: Model<N> + CommandPath, const N: usize> Problem<'_, M, N> {
             None => Ok((samples, stopped)),
         };
         (end, result)
+    }
+
+    /// The steps from `carry` until step `n_stop`, a stop by the recorder or a divergence
+    /// (returned), the command's history read and written through `line`; `EVERY_STEP` when
+    /// `every` is 1 (a sample after every step, without the countdown).
+    #[inline(always)]
+    fn steps<L: CommandLine, const EVERY_STEP: bool>(
+        &self,
+        carry: &mut Carry<N>,
+        line: &mut L,
+        n_stop: u64,
+        every: u64,
+        record: &mut impl FnMut(Sample) -> bool,
+    ) -> Option<SimError> {
+        // The changing values as locals, so that they can live in registers.
+        let Carry {
+            mut y,
+            mut valve,
+            mut xdd_now,
+            mut law,
+            mut run,
+            mut n,
+            mut to_record,
+            mut samples,
+            mut stopped,
+        } = std::mem::replace(carry, Carry::stand_in());
+        let (h, model, half_stroke) = (run.h, self.model, self.model.half_stroke());
+        let mut diverged = None;
+        let n_enter = n;
+        // The law's `∫ẍ`, and the last step's `∫ẍ dt` for its last measurement at the end.
+        let mut xd = law.platform_velocity();
+        let mut dxd_last = 0.0;
+        // On a divergence: the measurement of the step before it, if in this phase.
+        let mut last_before_divergence = None;
+        while !stopped && n < n_stop {
+            // Simulation::hold_step.
+            let xdd0 = xdd_now;
+            let xdd1 = self.xdd_at(n + 1);
+            let v0 = valve;
+            let v1 = line.read_end(n + 1, &self.tap);
+            let y_prev = y;
+            let mut y1 = y;
+            self.hold.step(&mut y1, [v0, xdd0], [v1, xdd1]);
+            let dxd = 0.5 * h * (xdd0 + xdd1);
+            // Simulation::finish_step.
+            valve = v1;
+            y = y1;
+            model.project(&mut y);
+            n += 1;
+            xdd_now = xdd1;
+            // Every state checked without a branch per state (a NaN fails as in `all`).
+            let within = y
+                .iter()
+                .zip(&self.bounds)
+                .fold(true, |ok, (v, b)| ok & (v.abs() <= *b));
+            if !within && let Err(e) = check_bounds::<M, N>(&y, n as f64 * h, |i| self.bounds[i]) {
+                diverged = Some(e);
+                // The law was last advanced by the step before (none in this phase when this
+                // was its first step).
+                if n - 1 > n_enter {
+                    last_before_divergence = Some(Measurement {
+                        u: model.relative_position(&y_prev),
+                        ydd: 0.0,
+                        xdd: xdd0,
+                        dxd: dxd_last,
+                    });
+                }
+                break;
+            }
+            let u = model.relative_position(&y);
+            // PaperLaw::advance (its measurement is set once, after the loop).
+            xd += dxd;
+            dxd_last = dxd;
+            // `f64::clamp` without its check of the limits' order, done once (v_max > 0).
+            let v = law.output_at(u, xd);
+            let v = if v < -self.v_max {
+                -self.v_max
+            } else if v > self.v_max {
+                self.v_max
+            } else {
+                v
+            };
+            line.push(v);
+            // `RunState::track_contact` writes nothing without a contact before or after.
+            if u.abs() - half_stroke > 0.0 || run.in_contact() {
+                run.steps = n;
+                run.track_contact(u, half_stroke);
+            }
+            if EVERY_STEP {
+                samples += 1;
+                stopped = !record(self.sample(h, n, &y, valve, xdd_now, v));
+            } else {
+                to_record -= 1;
+                if to_record == 0 {
+                    to_record = every;
+                    samples += 1;
+                    stopped = !record(self.sample(h, n, &y, valve, xdd_now, v));
+                }
+            }
+        }
+        // What Controller::advance and Controller::sent left after the last step that
+        // advanced the law: its measurement (`u` of the state as it is, ẍ now, unless the
+        // run diverged) and the command it pushed.
+        let last = if diverged.is_some() {
+            last_before_divergence
+        } else {
+            (n > n_enter).then(|| Measurement {
+                u: model.relative_position(&y),
+                ydd: 0.0,
+                xdd: xdd_now,
+                dxd: dxd_last,
+            })
+        };
+        if let Some(last) = last {
+            law = law.stepped(xd, last, line.newest());
+        }
+        *carry = Carry {
+            y,
+            valve,
+            xdd_now,
+            law,
+            run,
+            n,
+            to_record,
+            samples,
+            stopped,
+        };
+        diverged
     }
 }
