@@ -5,10 +5,12 @@
 
 use super::data::Campaign;
 use super::evaluate::{replay_all, weighted_of};
-use super::fit::{self, Bic, Evaluator, FitResult, Knob};
+use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
 use super::progress::Stage;
-use super::replay::{PreparedRecord, rms};
+use super::raw_error::raw_error_report;
+use super::replay::{PreparedRecord, SimChannels, rms};
 use super::result::CandidateScore;
+use super::stages::with_numerics_of;
 use super::{CalibrationOptions, EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
@@ -210,6 +212,10 @@ pub struct Trial {
     /// Whether it lowers the held-out error by at least
     /// [`CalibrationOptions::min_validation_gain`] (a NaN error does not).
     pub improves: bool,
+    /// Refinements of the effect's law ([`REFINEMENTS`]) the first re-fit left uncertain and
+    /// the criterion did not keep, with that fit's value and uncertainty: the plain law was
+    /// re-fitted instead.
+    pub pinned: Vec<FittedValue>,
 }
 
 /// Re-fits all of `knobs` and the effect of `best` from its screening fit, with
@@ -217,6 +223,8 @@ pub struct Trial {
 /// held-out records against `current_val`.
 pub fn try_effect(
     cx: &SearchContext<'_>,
+    campaign: &Campaign,
+    preset: &Params,
     best: &Ranked,
     knobs: &[Knob],
     round: usize,
@@ -232,13 +240,53 @@ pub fn try_effect(
     );
     let mut trial_knobs = knobs.to_vec();
     trial_knobs.extend_from_slice(best.effect.knobs());
-    let refit = fit::fit(
+    let mut refit = fit::fit(
         ev,
         &best.fit.params,
         &trial_knobs,
         options.max_iterations,
         cx.bic.ratio(),
     )?;
+    // A refinement the records leave uncertain is weighed against the plain law: the plain
+    // law re-fitted is kept unless the refinement lowers the criterion by more than
+    // REFINEMENT_MIN_DBIC or the raw error's worst band by a quarter (rather than reporting a
+    // value of either sign, or a trade-off between two moduli the records cannot tell apart).
+    let uncertain: Vec<FittedValue> = refit
+        .values
+        .iter()
+        .filter(|v| REFINEMENTS.contains(&v.knob) && !determined(v))
+        .cloned()
+        .collect();
+    let mut pinned = Vec::new();
+    if !uncertain.is_empty() {
+        let mut plain = refit.params;
+        for v in &uncertain {
+            v.knob.set(&mut plain, 0.0);
+        }
+        let mut plain_knobs = trial_knobs.clone();
+        plain_knobs.retain(|k| uncertain.iter().all(|v| v.knob != *k));
+        let plain_fit = fit::fit(
+            ev,
+            &plain,
+            &plain_knobs,
+            options.max_iterations,
+            cx.bic.ratio(),
+        )?;
+        let gain = cx.bic.value(refit.rss, trial_knobs.len())
+            - cx.bic.value(plain_fit.rss, plain_knobs.len());
+        // The fit's metric is low-passed and weighted; the verdict's raw measure may see what
+        // the refinement explains (a leakage growing with Δp drifts the stroke slowly).
+        let raw_gain = || -> Result<f64, IdentifyError> {
+            let refined = worst_raw_ratio(cx, campaign, preset, &refit.params)?;
+            let plain = worst_raw_ratio(cx, campaign, preset, &plain_fit.params)?;
+            Ok(refined / plain)
+        };
+        if gain > REFINEMENT_MIN_DBIC && raw_gain()? > REFINEMENT_MAX_RAW_RATIO {
+            refit = plain_fit;
+            trial_knobs = plain_knobs;
+            pinned = uncertain;
+        }
+    }
     let validation_rms = validation_rms(&refit.params, cx.validation)?;
     ev.monitor.advance();
     Ok(Trial {
@@ -246,7 +294,43 @@ pub fn try_effect(
         refit,
         knobs: trial_knobs,
         validation_rms,
+        pinned,
     })
+}
+
+/// Knobs that refine an effect's law beyond its size: hoses softer than the chambers, a
+/// leakage coefficient growing with the pressure across the piston. Where the records leave
+/// one uncertain ([`determined`]) and it does not earn its place by the criterion, the
+/// effect keeps its plain law (one modulus for hoses and chambers, a fixed gap).
+pub const REFINEMENTS: [Knob; 2] = [Knob::HoseCompliance, Knob::LeakageGrowth];
+
+/// ΔBIC (refined law against plain law) below which an uncertain refinement is kept: −10,
+/// "very strong" on the usual scale, as for the sensor properties.
+const REFINEMENT_MIN_DBIC: f64 = -10.0;
+
+/// Largest ratio of the refined law's worst raw band ([`worst_raw_ratio`]) to the plain
+/// law's at which an uncertain refinement is kept on the raw measure alone: it must take a
+/// quarter off.
+const REFINEMENT_MAX_RAW_RATIO: f64 = 0.75;
+
+/// The largest ratio of the raw error to its noise floor in any band of any record
+/// ([`raw_error`](super::raw_error), the verdict's measure) of `p` replayed on every record
+/// at the preset's step.
+fn worst_raw_ratio(
+    cx: &SearchContext<'_>,
+    campaign: &Campaign,
+    preset: &Params,
+    p: &Params,
+) -> Result<f64, IdentifyError> {
+    let reps = replay_all(&with_numerics_of(*p, preset), &campaign.all)?;
+    let sims: Vec<&SimChannels> = reps.iter().map(|r| &r.sim).collect();
+    let report = raw_error_report(&campaign.all, &sims, cx.options.raw_error_limit);
+    Ok(report.worst.map_or(f64::INFINITY, |w| w.ratio))
+}
+
+/// Whether a fitted value is determined: a finite 1-σ of at most half its size.
+fn determined(v: &FittedValue) -> bool {
+    v.std.is_finite() && v.std <= 0.5 * v.value.abs()
 }
 
 /// An effect the search added.
@@ -338,7 +422,7 @@ pub fn search(
         if !(best.score < 0.0 && best.gain >= min_gain) {
             break;
         }
-        let trial = try_effect(cx, &best, &knobs, round, current_val)?;
+        let trial = try_effect(cx, campaign, params, &best, &knobs, round, current_val)?;
         remaining.retain(|e| *e != best.effect);
         let (score, trial_val) = (best.score, trial.validation_rms);
         if !trial.improves {
@@ -365,6 +449,20 @@ pub fn search(
                 options.ambiguity_margin,
                 best.effect.name(),
                 confounding_hint(best.effect, other, &campaign.all),
+            ));
+        }
+        for v in &trial.pinned {
+            notes.push(format!(
+                "round {round}: `{}`: these records leave {} uncertain ({}) and it improves \
+                 neither the fit (ΔBIC > {REFINEMENT_MIN_DBIC}) nor the raw error's worst band \
+                 by a quarter; the effect keeps its plain law ({})",
+                best.effect.name(),
+                v.name,
+                super::units::format_parameter(&v.name, v.value, v.std),
+                match v.knob {
+                    Knob::HoseCompliance => "one modulus for hoses and chambers",
+                    _ => "a leakage coefficient that does not change with the pressure",
+                }
             ));
         }
         knobs = trial.knobs;
