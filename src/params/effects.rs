@@ -166,7 +166,8 @@ pub struct ComplianceEffect {
     /// Effective bulk modulus [Pa] of the chambers (and of the hoses when
     /// `hose_bulk_modulus_pa` is 0), 1e6 ..= 1e10 (replaces `fluid.bulk_modulus_pa`).
     pub effective_bulk_modulus_pa: f64,
-    /// Effective bulk modulus of the hoses [Pa], 0 or 1e6 ..= 1e10 (0: as the chambers).
+    /// Effective bulk modulus of the hoses [Pa], 0 ..= 1e10 (0 means as the chambers; any
+    /// other value must be at least 1e6, as `effective_bulk_modulus_pa`).
     pub hose_bulk_modulus_pa: f64,
 }
 

@@ -144,6 +144,17 @@ impl Params {
                 false,
             ),
         ];
+        // The hoses' modulus: 0 stands for "as the chambers"; a modulus of its own is a real one.
+        let hose = self.plant.effects.compliance.hose_bulk_modulus_pa;
+        if hose > 0.0 && hose < 1e6 {
+            return Err(ParamError::OutOfRange {
+                name: "effects.compliance.hose_bulk_modulus_pa".into(),
+                value: hose,
+                min: 1e6,
+                max: 1e10,
+                unit: "Pa (or 0: as the chambers)",
+            });
+        }
         for (name, value, min, max, unit, strict) in relations {
             if max < min {
                 // No value can pass: say why, not an empty range `[min, max]`.
@@ -298,6 +309,19 @@ mod tests {
     #[test]
     fn paper_defaults_validate() {
         Params::paper().validate().unwrap();
+    }
+
+    #[test]
+    fn a_hose_modulus_is_zero_or_a_real_modulus() {
+        let mut p = Params::paper();
+        p.plant.effects.compliance.hose_bulk_modulus_pa = 5e8;
+        p.validate().unwrap();
+        p.plant.effects.compliance.hose_bulk_modulus_pa = 10.0;
+        let e = p.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("effects.compliance.hose_bulk_modulus_pa") && e.contains("as the chambers"),
+            "{e}"
+        );
     }
 
     #[test]
