@@ -163,8 +163,12 @@ pub fn active_effects(p: &Params) -> Vec<String> {
         .iter()
         .filter(|(on, ..)| *on)
         .map(|(_, name, values)| {
+            // A refinement at 0 is the plain law (hoses as the chambers, a fixed gap): unsaid.
             let values: Vec<String> = values
                 .iter()
+                .filter(|(key, v)| {
+                    !(*v == 0.0 && matches!(*key, "hose_bulk_modulus_pa" | "growth_per_pa"))
+                })
                 .map(|(key, v)| fitted(key, *v, f64::NAN))
                 .collect();
             format!("{name} ({})", values.join(", "))
@@ -175,6 +179,19 @@ pub fn active_effects(p: &Params) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn refinements_are_said_only_when_set() {
+        let mut p = Params::paper();
+        p.plant.effects.compliance.enabled = true;
+        p.plant.effects.compliance.effective_bulk_modulus_pa = 9e8;
+        assert_eq!(active_effects(&p), ["compliance (β = 0.9000 GPa)"]);
+        p.plant.effects.compliance.hose_bulk_modulus_pa = 6e8;
+        assert_eq!(
+            active_effects(&p),
+            ["compliance (β = 0.9000 GPa, β_hose = 0.6000 GPa)"]
+        );
+    }
 
     #[test]
     fn fitted_values_read_as_in_a_paper() {
