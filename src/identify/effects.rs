@@ -4,13 +4,12 @@
 //! the rounds.
 
 use super::data::Campaign;
-use super::evaluate::{replay_all, weighted_of};
+use super::evaluate::{replay_all, weighted_of, with_numerics_of};
 use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
 use super::progress::Stage;
 use super::raw_error::raw_error_report;
 use super::replay::{PreparedRecord, SimChannels, rms};
 use super::result::CandidateScore;
-use super::stages::with_numerics_of;
 use super::{CalibrationOptions, EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
@@ -300,8 +299,9 @@ pub fn try_effect(
 
 /// Knobs that refine an effect's law beyond its size: hoses softer than the chambers, a
 /// leakage coefficient growing with the pressure across the piston. Where the records leave
-/// one uncertain ([`determined`]) and it does not earn its place by the criterion, the
-/// effect keeps its plain law (one modulus for hoses and chambers, a fixed gap).
+/// one uncertain (a 1-σ over half its value) and it earns its place neither by the criterion
+/// (ΔBIC < −10) nor on the raw error (its worst band a quarter lower), the effect keeps its
+/// plain law (one modulus for hoses and chambers, a fixed gap).
 pub const REFINEMENTS: [Knob; 2] = [Knob::HoseCompliance, Knob::LeakageGrowth];
 
 /// ΔBIC (refined law against plain law) below which an uncertain refinement is kept: −10,

@@ -12,6 +12,13 @@ use crate::params::Params;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 
+/// `p` with the preset's numerics back (undoes [`fit_params`](super::stages::fit_params)):
+/// what the reported errors replay with.
+pub fn with_numerics_of(mut p: Params, preset: &Params) -> Params {
+    p.numerics = preset.numerics;
+    p
+}
+
 /// Replays every record with `params` (in parallel).
 pub(super) fn replay_all(
     params: &Params,

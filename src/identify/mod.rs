@@ -520,7 +520,7 @@ fn beyond_the_library(
         return Ok(None);
     }
     let probe = evaluate::replay_all(
-        &stages::with_numerics_of(search.current.params, params),
+        &evaluate::with_numerics_of(search.current.params, params),
         &campaign.all,
     )?;
     let sims: Vec<&SimChannels> = probe.iter().map(|r| &r.sim).collect();

@@ -8,6 +8,7 @@ use super::diagnose;
 use super::effects::EffectSearch;
 use super::evaluate::{
     diagnostics, fmt_signed, raw_pooled, replay_all, stage_errors, summary, weighted_of,
+    with_numerics_of,
 };
 use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
 use super::paper::paper_baseline;
@@ -26,12 +27,6 @@ use crate::params::Params;
 pub fn fit_params(params: &Params, options: &CalibrationOptions) -> Params {
     let mut p = *params;
     p.numerics.max_step_s = params.numerics.max_step_s.max(options.fit_step_s);
-    p
-}
-
-/// `p` with the preset's numerics back (undoes [`fit_params`]).
-pub fn with_numerics_of(mut p: Params, preset: &Params) -> Params {
-    p.numerics = preset.numerics;
     p
 }
 

@@ -10,6 +10,8 @@
 //! are verified in `tests/it/integrator.rs`, and the accuracy against a 10× finer run is measured
 //! by `seat-twin bench`.
 
+use super::memo;
+
 /// Counters of integrator work, so that a regression shows as work before it shows as time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub struct StepStats {
@@ -422,37 +424,6 @@ impl<const N: usize> Etd4<N> {
         mul_add(&mut out, c4b, &w);
         mul_add(&mut out, c4c, &nc);
         *y = shift(&out);
-    }
-}
-
-/// The exponential method's coefficients and the exact hold's transitions built last in this
-/// process ([`Etd4::new`], [`ExactHold::new`](crate::simulation::lti::ExactHold::new)), by the
-/// bits of what they were built from.
-pub(super) mod memo {
-    use std::any::Any;
-    use std::sync::{Arc, Mutex};
-
-    /// How many are kept (a sweep or a search uses one; the app a few).
-    const KEPT: usize = 8;
-
-    type Kept = Vec<(Vec<u64>, Arc<dyn Any + Send + Sync>)>;
-
-    static KEPT_COEFFICIENTS: Mutex<Kept> = Mutex::new(Vec::new());
-
-    /// A copy of the coefficients built from `key`, if kept.
-    pub(in crate::simulation) fn get<T: Any + Clone>(key: &[u64]) -> Option<T> {
-        let kept = KEPT_COEFFICIENTS.lock().unwrap_or_else(|e| e.into_inner());
-        let (_, value) = kept.iter().find(|(k, _)| k.as_slice() == key)?;
-        value.downcast_ref::<T>().cloned()
-    }
-
-    /// Keeps `value`, built from `key`, in place of the oldest when full.
-    pub(in crate::simulation) fn put<T: Any + Send + Sync>(key: Vec<u64>, value: T) {
-        let mut kept = KEPT_COEFFICIENTS.lock().unwrap_or_else(|e| e.into_inner());
-        if kept.len() >= KEPT {
-            kept.remove(0);
-        }
-        kept.push((key, Arc::new(value)));
     }
 }
 

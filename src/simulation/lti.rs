@@ -25,7 +25,7 @@
 //! otherwise `exact_hold` returns `None` and the caller keeps RK4.
 
 use crate::model::{Inputs, Model};
-use crate::simulation::integrate::memo;
+use crate::simulation::memo;
 use nalgebra::{DMatrix, SMatrix};
 
 /// First word of an [`ExactHold`]'s key among the kept coefficients (no step's bits: a NaN).

@@ -22,6 +22,7 @@ pub mod delay;
 mod hold_paper;
 pub mod integrate;
 pub mod lti;
+mod memo;
 mod run;
 mod sample;
 mod specialised;
