@@ -348,6 +348,9 @@ fn randomised_rigs_confusion_table() {
         replay_ok += usize::from(halved);
         if only.is_some() {
             eprintln!("case {i} in full: {}", super::rig::summary(&r));
+            for e in &r.effects {
+                eprintln!("  {}: {:?} ± {:?}", e.effect.name(), e.params, e.uncertainties);
+            }
         }
         let verdict_ok = r.verdict == c.class.right_verdict();
         let fx_ok = effects_right(c, &r);
