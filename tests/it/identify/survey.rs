@@ -349,7 +349,12 @@ fn randomised_rigs_confusion_table() {
         if only.is_some() {
             eprintln!("case {i} in full: {}", super::rig::summary(&r));
             for e in &r.effects {
-                eprintln!("  {}: {:?} ± {:?}", e.effect.name(), e.params, e.uncertainties);
+                eprintln!(
+                    "  {}: {:?} ± {:?}",
+                    e.effect.name(),
+                    e.params,
+                    e.uncertainties
+                );
             }
         }
         let verdict_ok = r.verdict == c.class.right_verdict();
