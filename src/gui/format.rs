@@ -3,6 +3,7 @@
 //! optimiser's stop reason in words.
 
 pub use crate::format::{compact, value_pm};
+use crate::identify::effects::REFINEMENTS;
 use crate::params::Params;
 
 /// Symbol, display scale (display = SI × scale), unit of a fitted parameter by its report
@@ -163,12 +164,12 @@ pub fn active_effects(p: &Params) -> Vec<String> {
         .iter()
         .filter(|(on, ..)| *on)
         .map(|(_, name, values)| {
-            // A refinement at 0 is the plain law (hoses as the chambers, a fixed gap): unsaid.
+            // A refinement of an effect's law at 0 is its plain law (hoses as the chambers, a
+            // fixed gap): unsaid.
+            let refinement = |key: &str| REFINEMENTS.iter().any(|k| k.name() == key);
             let values: Vec<String> = values
                 .iter()
-                .filter(|(key, v)| {
-                    !(*v == 0.0 && matches!(*key, "hose_bulk_modulus_pa" | "growth_per_pa"))
-                })
+                .filter(|(key, v)| !(*v == 0.0 && refinement(key)))
                 .map(|(key, v)| fitted(key, *v, f64::NAN))
                 .collect();
             format!("{name} ({})", values.join(", "))

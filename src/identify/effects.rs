@@ -7,7 +7,7 @@ use super::data::Campaign;
 use super::evaluate::{replay_all, weighted_of, with_numerics_of};
 use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
 use super::progress::Stage;
-use super::raw_error::raw_error_report;
+use super::raw_error::{RawErrorReport, raw_error_report};
 use super::replay::{PreparedRecord, SimChannels, rms};
 use super::result::CandidateScore;
 use super::{CalibrationOptions, EffectId, IdentifyError};
@@ -313,18 +313,32 @@ const REFINEMENT_MIN_DBIC: f64 = -10.0;
 /// quarter off.
 const REFINEMENT_MAX_RAW_RATIO: f64 = 0.75;
 
+/// The raw error ([`raw_error`](super::raw_error), the verdict's measure) of `p` replayed
+/// on every record at the preset's step.
+pub fn raw_error_at(
+    cx: &SearchContext<'_>,
+    campaign: &Campaign,
+    preset: &Params,
+    p: &Params,
+) -> Result<RawErrorReport, IdentifyError> {
+    let reps = replay_all(&with_numerics_of(*p, preset), &campaign.all)?;
+    let sims: Vec<&SimChannels> = reps.iter().map(|r| &r.sim).collect();
+    Ok(raw_error_report(
+        &campaign.all,
+        &sims,
+        cx.options.raw_error_limit,
+    ))
+}
+
 /// The largest ratio of the raw error to its noise floor in any band of any record
-/// ([`raw_error`](super::raw_error), the verdict's measure) of `p` replayed on every record
-/// at the preset's step.
+/// ([`raw_error_at`]).
 fn worst_raw_ratio(
     cx: &SearchContext<'_>,
     campaign: &Campaign,
     preset: &Params,
     p: &Params,
 ) -> Result<f64, IdentifyError> {
-    let reps = replay_all(&with_numerics_of(*p, preset), &campaign.all)?;
-    let sims: Vec<&SimChannels> = reps.iter().map(|r| &r.sim).collect();
-    let report = raw_error_report(&campaign.all, &sims, cx.options.raw_error_limit);
+    let report = raw_error_at(cx, campaign, preset, p)?;
     Ok(report.worst.map_or(f64::INFINITY, |w| w.ratio))
 }
 

@@ -519,12 +519,7 @@ fn beyond_the_library(
     if cx.options.max_proposed == 0 {
         return Ok(None);
     }
-    let probe = evaluate::replay_all(
-        &evaluate::with_numerics_of(search.current.params, params),
-        &campaign.all,
-    )?;
-    let sims: Vec<&SimChannels> = probe.iter().map(|r| &r.sim).collect();
-    if raw_error::raw_error_report(&campaign.all, &sims, cx.options.raw_error_limit).at_floor() {
+    if effects::raw_error_at(cx, campaign, params, &search.current.params)?.at_floor() {
         return Ok(None);
     }
     proposed::search(cx, &search.current, &search.knobs)
