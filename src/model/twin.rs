@@ -114,15 +114,27 @@ pub struct ValveFlows {
 /// Signed square root with a laminar core: `Δ/(Δ² + δ²)^¼`, ≈ sign(Δ)·√|Δ| for |Δ| ≫ δ.
 #[inline(always)]
 pub fn signed_sqrt(delta: f64, core_sq: f64) -> f64 {
-    delta / (delta * delta + core_sq).sqrt().sqrt()
+    orifice(1.0, delta, core_sq)
 }
 
-/// [`signed_sqrt`] of two pressure drops at once. The twin's right-hand side is dominated by
-/// these fourth roots (two per port, four per evaluation); on x86-64 the two ports share one
-/// packed square root (SSE2, part of the x86-64 baseline), elsewhere it is two scalar calls.
-/// Bit-identical to the scalar form (IEEE square roots are correctly rounded either way).
+/// An orifice's flow `g·Δ/(Δ² + δ²)^¼` for a gain `g`, i.e. `g·`[`signed_sqrt`]`(Δ)`.
+///
+/// Computed as `(g·Δ/s)·√s` with `s = √(Δ² + δ²)`: the division and the second square root
+/// wait only on `s`, so they run side by side, and the gain is applied before them, off the
+/// chain. The twin's step is bound by this chain's latency (four stages, each waiting on the
+/// flows), not by its count of operations.
 #[inline(always)]
-pub fn signed_sqrt_pair(d1: f64, d2: f64, core_sq: f64) -> (f64, f64) {
+pub fn orifice(gain: f64, delta: f64, core_sq: f64) -> f64 {
+    let s = (delta * delta + core_sq).sqrt();
+    (gain * delta / s) * s.sqrt()
+}
+
+/// [`orifice`] of two ports at once. The twin's right-hand side is dominated by these fourth
+/// roots; on x86-64 the two ports share one packed square root (SSE2, part of the x86-64
+/// baseline), elsewhere it is two scalar calls. Bit-identical to the scalar form (IEEE square
+/// roots and divisions are correctly rounded either way).
+#[inline(always)]
+pub fn orifice_pair(gains: (f64, f64), d1: f64, d2: f64, core_sq: f64) -> (f64, f64) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{
@@ -132,11 +144,9 @@ pub fn signed_sqrt_pair(d1: f64, d2: f64, core_sq: f64) -> (f64, f64) {
         // the local array written by `_mm_storeu_pd`.
         unsafe {
             let d = _mm_set_pd(d2, d1);
-            let r = _mm_sqrt_pd(_mm_sqrt_pd(_mm_add_pd(
-                _mm_mul_pd(d, d),
-                _mm_set1_pd(core_sq),
-            )));
-            let q = _mm_div_pd(d, r);
+            let g = _mm_set_pd(gains.1, gains.0);
+            let s = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(d, d), _mm_set1_pd(core_sq)));
+            let q = _mm_mul_pd(_mm_div_pd(_mm_mul_pd(g, d), s), _mm_sqrt_pd(s));
             let mut out = [0.0f64; 2];
             _mm_storeu_pd(out.as_mut_ptr(), q);
             (out[0], out[1])
@@ -144,7 +154,7 @@ pub fn signed_sqrt_pair(d1: f64, d2: f64, core_sq: f64) -> (f64, f64) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        (signed_sqrt(d1, core_sq), signed_sqrt(d2, core_sq))
+        (orifice(gains.0, d1, core_sq), orifice(gains.1, d2, core_sq))
     }
 }
 
@@ -210,8 +220,16 @@ impl Twin {
     }
 
     /// Valve port flows, Eqs. (12)–(13), for a spool position and the two port pressures.
-    #[inline(always)]
     pub fn valve_flows(&self, xv: f64, p1v: f64, p2v: f64) -> ValveFlows {
+        let (q1v, q2v) = self.port_flows(xv, p1v, p2v, 1.0);
+        ValveFlows { q1v, q2v }
+    }
+
+    /// The valve's port flows (port 1 → valve, valve → port 2), each times `scale`: the
+    /// right-hand side asks for them over the hose capacitance, a factor folded into the
+    /// orifices' gains ahead of their square roots, off the step's critical path.
+    #[inline(always)]
+    fn port_flows(&self, xv: f64, p1v: f64, p2v: f64, scale: f64) -> (f64, f64) {
         let x = self.opening(xv);
         let p0 = self.params.plant.supply.return_pressure_pa;
         let g = self.orifice_gain * x;
@@ -227,19 +245,11 @@ impl Twin {
             (g, g)
         };
         if x > 0.0 {
-            let (r1, r2) =
-                signed_sqrt_pair(p1v - p0, self.supply_pressure(gs, p2v) - p2v, self.core_sq);
-            ValveFlows {
-                q1v: gr * r1,
-                q2v: gs * r2,
-            }
+            let d2 = self.supply_pressure(gs, p2v) - p2v;
+            orifice_pair((gr * scale, gs * scale), p1v - p0, d2, self.core_sq)
         } else {
-            let (r1, r2) =
-                signed_sqrt_pair(self.supply_pressure(-gs, p1v) - p1v, p2v - p0, self.core_sq);
-            ValveFlows {
-                q1v: gs * r1,
-                q2v: gr * r2,
-            }
+            let d1 = self.supply_pressure(-gs, p1v) - p1v;
+            orifice_pair((gs * scale, gr * scale), d1, p2v - p0, self.core_sq)
         }
     }
 
@@ -328,7 +338,8 @@ impl Model<10> for Twin {
         let a = d.area;
         let inv = &self.inv;
         let ydd = self.body_force(&s) * inv.mass;
-        let flows = self.valve_flows(s.xv, s.p1v, s.p2v);
+        // The port flows over the hoses' capacitance [Pa/s].
+        let (q1v_c, q2v_c) = self.port_flows(s.xv, s.p1v, s.p2v, inv.c_hose);
         let q_leak = self.leakage(&s);
         let v = &self.params.plant.valve;
         let wn = v.omega_n_rad_s;
@@ -340,8 +351,8 @@ impl Model<10> for Twin {
             p2: (s.q2 - s.du * a + q_leak) * inv.c_chamber,
             q1: (s.p1 - s.p1v - d.resistance * s.q1) * inv.inertance,
             q2: (s.p2v - s.p2 - d.resistance * s.q2) * inv.inertance,
-            p1v: (s.q1 - flows.q1v) * inv.c_hose,
-            p2v: (flows.q2v - s.q2) * inv.c_hose,
+            p1v: s.q1 * inv.c_hose - q1v_c,
+            p2v: q2v_c - s.q2 * inv.c_hose,
             xv: s.dxv,
             dxv: wn * wn * (target - s.xv) - 2.0 * v.zeta * wn * s.dxv,
         }
@@ -417,9 +428,10 @@ mod tests {
     fn packed_pair_equals_the_scalar_form_bit_for_bit() {
         let core = 1e4_f64.powi(2);
         for (a, b) in [(4.5e6, -3.0e5), (0.0, 1e3), (-9e6, 2.5e-3), (1e-300, -7.0)] {
-            let (x, y) = signed_sqrt_pair(a, b, core);
-            assert_eq!(x.to_bits(), signed_sqrt(a, core).to_bits());
-            assert_eq!(y.to_bits(), signed_sqrt(b, core).to_bits());
+            let gains = (3.1e-7, -2.2e-6);
+            let (x, y) = orifice_pair(gains, a, b, core);
+            assert_eq!(x.to_bits(), orifice(gains.0, a, core).to_bits());
+            assert_eq!(y.to_bits(), orifice(gains.1, b, core).to_bits());
         }
     }
 
