@@ -29,11 +29,14 @@ if [ "$(wasm-bindgen --version 2>/dev/null | awk '{print $2}')" != "$version" ];
     cargo install wasm-bindgen-cli --version "$version"
 fi
 
-step "cargo build --release --lib --target wasm32-unknown-unknown"
-cargo build --release --lib --target wasm32-unknown-unknown
+# A target directory of its own (target/web): the wasm32 build then never waits on the lock
+# of a native build in target/, so `bash .ci/test` can run the two side by side.
 target_dir=$(cargo metadata --format-version 1 --no-deps \
     | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
-wasm="$target_dir/wasm32-unknown-unknown/release/seat_twin.wasm"
+web_target="$target_dir/web"
+step "cargo build --release --lib --target wasm32-unknown-unknown --target-dir $web_target"
+cargo build --release --lib --target wasm32-unknown-unknown --target-dir "$web_target"
+wasm="$web_target/wasm32-unknown-unknown/release/seat_twin.wasm"
 
 # Staged in a hidden folder, moved into place at the end: a failed build leaves the last
 # good web/dist/ as it was.

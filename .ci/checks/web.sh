@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The web app in a real browser. Builds it (web/build.sh), installs Debian's chromium (and
-# Node, if missing) and the browser driver (playwright-core from npm, pinned in
-# tests/web/package.json), serves web/dist on 127.0.0.1 and runs tests/web/browser_test.mjs:
+# The web app in a real browser. Builds it and installs Debian's chromium (and Node, if
+# missing) and the browser driver (.ci/prepare-web.sh: a no-op when `bash .ci/test` already ran
+# it beside `cargo test`), serves web/dist on 127.0.0.1 and runs tests/web/browser_test.mjs:
 # the seeded random ride against `seat-twin simulate` (a_w to 1e-9), Kp through the sliders'
 # path, unstable and back, a lesson step, a shared link, the file picker and a download,
 # screenshots (into target/web-shots/). Each step prints its time.
@@ -18,25 +18,8 @@ step() {
     step_start=$now
 }
 
-step "bash web/build.sh"
-bash web/build.sh
-
-# Debian's chromium, and Node with npm for the browser driver, if missing (apt-get, once).
-missing=""
-command -v chromium >/dev/null || missing="$missing chromium"
-command -v npm >/dev/null || missing="$missing nodejs npm"
-if [ -n "$missing" ]; then
-    step "apt-get install$missing"
-    if [ "$(id -u)" -eq 0 ]; then sudo=""; else sudo="sudo"; fi
-    $sudo apt-get update -qq
-    # shellcheck disable=SC2086
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends $missing
-fi
-
-if [ ! -d tests/web/node_modules/playwright-core ]; then
-    step "npm ci (playwright-core, the browser driver)"
-    npm ci --prefix tests/web --no-audit --no-fund
-fi
+step "bash .ci/prepare-web.sh (the app's wasm build, chromium, the browser driver)"
+bash .ci/prepare-web.sh
 
 step "the CLI's reference: seat-twin simulate, a_w as the app evaluates it"
 # The debug build with every feature is the one `cargo test --all-features` just made (with
