@@ -489,6 +489,16 @@ pub fn search(
         current = trial.refit;
         current_val = trial_val;
     }
+    // The hoses' and chambers' moduli, where both were fitted: their split's profile.
+    if let Some(split) = super::profile::hose_split(cx, &current, &knobs)? {
+        if let Some(end) = &split.fit {
+            current = end.clone();
+        }
+        if split.trades_off() {
+            split.apply(&mut current);
+            notes.push(split.note(&current));
+        }
+    }
     Ok(EffectSearch {
         current,
         knobs,

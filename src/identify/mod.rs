@@ -81,6 +81,7 @@ mod evaluate;
 pub mod figures;
 pub mod fit;
 pub mod paper;
+pub mod profile;
 pub mod progress;
 pub mod proposed;
 pub mod raw_error;

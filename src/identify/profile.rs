@@ -1,0 +1,205 @@
+//! Profile checks of the uncertainties where the fit's local picture can be overconfident.
+//!
+//! A fit's 1-σ comes from the Jacobian at its end point: the curvature of the residual there.
+//! Where two parameters trade off along a curved valley, that curvature can be steep across
+//! the valley's floor at the end point and yet the floor rise only slowly along it, so the
+//! local 1-σ is far smaller than the records warrant. The hoses' and the chambers' bulk
+//! moduli are such a pair: the records see mostly their total capacitance (the hoses hold
+//! about five times the chambers' oil), the split only through the line's own mode.
+//!
+//! The check is the profile of the criterion (as in a profile likelihood): the chambers'
+//! modulus is moved to each side (×1.5 and ÷1.5) with the total capacitance kept, everything
+//! else fitted again, and the rise of the residual read in units of its own noise,
+//! `Δχ² = ΔRSS/s²` with the fit's `s²` (per effective residual). A parabolic profile has
+//! `Δχ² = (Δβ/σ)²`, so each side gives `σ = |Δβ|/√Δχ²`; the reported 1-σ is the largest of
+//! the local one and the two sides', for both moduli (the hoses' from the refitted value).
+//! A side within `Δχ² ≤ 1` — another valley as deep as the fit's, or nearly — stays within
+//! 1-σ; one deeper than the fit's is fitted again in full and becomes the result.
+
+use super::effects::SearchContext;
+use super::fit::{self, FitResult, Knob};
+use super::{CalibrationOptions, IdentifyError};
+use crate::params::derived;
+
+/// Factor by which the chambers' modulus is moved to each side of the fit.
+const STEP: f64 = 1.5;
+
+/// Ratio of the profile's 1-σ to the local one above which the report says the two moduli
+/// trade off.
+const WIDENED: f64 = 1.5;
+
+/// One side of the profile: the chambers' and hoses' moduli refitted with the chambers fixed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfilePoint {
+    /// Chambers' modulus, held [Pa].
+    pub chambers_pa: f64,
+    /// Hoses' modulus, refitted [Pa].
+    pub hoses_pa: f64,
+    /// Rise of the residual over the fit's, in units of its noise (`ΔRSS/s²`) [-].
+    pub delta_chi2: f64,
+}
+
+/// What the profile of the hose/chamber split found. The points are relative to the end
+/// point: [`Self::fit`] where the profile found a deeper valley, else the fit profiled.
+#[derive(Debug, Clone)]
+pub struct SplitProfile {
+    /// The two sides (those whose start was physical).
+    pub points: Vec<ProfilePoint>,
+    /// Local 1-σ of the chambers' and the hoses' moduli [Pa].
+    pub local: [f64; 2],
+    /// 1-σ after the profile [Pa].
+    pub widened: [f64; 2],
+    /// The fit done again in full from a side that fitted better than the fit itself
+    /// (another valley); the points are then relative to it.
+    pub fit: Option<FitResult>,
+}
+
+/// Profiles the chambers'/hoses' split of `fit` (of `knobs`) when both moduli are fitted;
+/// `None` otherwise. Two fits of all other knobs (in parallel).
+pub fn hose_split(
+    cx: &SearchContext<'_>,
+    fit: &FitResult,
+    knobs: &[Knob],
+) -> Result<Option<SplitProfile>, IdentifyError> {
+    let index = |k: Knob| knobs.iter().position(|&x| x == k);
+    let (Some(ic), Some(ih)) = (index(Knob::Compliance), index(Knob::HoseCompliance)) else {
+        return Ok(None);
+    };
+    let p0 = fit.params;
+    let (beta_c, beta_h) = (p0.effective_bulk_modulus_pa(), p0.hose_bulk_modulus_pa());
+    if p0.plant.effects.compliance.hose_bulk_modulus_pa <= 0.0 {
+        return Ok(None);
+    }
+    let d = derived(&p0);
+    let total = d.c_chamber + d.c_hose;
+    let others: Vec<Knob> = knobs
+        .iter()
+        .copied()
+        .filter(|&k| k != Knob::Compliance)
+        .collect();
+    let starts: Vec<_> = [STEP, 1.0 / STEP]
+        .iter()
+        .filter_map(|&f| {
+            // The chambers' capacitance scales as 1/β; the hoses take the rest of the total.
+            let chambers = beta_c * f;
+            let c_hose = total - d.c_chamber / f;
+            let hoses = beta_h * d.c_hose / c_hose;
+            let in_range = |b: f64| (1e6..=1e10).contains(&b);
+            (c_hose > 0.1 * d.c_hose && in_range(chambers) && in_range(hoses)).then(|| {
+                let mut p = p0;
+                p.plant.effects.compliance.effective_bulk_modulus_pa = chambers;
+                p.plant.effects.compliance.hose_bulk_modulus_pa = hoses;
+                p
+            })
+        })
+        .collect();
+    let options: &CalibrationOptions = cx.options;
+    let ratio = cx.bic.ratio();
+    let fits: Vec<Result<FitResult, IdentifyError>> = {
+        use rayon::prelude::*;
+        starts
+            .par_iter()
+            .map(|p| fit::fit(cx.ev, p, &others, options.max_iterations, ratio))
+            .collect()
+    };
+    let dof = fit.n.saturating_sub(knobs.len()).max(1) as f64;
+    let s2 = fit.rss / dof / ratio.clamp(1e-6, 1.0);
+    let mut sides = Vec::new();
+    for side in fits {
+        sides.push(side?);
+    }
+    // A side at least as deep as the fit is another valley: the fit is done again in full
+    // from the deepest, and the first end point becomes one of the profile's points.
+    let deepest = sides
+        .iter()
+        .filter(|s| s.rss < fit.rss)
+        .min_by(|a, b| a.rss.total_cmp(&b.rss));
+    let (end, moved) = match deepest {
+        Some(d) => {
+            let refit = fit::fit(cx.ev, &d.params, knobs, options.max_iterations, ratio)?;
+            if refit.rss < fit.rss {
+                sides.push(fit.clone());
+                (refit, true)
+            } else {
+                (fit.clone(), false)
+            }
+        }
+        None => (fit.clone(), false),
+    };
+    let (beta_c, beta_h) = (
+        end.params.effective_bulk_modulus_pa(),
+        end.params.hose_bulk_modulus_pa(),
+    );
+    let local = [end.values[ic].std, end.values[ih].std];
+    let mut widened = local;
+    let mut points = Vec::new();
+    for side in &sides {
+        let point = ProfilePoint {
+            chambers_pa: side.params.effective_bulk_modulus_pa(),
+            hoses_pa: side.params.hose_bulk_modulus_pa(),
+            delta_chi2: (side.rss - end.rss) / s2,
+        };
+        // σ = |Δβ|/√Δχ² on a parabolic profile; a point within Δχ² ≤ 1 (another valley as
+        // deep, or nearly) is kept within 1-σ.
+        let root = point.delta_chi2.max(1.0).sqrt();
+        widened[0] = widened[0].max((point.chambers_pa - beta_c).abs() / root);
+        widened[1] = widened[1].max((point.hoses_pa - beta_h).abs() / root);
+        points.push(point);
+    }
+    Ok(Some(SplitProfile {
+        points,
+        local,
+        widened,
+        fit: moved.then_some(end),
+    }))
+}
+
+impl SplitProfile {
+    /// Whether the profile widened either 1-σ by more than half.
+    pub fn trades_off(&self) -> bool {
+        self.widened[0] > WIDENED * self.local[0] || self.widened[1] > WIDENED * self.local[1]
+    }
+
+    /// The note for the report when [`Self::trades_off`]: the points that fit nearly as well.
+    pub fn note(&self, end: &FitResult) -> String {
+        let gpa = |v: f64| format!("{:.3} GPa", 1e-9 * v);
+        let near: Vec<String> = self
+            .points
+            .iter()
+            .map(|q| {
+                format!(
+                    "chambers {} with hoses {} (Δχ² {:+.1})",
+                    gpa(q.chambers_pa),
+                    gpa(q.hoses_pa),
+                    q.delta_chi2
+                )
+            })
+            .collect();
+        format!(
+            "`compliance`: the chambers' and the hoses' bulk moduli trade off (the records see \
+             mostly their total capacitance). Fitted: chambers {} with hoses {}; the profile \
+             (chambers' modulus held ×1.5 and ÷1.5 with the total capacitance kept, everything \
+             else fitted again; Δχ² is the rise of the residual in units of its noise): {}. The \
+             1-σ are widened from the local {} and {} to {} and {} to cover it. Pressures at the \
+             valve ports, or a test that excites the line's own mode, would separate them.",
+            gpa(end.params.effective_bulk_modulus_pa()),
+            gpa(end.params.hose_bulk_modulus_pa()),
+            near.join("; "),
+            gpa(self.local[0]),
+            gpa(self.local[1]),
+            gpa(self.widened[0]),
+            gpa(self.widened[1]),
+        )
+    }
+
+    /// Sets the widened 1-σ into `fit`'s values of the two moduli.
+    pub fn apply(&self, fit: &mut FitResult) {
+        for v in &mut fit.values {
+            match v.knob {
+                Knob::Compliance => v.std = self.widened[0],
+                Knob::HoseCompliance => v.std = self.widened[1],
+                _ => {}
+            }
+        }
+    }
+}
