@@ -433,12 +433,90 @@ pub fn search(
         } else {
             options.min_relative_gain_later
         };
-        if !(best.score < 0.0 && best.gain >= min_gain) {
+        let qualifies = best.score < 0.0 && best.gain >= min_gain;
+        // Under the gain bar, a candidate the criterion favours is still tried while the raw
+        // error (the verdict's measure) is above its limit: the weighted fit metric can
+        // under-rate an effect whose signature lies where it weighs little (friction's at
+        // the reversals, beside an overlap's). It is kept only if it also takes a quarter
+        // off the raw error's worst band.
+        let raw_before = if !qualifies && best.score < 0.0 {
+            Some(worst_raw_ratio(cx, campaign, params, &current.params)?)
+                .filter(|&w| w > options.raw_error_limit)
+        } else {
+            None
+        };
+        if !qualifies && raw_before.is_none() {
             break;
         }
         let trial = try_effect(cx, campaign, params, &best, &knobs, round, current_val)?;
         remaining.retain(|e| *e != best.effect);
         let (score, trial_val) = (best.score, trial.validation_rms);
+        if let Some(before) = raw_before {
+            let after = worst_raw_ratio(cx, campaign, params, &trial.refit.params)?;
+            // Its size determined and more than 2σ from "off", and every uncertainty of the
+            // re-fit finite: an effect tried below the bar must not leave the fit degenerate,
+            // nor enter at no size only to let the others' fit move on.
+            let size = best.effect.knobs()[0];
+            let off = {
+                let mut p = trial.refit.params;
+                size.set(&mut p, 0.0);
+                size.value(&p)
+            };
+            let determinate = trial.refit.values.iter().all(|v| v.std.is_finite())
+                && trial
+                    .refit
+                    .values
+                    .iter()
+                    .filter(|v| v.knob == size)
+                    .all(|v| determined(v) && (v.value - off).abs() > 2.0 * v.std);
+            let kept = trial.improves && determinate && after <= REFINEMENT_MAX_RAW_RATIO * before;
+            notes.push(format!(
+                "round {round}: `{}` removed {:.1} % of the weighted residual (ΔBIC {score:.1}), \
+                 under the {:.0} % a further effect needs, but the raw error was above its \
+                 limit (worst band {before:.1}× its floor): tried, it {} the worst band to \
+                 {after:.1}× and the held-out weighted RMS {current_val:.3} → {trial_val:.3}{}: \
+                 {}",
+                best.effect.name(),
+                100.0 * best.gain,
+                100.0 * min_gain,
+                if after < before { "lowers" } else { "leaves" },
+                if determinate {
+                    ""
+                } else {
+                    ", but its size is undetermined or within 2σ of none, or another parameter \
+                     is left undetermined"
+                },
+                if kept { "added" } else { "not added" }
+            ));
+            if !kept {
+                // A re-fit that lowered the raw error with the tried effect at no size of its
+                // own: the other parameters moved to a deeper valley of the model as it was.
+                // Fitted again from there without the effect, that is kept if deeper.
+                if !determinate && trial.improves && after <= REFINEMENT_MAX_RAW_RATIO * before {
+                    let mut restart = trial.refit.params;
+                    best.effect.disable(&mut restart);
+                    let again = fit::fit(
+                        cx.ev,
+                        &restart,
+                        &knobs,
+                        options.max_iterations,
+                        cx.bic.ratio(),
+                    )?;
+                    let w = worst_raw_ratio(cx, campaign, params, &again.params)?;
+                    if again.rss < current.rss && w < before {
+                        notes.push(format!(
+                            "round {round}: fitted again from that re-fit's other parameters \
+                             without `{}`, the model as it was reaches a deeper valley (weighted \
+                             residual −{:.1} %, worst raw band {before:.1}× → {w:.1}×): kept",
+                            best.effect.name(),
+                            100.0 * (1.0 - again.rss / current.rss),
+                        ));
+                        current = again;
+                    }
+                }
+                break;
+            }
+        }
         if !trial.improves {
             notes.push(format!(
                 "round {round}: `{}` improved the fit records (ΔBIC {score:.1}, {:.1} % of the \

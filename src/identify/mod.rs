@@ -219,6 +219,19 @@ impl EffectId {
         }
     }
 
+    /// Switches the effect off in `p` (its values stay as they were).
+    pub fn disable(self, p: &mut Params) {
+        let e = &mut p.plant.effects;
+        match self {
+            EffectId::Friction => e.friction.enabled = false,
+            EffectId::ValveOverlap => e.valve_overlap.enabled = false,
+            EffectId::ValveOffset => e.valve_offset.enabled = false,
+            EffectId::Leakage => e.leakage.enabled = false,
+            EffectId::Compliance => e.compliance.enabled = false,
+            EffectId::SupplySag => e.supply_sag.enabled = false,
+        }
+    }
+
     /// The signature feature of [`diagnose`] that points at this effect.
     pub fn signature(self) -> &'static str {
         match self {

@@ -348,6 +348,9 @@ fn randomised_rigs_confusion_table() {
         replay_ok += usize::from(halved);
         if only.is_some() {
             eprintln!("case {i} in full: {}", super::rig::summary(&r));
+            for n in &r.notes {
+                eprintln!("  note: {n}");
+            }
             for e in &r.effects {
                 eprintln!(
                     "  {}: {:?} ± {:?}",
@@ -471,11 +474,8 @@ fn randomised_rigs_confusion_table() {
 /// note says they trade off.
 #[test]
 fn a_hose_chamber_split_the_records_cannot_tell_is_reported_as_a_trade_off() {
-    let (seed, i) = (2021, 20);
-    let c = &cases(seed)[i];
+    let (c, r) = survey_case(2021, 20);
     assert_eq!(c.fx.compliance.map(|(_, chambers)| chambers), Some(0.9e9));
-    let recs = campaign_of(c.cd, c.tau, c.fx, 1500 + i as u64, c.pressures, 1000.0);
-    let r = calibrate_paper(&recs);
     let compliance = r
         .effects
         .iter()
@@ -498,4 +498,59 @@ fn a_hose_chamber_split_the_records_cannot_tell_is_reported_as_a_trade_off() {
         "no trade-off note: {:?}",
         r.notes
     );
+}
+
+/// Calibrates case `i` of the draw `seed` as the survey does.
+fn survey_case(seed: u64, i: usize) -> (Case, CalibrationReport) {
+    let c = cases(seed).swap_remove(i);
+    let noise_seed = 500u64.wrapping_add(seed.wrapping_sub(2020).wrapping_mul(1000));
+    let recs = campaign_of(
+        c.cd,
+        c.tau,
+        c.fx,
+        noise_seed + i as u64,
+        c.pressures,
+        1000.0,
+    );
+    let r = calibrate_paper(&recs);
+    (c, r)
+}
+
+/// Case 2 of the draw 2021 (friction 36 N beside a 36 µm overlap): friction removed 39 % of
+/// the weighted residual after the overlap, under the 40 % a further effect needs, and was
+/// missed (`unexplained`, Cd 4.7σ off) while the raw error stood at 10× its floor. Tried on
+/// the raw error, it takes every band to its floor and is added.
+#[test]
+fn friction_beside_an_overlap_under_the_gain_bar_is_added_on_the_raw_error() {
+    let (c, r) = survey_case(2021, 2);
+    assert!(
+        effects_right(&c, &r),
+        "{}; {:?}",
+        super::rig::summary(&r),
+        r.notes
+    );
+    assert_eq!(r.verdict, Verdict::Explained, "{}", super::rig::summary(&r));
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.contains("under the 40 %") && n.ends_with("added")),
+        "{:?}",
+        r.notes
+    );
+}
+
+/// Case 1 of the draw 2024 (friction alone, 47 N): the friction fit stopped in a valley whose
+/// raw error left a band at 4.0×; compliance, tried on the raw error, ended at no size of its
+/// own (1.18 GPa against the oil's 1.2) but let the friction move on. Compliance is not added;
+/// the model as it was, fitted again from there, is kept: `explained` by friction alone.
+#[test]
+fn a_tried_effect_at_no_size_is_not_added_but_its_deeper_valley_is_kept() {
+    let (c, r) = survey_case(2024, 1);
+    assert!(
+        effects_right(&c, &r),
+        "{}; {:?}",
+        super::rig::summary(&r),
+        r.notes
+    );
+    assert_eq!(r.verdict, Verdict::Explained, "{}", super::rig::summary(&r));
 }
