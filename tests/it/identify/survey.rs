@@ -310,16 +310,7 @@ fn randomised_rigs_confusion_table() {
         if only.as_ref().is_some_and(|o| !o.contains(&i)) {
             continue;
         }
-        // Noise seeds 500 + i for the README's table, others for other draws.
-        let noise_seed = 500u64.wrapping_add(seed.wrapping_sub(2020).wrapping_mul(1000));
-        let recs = campaign_of(
-            c.cd,
-            c.tau,
-            c.fx,
-            noise_seed + i as u64,
-            c.pressures,
-            1000.0,
-        );
+        let recs = records_of(seed, i, c);
         let t0 = std::time::Instant::now();
         let r = calibrate_paper(&recs);
         let secs = t0.elapsed().as_secs_f64();
@@ -500,19 +491,24 @@ fn a_hose_chamber_split_the_records_cannot_tell_is_reported_as_a_trade_off() {
     );
 }
 
-/// Calibrates case `i` of the draw `seed` as the survey does.
-fn survey_case(seed: u64, i: usize) -> (Case, CalibrationReport) {
-    let c = cases(seed).swap_remove(i);
+/// The records of case `i` (`c`) of the draw `seed`: noise seeds 500 + i for the README's
+/// table (2020), others for other draws.
+fn records_of(seed: u64, i: usize, c: &Case) -> Vec<seat_twin::dataset::Record> {
     let noise_seed = 500u64.wrapping_add(seed.wrapping_sub(2020).wrapping_mul(1000));
-    let recs = campaign_of(
+    campaign_of(
         c.cd,
         c.tau,
         c.fx,
         noise_seed + i as u64,
         c.pressures,
         1000.0,
-    );
-    let r = calibrate_paper(&recs);
+    )
+}
+
+/// Calibrates case `i` of the draw `seed` as the survey does.
+fn survey_case(seed: u64, i: usize) -> (Case, CalibrationReport) {
+    let c = cases(seed).swap_remove(i);
+    let r = calibrate_paper(&records_of(seed, i, &c));
     (c, r)
 }
 
