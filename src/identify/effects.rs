@@ -568,7 +568,14 @@ pub fn search(
         current_val = trial_val;
     }
     // The hoses' and chambers' moduli, where both were fitted: their split's profile.
-    if let Some(split) = super::profile::hose_split(cx, &current, &knobs)? {
+    let split = super::profile::hose_split(
+        cx.ev,
+        &current,
+        &knobs,
+        options.max_iterations,
+        cx.bic.ratio(),
+    )?;
+    if let Some(split) = split {
         if let Some(end) = &split.fit {
             current = end.clone();
         }

@@ -16,9 +16,8 @@
 //! A side within `Δχ² ≤ 1` — another valley as deep as the fit's, or nearly — stays within
 //! 1-σ; one deeper than the fit's is fitted again in full and becomes the result.
 
-use super::effects::SearchContext;
-use super::fit::{self, FitResult, Knob};
-use super::{CalibrationOptions, IdentifyError};
+use super::IdentifyError;
+use super::fit::{self, Evaluator, FitResult, Knob};
 use crate::params::derived;
 
 /// Factor by which the chambers' modulus is moved to each side of the fit.
@@ -55,11 +54,14 @@ pub struct SplitProfile {
 }
 
 /// Profiles the chambers'/hoses' split of `fit` (of `knobs`) when both moduli are fitted;
-/// `None` otherwise. Two fits of all other knobs (in parallel).
+/// `None` otherwise. Two fits of all other knobs (in parallel), each with at most
+/// `max_jacobians` Jacobians; `n_eff_ratio` as for [`fit::fit`].
 pub fn hose_split(
-    cx: &SearchContext<'_>,
+    ev: &Evaluator<'_>,
     fit: &FitResult,
     knobs: &[Knob],
+    max_jacobians: usize,
+    n_eff_ratio: f64,
 ) -> Result<Option<SplitProfile>, IdentifyError> {
     let index = |k: Knob| knobs.iter().position(|&x| x == k);
     let (Some(ic), Some(ih)) = (index(Knob::Compliance), index(Knob::HoseCompliance)) else {
@@ -93,13 +95,12 @@ pub fn hose_split(
             })
         })
         .collect();
-    let options: &CalibrationOptions = cx.options;
-    let ratio = cx.bic.ratio();
+    let ratio = n_eff_ratio;
     let fits: Vec<Result<FitResult, IdentifyError>> = {
         use rayon::prelude::*;
         starts
             .par_iter()
-            .map(|p| fit::fit(cx.ev, p, &others, options.max_iterations, ratio))
+            .map(|p| fit::fit(ev, p, &others, max_jacobians, ratio))
             .collect()
     };
     let dof = fit.n.saturating_sub(knobs.len()).max(1) as f64;
@@ -116,7 +117,7 @@ pub fn hose_split(
         .min_by(|a, b| a.rss.total_cmp(&b.rss));
     let (end, moved) = match deepest {
         Some(d) => {
-            let refit = fit::fit(cx.ev, &d.params, knobs, options.max_iterations, ratio)?;
+            let refit = fit::fit(ev, &d.params, knobs, max_jacobians, ratio)?;
             if refit.rss < fit.rss {
                 sides.push(fit.clone());
                 (refit, true)
