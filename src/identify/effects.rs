@@ -469,7 +469,8 @@ pub fn search(
                     .iter()
                     .filter(|v| v.knob == size)
                     .all(|v| determined(v) && (v.value - off).abs() > 2.0 * v.std);
-            let kept = trial.improves && determinate && after <= REFINEMENT_MAX_RAW_RATIO * before;
+            let lowers_raw = after <= REFINEMENT_MAX_RAW_RATIO * before;
+            let kept = trial.improves && determinate && lowers_raw;
             notes.push(format!(
                 "round {round}: `{}` removed {:.1} % of the weighted residual (ΔBIC {score:.1}), \
                  under the {:.0} % a further effect needs, but the raw error was above its \
@@ -492,7 +493,7 @@ pub fn search(
                 // A re-fit that lowered the raw error with the tried effect at no size of its
                 // own: the other parameters moved to a deeper valley of the model as it was.
                 // Fitted again from there without the effect, that is kept if deeper.
-                if !determinate && trial.improves && after <= REFINEMENT_MAX_RAW_RATIO * before {
+                if !determinate && trial.improves && lowers_raw {
                     let mut restart = trial.refit.params;
                     best.effect.disable(&mut restart);
                     let again = fit::fit(

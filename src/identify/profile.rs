@@ -95,16 +95,15 @@ pub fn hose_split(
             })
         })
         .collect();
-    let ratio = n_eff_ratio;
     let fits: Vec<Result<FitResult, IdentifyError>> = {
         use rayon::prelude::*;
         starts
             .par_iter()
-            .map(|p| fit::fit(ev, p, &others, max_jacobians, ratio))
+            .map(|p| fit::fit(ev, p, &others, max_jacobians, n_eff_ratio))
             .collect()
     };
     let dof = fit.n.saturating_sub(knobs.len()).max(1) as f64;
-    let s2 = fit.rss / dof / ratio.clamp(1e-6, 1.0);
+    let s2 = fit.rss / dof / n_eff_ratio.clamp(1e-6, 1.0);
     let mut sides = Vec::new();
     for side in fits {
         sides.push(side?);
@@ -117,7 +116,7 @@ pub fn hose_split(
         .min_by(|a, b| a.rss.total_cmp(&b.rss));
     let (end, moved) = match deepest {
         Some(d) => {
-            let refit = fit::fit(ev, &d.params, knobs, max_jacobians, ratio)?;
+            let refit = fit::fit(ev, &d.params, knobs, max_jacobians, n_eff_ratio)?;
             if refit.rss < fit.rss {
                 sides.push(fit.clone());
                 (refit, true)
