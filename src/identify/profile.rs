@@ -86,7 +86,8 @@ pub fn hose_split(
             let chambers = beta_c * f;
             let c_hose = total - d.c_chamber / f;
             let hoses = beta_h * d.c_hose / c_hose;
-            let in_range = |b: f64| (1e6..=1e10).contains(&b);
+            let spec = Knob::Compliance.spec();
+            let in_range = |b: f64| (spec.min..=spec.max).contains(&b);
             (c_hose > 0.1 * d.c_hose && in_range(chambers) && in_range(hoses)).then(|| {
                 let mut p = p0;
                 p.plant.effects.compliance.effective_bulk_modulus_pa = chambers;
@@ -104,10 +105,7 @@ pub fn hose_split(
     };
     let dof = fit.n.saturating_sub(knobs.len()).max(1) as f64;
     let s2 = fit.rss / dof / n_eff_ratio.clamp(1e-6, 1.0);
-    let mut sides = Vec::new();
-    for side in fits {
-        sides.push(side?);
-    }
+    let mut sides = fits.into_iter().collect::<Result<Vec<_>, _>>()?;
     // A side at least as deep as the fit is another valley: the fit is done again in full
     // from the deepest, and the first end point becomes one of the profile's points.
     let deepest = sides
