@@ -29,7 +29,7 @@ fn confounding_hint(a: EffectId, b: EffectId, recs: &[PreparedRecord]) -> &'stat
 
 /// Coarse starts for a candidate effect's fit: its first parameter on a log grid (both signs
 /// for a signed one), the others at 0, gives the best of the grid and "off". For compliance
-/// also the best of hoses softer than the chambers from there. For friction
+/// a finer grid and its best valleys ([`compliance_starts`]). For friction
 /// also the best of a Stribeck peak at a few Stribeck velocities from there: a friction law
 /// with and without its peak are different valleys of the fit (a peak's start can look worse
 /// before the fit and end better, or the other way round), so both are fitted.
@@ -46,10 +46,19 @@ pub fn multi_start(
     }
     let signed = matches!(e, EffectId::ValveOffset);
     let mut grid = vec![0.0];
-    for g in [0.1, 0.3, 1.0, 3.0, 10.0] {
-        grid.push(g);
-        if signed {
-            grid.push(-g);
+    if e == EffectId::Compliance {
+        // The oil's modulus over 1.2, 1.2², … 1.2¹³ (down to 1/10.7): the hydraulic mode's
+        // frequency goes as the modulus' square root, so each step moves it by ≈ 10 %. A
+        // lightly damped mode driven by sines at a few fixed frequencies makes narrow valleys
+        // in the modulus, which a coarser grid (×3 steps) steps over: its best start then
+        // lies in a valley of the mode on the wrong side of a test frequency.
+        grid.extend((1..=13).map(|k| 1.2_f64.powi(k) - 1.0));
+    } else {
+        for g in [0.1, 0.3, 1.0, 3.0, 10.0] {
+            grid.push(g);
+            if signed {
+                grid.push(-g);
+            }
         }
     }
     let starts: Vec<Params> = grid
@@ -60,23 +69,10 @@ pub fn multi_start(
             p
         })
         .collect();
-    let best = best_of(ev, &starts)?.unwrap_or(off);
     if e == EffectId::Compliance {
-        // Hoses softer than the chambers are another valley: their mode sits elsewhere. Also
-        // start from the hoses at 1/1.25 … 1/3 of the chambers' modulus found above.
-        let softer: Vec<Params> = [0.25, 0.5, 1.0, 2.0]
-            .iter()
-            .map(|&t| {
-                let mut p = best;
-                Knob::HoseCompliance.set(&mut p, t);
-                p
-            })
-            .collect();
-        return Ok(match best_of(ev, &softer)? {
-            Some(hose) if hose != best => vec![best, hose],
-            _ => vec![best],
-        });
+        return compliance_starts(ev, &starts);
     }
+    let best = best_of(ev, &starts)?.unwrap_or(off);
     if e != EffectId::Friction {
         return Ok(vec![best]);
     }
@@ -99,24 +95,79 @@ pub fn multi_start(
     }
 }
 
-/// The parameter set of `starts` with the smallest residual sum of squares on the fit
-/// records (replayed in parallel); `None` for no starts.
-pub fn best_of(ev: &Evaluator<'_>, starts: &[Params]) -> Result<Option<Params>, IdentifyError> {
-    let costs: Vec<Option<(f64, Params)>> = starts
+/// How many valleys of the moduli's grid compliance's fit starts from.
+const COMPLIANCE_VALLEYS: usize = 3;
+
+/// Hoses' modulus on compliance's start grid, as the chambers' over 1 + this.
+const HOSE_RATIOS: [f64; 5] = [0.0, 0.25, 0.5, 1.0, 2.0];
+
+/// Compliance's starts: the [`COMPLIANCE_VALLEYS`] lowest local minima of the fit records'
+/// residual on a grid of the chambers' modulus (`chambers`, hoses as the chambers) times
+/// the hoses' modulus at 1/1 … 1/3 of the chambers' ([`HOSE_RATIOS`]). The lightly damped
+/// mode makes the residual rise and fall as it passes the test frequencies, in both moduli:
+/// the grid's single best point need not lie in the deepest valley after the fit, and a
+/// search along the chambers' modulus with the hoses as stiff, then a softer hose from the
+/// best point only, can miss the valley of hoses softer than the chambers altogether.
+fn compliance_starts(
+    ev: &Evaluator<'_>,
+    chambers: &[Params],
+) -> Result<Vec<Params>, IdentifyError> {
+    let grid: Vec<Params> = chambers
+        .iter()
+        .flat_map(|from| {
+            HOSE_RATIOS.iter().map(move |&t| {
+                let mut p = *from;
+                Knob::HoseCompliance.set(&mut p, t);
+                p
+            })
+        })
+        .collect();
+    let costs = costs_of(ev, &grid)?;
+    let (rows, cols) = (chambers.len(), HOSE_RATIOS.len());
+    let cost = |i: usize, j: usize| costs[i * cols + j];
+    let mut minima: Vec<usize> = Vec::new();
+    for i in 0..rows {
+        for j in 0..cols {
+            let c = cost(i, j);
+            let lower = |di: isize, dj: isize| {
+                let (ni, nj) = (i as isize + di, j as isize + dj);
+                (0..rows as isize).contains(&ni)
+                    && (0..cols as isize).contains(&nj)
+                    && cost(ni as usize, nj as usize) < c
+            };
+            if !(lower(-1, 0) || lower(1, 0) || lower(0, -1) || lower(0, 1)) && c.is_finite() {
+                minima.push(i * cols + j);
+            }
+        }
+    }
+    minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
+    Ok(minima
+        .into_iter()
+        .take(COMPLIANCE_VALLEYS)
+        .map(|k| grid[k])
+        .collect())
+}
+
+/// The residual sum of squares of each of `starts` on the fit records (replayed in
+/// parallel).
+fn costs_of(ev: &Evaluator<'_>, starts: &[Params]) -> Result<Vec<f64>, IdentifyError> {
+    starts
         .par_iter()
         .map(|p| {
             ev.residuals(p)
-                .map(|r| (r.iter().map(|v| v * v).sum::<f64>(), *p))
+                .map(|r| r.iter().map(|v| v * v).sum::<f64>())
         })
-        .collect();
-    let mut best: Option<(f64, Params)> = None;
-    for c in costs {
-        let (cost, p) = c.ok_or(IdentifyError::Cancelled)?;
-        if best.as_ref().is_none_or(|(b, _)| cost < *b) {
-            best = Some((cost, p));
-        }
-    }
-    Ok(best.map(|b| b.1))
+        .collect::<Option<Vec<f64>>>()
+        .ok_or(IdentifyError::Cancelled)
+}
+
+/// The parameter set of `starts` with the smallest residual sum of squares on the fit
+/// records (replayed in parallel); `None` for no starts.
+pub fn best_of(ev: &Evaluator<'_>, starts: &[Params]) -> Result<Option<Params>, IdentifyError> {
+    let costs = costs_of(ev, starts)?;
+    Ok((0..starts.len())
+        .min_by(|&a, &b| costs[a].total_cmp(&costs[b]))
+        .map(|i| starts[i]))
 }
 
 /// A candidate effect fitted on top of the current model in one round.
