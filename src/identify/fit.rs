@@ -82,6 +82,8 @@ pub enum Knob {
     TurbulentLeakage,
     /// `corrections.command_lag_s` [s] = 1e-3·|θ|.
     CommandLag,
+    /// `corrections.command_drift_v_per_s` [V/s] = 1e-3·θ.
+    CommandDrift,
 }
 
 impl Knob {
@@ -158,6 +160,7 @@ impl Knob {
             Knob::QuadraticDamping => c.quadratic_damping_n_s2_per_m2 / 1000.0,
             Knob::TurbulentLeakage => c.turbulent_leakage_m3_per_s_sqrt_pa / 1e-9,
             Knob::CommandLag => c.command_lag_s / 1e-3,
+            Knob::CommandDrift => c.command_drift_v_per_s / 1e-3,
             _ => 0.0,
         }
     }
@@ -193,6 +196,7 @@ impl Knob {
             Knob::QuadraticDamping => "corrections.quadratic_damping_n_s2_per_m2",
             Knob::TurbulentLeakage => "corrections.turbulent_leakage_m3_per_s_sqrt_pa",
             Knob::CommandLag => "corrections.command_lag_s",
+            Knob::CommandDrift => "corrections.command_drift_v_per_s",
         };
         spec(key).expect("every knob is in the parameter table")
     }
@@ -235,6 +239,7 @@ impl Knob {
             Knob::QuadraticDamping => 1000.0 * a,
             Knob::TurbulentLeakage => 1e-9 * a,
             Knob::CommandLag => 1e-3 * a,
+            Knob::CommandDrift => 1e-3 * theta,
         };
         // The hoses' modulus is the chambers' divided by (1 + θ_hose): a new chambers' modulus
         // keeps that ratio, so the two knobs can be set in either order.
@@ -268,7 +273,8 @@ impl Knob {
             | Knob::ExtraSpring
             | Knob::QuadraticDamping
             | Knob::TurbulentLeakage
-            | Knob::CommandLag => {}
+            | Knob::CommandLag
+            | Knob::CommandDrift => {}
         }
     }
 

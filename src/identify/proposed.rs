@@ -36,11 +36,13 @@ pub enum CorrectionId {
     TurbulentLeakage,
     /// A first-order lag of the valve command, beside the delay τ.
     CommandLag,
+    /// The valve's null drifting during each record.
+    CommandDrift,
 }
 
 impl CorrectionId {
     /// Every correction of the family.
-    pub const ALL: [CorrectionId; 7] = [
+    pub const ALL: [CorrectionId; 8] = [
         CorrectionId::CdOpening,
         CorrectionId::FlowDirection,
         CorrectionId::ReturnEdge,
@@ -48,6 +50,7 @@ impl CorrectionId {
         CorrectionId::QuadraticDamping,
         CorrectionId::TurbulentLeakage,
         CorrectionId::CommandLag,
+        CorrectionId::CommandDrift,
     ];
 
     /// The id in reports (`cd_opening`, `flow_direction`, …).
@@ -60,6 +63,7 @@ impl CorrectionId {
             CorrectionId::QuadraticDamping => "quadratic_damping",
             CorrectionId::TurbulentLeakage => "turbulent_leakage",
             CorrectionId::CommandLag => "command_lag",
+            CorrectionId::CommandDrift => "command_drift",
         }
     }
 
@@ -79,6 +83,7 @@ impl CorrectionId {
             CorrectionId::QuadraticDamping => &[Knob::QuadraticDamping],
             CorrectionId::TurbulentLeakage => &[Knob::TurbulentLeakage],
             CorrectionId::CommandLag => &[Knob::CommandLag],
+            CorrectionId::CommandDrift => &[Knob::CommandDrift],
         }
     }
 
@@ -146,6 +151,13 @@ impl CorrectionId {
                 pm(1e3 * v, 1e3 * s, 2),
                 1e3 * p.plant.valve.tau_s,
                 100.0 / (1.0 + (2.0 * std::f64::consts::PI * 20.0 * v).powi(2)).sqrt()
+            ),
+            CorrectionId::CommandDrift => format!(
+                "the valve's null drifts by {} mV/s during each record: an offset of the command \
+                 that grows from the record's start ({:+.1} mV after 10 s), as a torque motor or \
+                 an amplifier warming up makes it",
+                pm(1e3 * v, 1e3 * s, 3),
+                1e4 * v
             ),
         }
     }

@@ -19,9 +19,11 @@ use serde::{Deserialize, Serialize};
 ///   of the pressure difference (a turbulent gap), `c_t·sign(Δp)·√|Δp|`.
 /// * Valve command, Eq. (10): a first-order lag `T_cmd·v̇ = v_in − v` between the command as
 ///   sent and the one the valve acts on (a servo amplifier's or a proportional magnet's),
-///   beside the pure delay τ. Applied by the replay of measured records (`seat-twin replay`,
-///   `seat-twin calibrate`: the record's command is filtered before it drives the valve,
-///   [`Self::lagged_command`]); the twin's own closed-loop simulation does not apply it yet.
+///   beside the pure delay τ; and a null that drifts during each record, `+ r·t` with `t`
+///   from the record's start (a torque motor or an amplifier warming up). Applied by the
+///   replay of measured records (`seat-twin replay`, `seat-twin calibrate`: the record's
+///   command is filtered, then offset, before it drives the valve, [`Self::acted_command`]);
+///   the twin's own closed-loop simulation does not apply them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct CorrectionParams {
@@ -41,6 +43,9 @@ pub struct CorrectionParams {
     pub turbulent_leakage_m3_per_s_sqrt_pa: f64,
     /// First-order lag `T_cmd` of the valve command [s], 0 ..= 0.05 (0: none).
     pub command_lag_s: f64,
+    /// Drift rate `r` of the valve's null during each record [V/s], -0.1 ..= 0.1 (0: none);
+    /// the valve acts on its command plus `r·t`, `t` from the record's start.
+    pub command_drift_v_per_s: f64,
 }
 
 impl CorrectionParams {
@@ -72,6 +77,23 @@ impl CorrectionParams {
             m * (1.0 - self.flow_gain_return_edge),
             m * (1.0 + self.flow_gain_return_edge),
         )
+    }
+
+    /// The command [V] the valve acts on, sampled every `dt` [s], for the command as sent
+    /// `v_in` sampled at the same instants: [`Self::lagged_command`], plus the null's drift
+    /// `r·t` from the first sample. `None` when neither term is on (the valve acts on `v_in`).
+    pub fn acted_command(&self, v_in: &[f64], dt: f64) -> Option<Vec<f64>> {
+        let r = self.command_drift_v_per_s;
+        if self.command_lag_s <= 0.0 && r == 0.0 {
+            return None;
+        }
+        let mut v = self.lagged_command(v_in, dt);
+        if r != 0.0 {
+            for (i, x) in v.iter_mut().enumerate() {
+                *x += r * (i as f64 * dt);
+            }
+        }
+        Some(v)
     }
 
     /// The command `v` [V] the valve acts on, sampled every `dt` [s], for the command as sent
@@ -130,6 +152,7 @@ mod tests {
             quadratic_damping_n_s2_per_m2: 2000.0,
             turbulent_leakage_m3_per_s_sqrt_pa: 0.0,
             command_lag_s: 0.0,
+            command_drift_v_per_s: 0.0,
         };
         // Full opening, positive: (1 + 0.05)·(1.05) and the edges ∓2 %.
         let (s, r) = c.edge_gains(8e-4, 8e-4);
@@ -176,5 +199,31 @@ mod tests {
         // period: within 0.5 %.
         assert!((amp / gain - 1.0).abs() < 5e-3, "{amp} vs {gain}");
         assert_eq!(CorrectionParams::default().lagged_command(&sine, dt), sine);
+    }
+
+    /// The command the valve acts on: none without a term; the drift alone adds `r·t` from
+    /// the first sample; with the lag too, the lagged command plus the same ramp.
+    #[test]
+    fn a_drifting_null_adds_its_ramp_to_the_command() {
+        let dt = 1e-3;
+        let v_in: Vec<f64> = (0..500).map(|i| (0.05 * i as f64).sin()).collect();
+        assert_eq!(CorrectionParams::default().acted_command(&v_in, dt), None);
+        let drift = CorrectionParams {
+            command_drift_v_per_s: 2e-3,
+            ..Default::default()
+        };
+        let v = drift.acted_command(&v_in, dt).expect("a drift");
+        for (i, (a, b)) in v.iter().zip(&v_in).enumerate() {
+            assert!((a - b - 2e-3 * i as f64 * dt).abs() < 1e-15, "{i}");
+        }
+        let both = CorrectionParams {
+            command_lag_s: 4e-3,
+            ..drift
+        };
+        let lagged = both.lagged_command(&v_in, dt);
+        let v = both.acted_command(&v_in, dt).expect("a lag and a drift");
+        for (i, (a, b)) in v.iter().zip(&lagged).enumerate() {
+            assert!((a - b - 2e-3 * i as f64 * dt).abs() < 1e-15, "{i}");
+        }
     }
 }

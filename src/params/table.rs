@@ -120,7 +120,7 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
-pub static PARAMS: [ParamSpec; 60] = [
+pub static PARAMS: [ParamSpec; 61] = [
     entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
     entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
@@ -251,6 +251,8 @@ pub static PARAMS: [ParamSpec; 60] = [
         (1.0, "m³/(s·√Pa)"), "leakage across the piston growing with √|Δp|"),
     entry!("corrections.command_lag_s", plant.corrections.command_lag_s, "T_cmd", "s", [0.0, 0.05],
         None, (1e3, "ms"), "first-order lag of the valve command"),
+    entry!("corrections.command_drift_v_per_s", plant.corrections.command_drift_v_per_s, "r_null",
+        "V/s", [-0.1, 0.1], None, (1e3, "mV/s"), "drift of the valve's null during each record"),
 ];
 
 /// The table entry of a dotted key (`valve.cd`), `None` for an unknown key.

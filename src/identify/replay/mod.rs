@@ -231,12 +231,11 @@ fn replay_samples(
             .min(params.friction_resolving_step_s()),
         1.0 / dt,
     );
-    // A proposed lag of the valve command filters the command as sent.
-    let corrections = &params.plant.corrections;
-    let values = if corrections.command_lag_s > 0.0 {
-        Arc::new(corrections.lagged_command(&v_in, dt))
-    } else {
-        v_in
+    // A proposed lag of the valve command filters the command as sent, a proposed drift of
+    // the valve's null offsets it.
+    let values = match params.plant.corrections.acted_command(&v_in, dt) {
+        Some(v) => Arc::new(v),
+        None => v_in,
     };
     let drive = Drive::OpenLoop(CommandSignal::Sampled { dt, values });
     let mut sim = Simulation::twin(params, h, drive, platform);

@@ -443,7 +443,9 @@ fn effect_outside_the_library_is_unexplained() {
 /// null drifting during each test) is `unexplained`, however well a valve offset follows
 /// the drift's mean; the report names the record, `u`, the band and the window where the raw
 /// residual stays above the noise floor. The old verdict, which judged a low-passed velocity
-/// weighted by 1 % of its own RMS, could not see this drift.
+/// weighted by 1 % of its own RMS, could not see this drift. Beyond the library the drift is
+/// proposed as what it is, the valve's null drifting, at the rig's rate within 3σ, and with
+/// it every raw band is at its floor.
 #[test]
 fn a_slow_stroke_drift_outside_the_library_is_unexplained() {
     let fx = RigEffects {
@@ -452,7 +454,16 @@ fn a_slow_stroke_drift_outside_the_library_is_unexplained() {
     };
     let r = run(fx, 25);
     let s = summary(&r);
-    eprintln!("null drift: {s}; raw: {}", r.raw_error_after.summary());
+    eprintln!(
+        "null drift: {s}; raw: {}; proposed {:?}; candidates {:?}; with them {}",
+        r.raw_error_after.summary(),
+        r.proposed,
+        r.proposed_candidates,
+        r.raw_error_proposed
+            .as_ref()
+            .map(|e| e.summary())
+            .unwrap_or_default()
+    );
     assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
     let worst = r
         .raw_error_after
@@ -467,6 +478,27 @@ fn a_slow_stroke_drift_outside_the_library_is_unexplained() {
         .as_str()
         .unwrap_or_default();
     assert!(left.contains(&format!("{} u ", worst.file)), "{left}");
+    let term = r
+        .proposed
+        .iter()
+        .find(|t| t.name == "command_drift")
+        .unwrap_or_else(|| panic!("no null drift proposed: {:?}", r.proposed));
+    let (v, sd) = (
+        term.params["command_drift_v_per_s"],
+        term.uncertainties["command_drift_v_per_s"],
+    );
+    assert!((v - 2e-3).abs() < 3.0 * sd, "{v} ± {sd}");
+    assert!(
+        term.description.contains("null drifts"),
+        "{}",
+        term.description
+    );
+    assert_eq!(r.params.plant.corrections.command_drift_v_per_s, v);
+    let with = r
+        .raw_error_proposed
+        .as_ref()
+        .expect("raw error with the term");
+    assert!(with.at_floor(), "{}", with.summary());
 }
 
 /// Issue 20, item 5: two imperfect sensors on a rig without any hidden effect — the
@@ -576,6 +608,7 @@ fn three_effects_outside_the_library_are_proposed() {
                 "flow_gain_return_edge",
                 "turbulent_leakage_m3_per_s_sqrt_pa",
                 "command_lag_s",
+                "command_drift_v_per_s",
             ]
             .into_iter()
             .find(|k| t.params.contains_key(*k))
