@@ -634,6 +634,8 @@ pub fn search(
         if split.trades_off() {
             split.apply(&mut current);
             notes.push(split.note(&current));
+        } else if let Some(note) = super::profile::undetermined_note(&current) {
+            notes.push(note);
         }
     }
     Ok(EffectSearch {

@@ -152,6 +152,27 @@ pub fn hose_split(
     }))
 }
 
+/// The note for the report when the fit's own 1-σ of either modulus is over half its value
+/// (the profile then has nothing to widen): the records do not separate them.
+pub fn undetermined_note(fit: &FitResult) -> Option<String> {
+    let value = |k: Knob| fit.values.iter().find(|v| v.knob == k);
+    let (c, h) = (value(Knob::Compliance)?, value(Knob::HoseCompliance)?);
+    let loose = |v: &super::fit::FittedValue| !(v.std <= 0.5 * v.value.abs());
+    if !(loose(c) || loose(h)) {
+        return None;
+    }
+    let gpa =
+        |v: &super::fit::FittedValue| format!("{:.3} ± {:.3} GPa", 1e-9 * v.value, 1e-9 * v.std);
+    Some(format!(
+        "`compliance`: these records do not separate the chambers' bulk modulus ({}) from the \
+         hoses' ({}): they see mostly the total capacitance, and the split is left uncertain. \
+         Pressures at the valve ports, or a test that excites the line's own mode, would \
+         separate them.",
+        gpa(c),
+        gpa(h)
+    ))
+}
+
 impl SplitProfile {
     /// Whether the profile widened either 1-σ by more than half.
     pub fn trades_off(&self) -> bool {

@@ -257,6 +257,8 @@ fn checked_parameters(c: &Case, r: &CalibrationReport) -> Vec<(String, f64, f64,
     out
 }
 
+/// Whether the calibration found the rig's effects: the library's exactly, the sensor properties
+/// that matter, the drifting Cd, or each effect outside the library as its proposed term.
 fn effects_right(c: &Case, r: &CalibrationReport) -> bool {
     let mut found: Vec<EffectId> = r.effects.iter().map(|e| e.effect).collect();
     found.sort();
@@ -281,7 +283,22 @@ fn effects_right(c: &Case, r: &CalibrationReport) -> bool {
                 .filter(|(_, _, v)| v.is_some())
                 .all(|(ch, k, _)| r.sensors.iter().any(|s| s.channel == *ch && s.kind == *k))
         }
-        Class::Outside => !r.proposed.is_empty(),
+        Class::Outside => {
+            // Each of the rig's effects outside the library proposed as the term that
+            // describes it (more terms may come with it): Cd per direction as the
+            // direction difference, Cd rising with the opening as the opening term.
+            let expected = [
+                (c.fx.cd_spool.is_some(), "flow_direction"),
+                (c.fx.cd_opening.is_some(), "cd_opening"),
+                (c.fx.quadratic_damping.is_some(), "quadratic_damping"),
+                (c.fx.null_drift_v_per_s.is_some(), "command_drift"),
+            ];
+            !r.proposed.is_empty()
+                && expected
+                    .iter()
+                    .filter(|(present, _)| *present)
+                    .all(|(_, name)| r.proposed.iter().any(|t| t.name == *name))
+        }
         Class::Drift => r.drifts.iter().any(|d| d.parameter == "cd"),
     }
 }
