@@ -304,7 +304,7 @@ pub fn try_effect(
     let uncertain: Vec<FittedValue> = refit
         .values
         .iter()
-        .filter(|v| REFINEMENTS.contains(&v.knob) && !determined(v))
+        .filter(|v| REFINEMENTS.contains(&v.knob) && !v.is_determined())
         .cloned()
         .collect();
     let mut pinned = Vec::new();
@@ -391,11 +391,6 @@ fn worst_raw_ratio(
 ) -> Result<f64, IdentifyError> {
     let report = raw_error_at(cx, campaign, preset, p)?;
     Ok(report.worst.map_or(f64::INFINITY, |w| w.ratio))
-}
-
-/// Whether a fitted value is determined: a finite 1-σ of at most half its size.
-fn determined(v: &FittedValue) -> bool {
-    v.std.is_finite() && v.std <= 0.5 * v.value.abs()
 }
 
 /// An effect the search added.
@@ -519,7 +514,7 @@ pub fn search(
                     .values
                     .iter()
                     .filter(|v| v.knob == size)
-                    .all(|v| determined(v) && (v.value - off).abs() > 2.0 * v.std);
+                    .all(|v| v.is_determined() && (v.value - off).abs() > 2.0 * v.std);
             let lowers_raw = after <= REFINEMENT_MAX_RAW_RATIO * before;
             let kept = trial.improves && determinate && lowers_raw;
             notes.push(format!(

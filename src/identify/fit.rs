@@ -301,6 +301,13 @@ pub struct FittedValue {
     pub std: f64,
 }
 
+impl FittedValue {
+    /// Whether the records determine it: a finite 1-σ of at most half its size.
+    pub fn is_determined(&self) -> bool {
+        self.std.is_finite() && self.std <= 0.5 * self.value.abs()
+    }
+}
+
 /// Outcome of one Levenberg–Marquardt fit.
 #[derive(Debug, Clone)]
 pub struct FitResult {

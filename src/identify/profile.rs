@@ -157,8 +157,7 @@ pub fn hose_split(
 pub fn undetermined_note(fit: &FitResult) -> Option<String> {
     let value = |k: Knob| fit.values.iter().find(|v| v.knob == k);
     let (c, h) = (value(Knob::Compliance)?, value(Knob::HoseCompliance)?);
-    let loose = |v: &super::fit::FittedValue| v.std.is_nan() || v.std > 0.5 * v.value.abs();
-    if !(loose(c) || loose(h)) {
+    if c.is_determined() && h.is_determined() {
         return None;
     }
     let gpa =
