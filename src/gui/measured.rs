@@ -562,7 +562,8 @@ impl MeasuredData {
         };
         ui.label(
             RichText::new(format!(
-                "raw error (the verdict's measure, worst band against its noise floor, limit                  {:.1}): before {}, after {}{}",
+                "raw error (the verdict's measure, worst band against its noise floor, limit \
+                 {:.1}): before {}, after {}{}",
                 r.raw_error_after.limit,
                 worst(&r.raw_error_before),
                 worst(&r.raw_error_after),

@@ -512,6 +512,34 @@ impl Bic {
     }
 }
 
+/// The parameters' covariance `s2·(JᵀJ)⁻¹` from the Jacobian `jac`, with each parameter the
+/// residual does not respond to at all (a zero column: a knob held at its bound, as a sensor
+/// lag at 0 or a Stribeck velocity at its floor, where the one-sided difference moves
+/// nothing) left out: its row and column are NaN (undetermined), and the others are the
+/// covariance with it held where it is. Without that, one such column made `JᵀJ` singular
+/// and every parameter of the fit read "undetermined" (a campaign whose fit was at its floor
+/// then came out `insufficient_data`). `None` when the rest is singular too.
+fn covariance(jac: &DMatrix<f64>, s2: f64) -> Option<DMatrix<f64>> {
+    let p = jac.ncols();
+    let norms: Vec<f64> = (0..p).map(|j| jac.column(j).norm()).collect();
+    let largest = norms.iter().copied().fold(0.0, f64::max);
+    let kept: Vec<usize> = (0..p)
+        .filter(|&j| norms[j].is_finite() && norms[j] > 1e-12 * largest)
+        .collect();
+    if kept.is_empty() {
+        return None;
+    }
+    let sub = jac.select_columns(kept.iter());
+    let inv = (sub.transpose() * &sub).try_inverse()?;
+    let mut cov = DMatrix::from_element(p, p, f64::NAN);
+    for (a, &i) in kept.iter().enumerate() {
+        for (b, &j) in kept.iter().enumerate() {
+            cov[(i, j)] = inv[(a, b)] * s2;
+        }
+    }
+    Some(cov)
+}
+
 /// Fits `knobs` starting from their values in `start`, with at most `max_jacobians`
 /// Jacobians. `n_eff_ratio` = n_eff/n of the residual, for the uncertainties.
 pub fn fit(
@@ -561,15 +589,16 @@ pub fn fit(
     let n = jac.nrows();
     let p = knobs.len();
     let s2 = rss / (n.saturating_sub(p).max(1)) as f64 / n_eff_ratio.clamp(1e-6, 1.0);
-    let jtj = jac.transpose() * &jac;
-    let cov = jtj.clone().try_inverse().map(|c| c * s2);
+    let cov = covariance(&jac, s2);
     let params = params_at(start, knobs, &theta);
     let mut values = Vec::with_capacity(p);
     for (j, k) in knobs.iter().enumerate() {
+        // NaN (a parameter left out of the covariance) stays NaN: `f64::max` would make it 0.
         let std_theta = cov
             .as_ref()
-            .map(|c| c[(j, j)].max(0.0).sqrt())
-            .unwrap_or(f64::NAN);
+            .map(|c| c[(j, j)])
+            .filter(|d| !d.is_nan())
+            .map_or(f64::NAN, |d| d.max(0.0).sqrt());
         // SI uncertainty through the local slope of the θ → SI map.
         let mut q = params;
         let eps = 1e-3 * theta[j].abs().max(1.0);
@@ -606,4 +635,31 @@ pub fn fit(
         evaluations: ev.monitor.evaluations() - evals_before,
         correlation,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A parameter the residual does not respond to (a zero column) is undetermined on its
+    /// own: its variance is NaN, and the others' covariance is `s2·(JᵀJ)⁻¹` of the rest.
+    #[test]
+    fn a_zero_column_leaves_only_its_own_parameter_undetermined() {
+        // Two independent parameters with slopes 2 and 4 over four residuals, and a third
+        // the residual does not see.
+        let jac = DMatrix::from_row_slice(
+            4,
+            3,
+            &[2.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 4.0, 0.0, 0.0, 4.0, 0.0],
+        );
+        let cov = covariance(&jac, 0.5).expect("the rest is regular");
+        // (JᵀJ)⁻¹ = diag(1/8, 1/32), times s2 = 0.5.
+        assert!((cov[(0, 0)] - 0.5 / 8.0).abs() < 1e-15);
+        assert!((cov[(1, 1)] - 0.5 / 32.0).abs() < 1e-15);
+        assert_eq!(cov[(0, 1)], 0.0);
+        assert!(cov[(2, 2)].is_nan() && cov[(0, 2)].is_nan() && cov[(2, 1)].is_nan());
+        // Two columns that are the same: singular, no covariance.
+        let twins = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 2.0, 2.0]);
+        assert!(covariance(&twins, 1.0).is_none());
+    }
 }

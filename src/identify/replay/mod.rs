@@ -40,8 +40,12 @@
 //!
 //! All are decimated to about `eval_rate_hz`, and each residual is divided by
 //! `max(σ_noise, floor·RMS(signal))` of its file and channel, where `σ_noise` is the sensor
-//! noise estimated from the measured record itself (see [`crate::dsp::noise_rms`]) after
-//! the same filter. The reported error is the RMS of these weighted residuals: 1 means the twin
+//! noise estimated from the measured record itself (see [`crate::dsp::noise_floor`], the raw
+//! error measure's estimate too) after the same filter. Until 2026-11-27 the weights used a
+//! plain spectral estimate (the top 40 % of the unwindowed spectrum), which a record's drift
+//! and start leak into: at 200 Hz it read the body accelerometer's noise 40 times too high
+//! and the stroke sensor's 30 times, so the fit weighed `ÿ` and `u̇` at almost nothing and
+//! a stroke drift (a valve offset) drove Cd to its bound. The reported error is the RMS of these weighted residuals: 1 means the twin
 //! matches the record to the sensor noise.
 
 use super::IdentifyError;
@@ -52,7 +56,7 @@ use crate::simulation::{Drive, Run, Sample, Simulation, step_for_rate};
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::dsp::{NoiseFloor, noise_floor, noise_gain, noise_rms};
+use crate::dsp::{NoiseFloor, noise_floor, noise_gain};
 pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
 
 mod errors;
@@ -183,7 +187,7 @@ fn record_platform(record: &Record) -> (PlatformMotion, bool) {
     // A platform channel that is indistinguishable from its own sensor noise means the
     // platform was still: replaying that noise would only add noise to the twin.
     let moving = |v: &Vec<f64>| {
-        let n = noise_rms(v, dt);
+        let n = noise_floor(v).rms;
         let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
         let dev: Vec<f64> = v.iter().map(|x| x - mean).collect();
         rms(&dev) > 3.0 * n.max(1e-15)
@@ -355,14 +359,15 @@ impl PreparedRecord {
         let decimate = ((fs / opt.eval_rate_hz).round() as usize).max(1);
         let du_meas_f = filtered_derivative(&u, dt, lowpass_hz);
         let ydd_meas_f = record.ydd.as_ref().map(|y| lowpass(y, dt, lowpass_hz));
-        let noise_u = noise_rms(&u, dt);
         let floor_u = noise_floor(&u);
+        let noise_u = floor_u.rms;
         let u_drift_meas = butterworth_zero_phase(&u, dt, DRIFT_LOWPASS_HZ.min(0.3 / dt), 2);
         let u_mean = u.iter().sum::<f64>() / u.len().max(1) as f64;
         let u_swing = rms(&u.iter().map(|v| v - u_mean).collect::<Vec<_>>());
         let scale_u_drift = floor_u.rms.hypot(RESOLUTION * u_swing).max(1e-9);
         let drift_decimate = ((fs / DRIFT_EVAL_RATE_HZ).round() as usize).max(1);
-        let noise_ydd = record.ydd.as_ref().map(|y| noise_rms(y, dt)).unwrap_or(0.0);
+        let floor_ydd = record.ydd.as_deref().map(noise_floor).unwrap_or_default();
+        let noise_ydd = floor_ydd.rms;
         let gain_du = noise_gain(record.len(), |x| filtered_derivative(x, dt, lowpass_hz));
         let gain_y = noise_gain(record.len(), |x| lowpass(x, dt, lowpass_hz));
         let scale_du = (noise_u * gain_du)
@@ -383,7 +388,7 @@ impl PreparedRecord {
         for (i, raw) in [&record.p1, &record.p2].into_iter().enumerate() {
             if let Some(p) = raw {
                 let f = lowpass(p, dt, lowpass_hz);
-                let n = noise_rms(p, dt);
+                let n = noise_floor(p).rms;
                 // The floor is taken on the swing about the mean: the mean pressure (tens of
                 // bar) says nothing about how well the twin can follow it.
                 let mean = f.iter().sum::<f64>() / f.len().max(1) as f64;
@@ -417,7 +422,7 @@ impl PreparedRecord {
             u_drift_meas,
             scale_u_drift,
             drift_decimate,
-            floor_ydd: record.ydd.as_deref().map(noise_floor).unwrap_or_default(),
+            floor_ydd,
             floor_p: [
                 record.p1.as_deref().map(noise_floor).unwrap_or_default(),
                 record.p2.as_deref().map(noise_floor).unwrap_or_default(),

@@ -319,7 +319,8 @@ fn randomised_rigs_confusion_table() {
     let mut misses = Vec::new();
     let mut replay_ok = 0;
     let started = std::time::Instant::now();
-    // `SURVEY_CASES=1,2,19` runs only those cases (for development; the table then counts them).
+    // `SURVEY_CASES=1,2,19` runs only those cases (for development; the table then counts them);
+    // `SURVEY_RATE_HZ=200` samples the records at 200 Hz instead of 1 kHz.
     let only: Option<Vec<usize>> = std::env::var("SURVEY_CASES")
         .ok()
         .map(|v| v.split(',').filter_map(|s| s.trim().parse().ok()).collect());
@@ -509,16 +510,22 @@ fn a_hose_chamber_split_the_records_cannot_tell_is_reported_as_a_trade_off() {
 }
 
 /// The records of case `i` (`c`) of the draw `seed`: noise seeds 500 + i for the README's
-/// table (2020), others for other draws.
+/// table (2020), others for other draws; sampled at 1 kHz, or at `SURVEY_RATE_HZ` (a divisor
+/// of the rig's 20 kHz, 200 Hz to 10 kHz) for the survey at other rates.
 fn records_of(seed: u64, i: usize, c: &Case) -> Vec<seat_twin::dataset::Record> {
     let noise_seed = 500u64.wrapping_add(seed.wrapping_sub(2020).wrapping_mul(1000));
+    let rate_hz = std::env::var("SURVEY_RATE_HZ")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .filter(|r: &f64| (200.0..=10_000.0).contains(r))
+        .unwrap_or(1000.0);
     campaign_of(
         c.cd,
         c.tau,
         c.fx,
         noise_seed + i as u64,
         c.pressures,
-        1000.0,
+        rate_hz,
     )
 }
 
@@ -538,33 +545,28 @@ fn explained_with_its_effects(seed: u64, i: usize) -> CalibrationReport {
     r
 }
 
-/// Asserts that one of the report's notes says `what`.
-fn assert_a_note(r: &CalibrationReport, what: impl Fn(&str) -> bool) {
-    assert!(r.notes.iter().any(|n| what(n)), "{:?}", r.notes);
-}
-
 /// Case 2 of the draw 2021 (friction 36 N beside a 36 µm overlap): friction removed 39 % of
 /// the weighted residual after the overlap, under the 40 % a further effect needs, and was
-/// missed (`unexplained`, Cd 4.7σ off) while the raw error stood at 10× its floor. Tried on
-/// the raw error, it takes every band to its floor and is added.
+/// missed (`unexplained`, Cd 4.7σ off) while the raw error stood at 10× its floor; it was then
+/// added by a trial on the raw error. Since the fit's weights take the sensor noise from the
+/// same estimate as the verdict (2026-11-27; before, the stroke's noise read 10–15 times too
+/// high, so the small tests' velocity weighed little), friction clears the bar by itself.
 #[test]
-fn friction_beside_an_overlap_under_the_gain_bar_is_added_on_the_raw_error() {
+fn friction_beside_an_overlap_is_found() {
     let r = explained_with_its_effects(2021, 2);
-    assert_a_note(&r, |n| {
-        n.contains("`friction` removed") && n.ends_with(": added")
-    });
+    let found: Vec<&str> = r.effects.iter().map(|e| e.effect.name()).collect();
+    assert_eq!(found, ["valve_overlap", "friction"], "{:?}", r.notes);
 }
 
 /// Case 1 of the draw 2024 (friction alone, 47 N): the friction fit stopped in a valley whose
-/// raw error left a band at 4.0×; compliance, tried on the raw error, ended at no size of its
-/// own (1.18 GPa against the oil's 1.2) but let the friction move on. Compliance is not added;
-/// the model as it was, fitted again from there, is kept: `explained` by friction alone.
+/// raw error left a band at 4.0×, and only a trial of compliance (ended at no size of its
+/// own) let the friction move on to the rig's valley. With the fit's weights on the verdict's
+/// noise estimate (2026-11-27) the friction fit reaches it directly: `explained` by friction
+/// alone.
 #[test]
-fn a_tried_effect_at_no_size_is_not_added_but_its_deeper_valley_is_kept() {
+fn friction_alone_of_the_2024_draw_is_explained() {
     let r = explained_with_its_effects(2024, 1);
-    assert_a_note(&r, |n| {
-        n.contains("without `compliance`") && n.contains("deeper valley")
-    });
+    assert_eq!(r.effects.len(), 1, "{:?}", r.notes);
 }
 
 /// Case 20 of the draw 2025 (a 39 µm overlap beside hoses at 0.68 GPa): after the overlap,
