@@ -325,14 +325,19 @@ pub fn noise_floor(x: &[f64]) -> NoiseFloor {
     } else {
         f64::INFINITY
     };
-    // Fourth-difference estimate.
+    // The spectrum's buffers go before the difference's, so that a long record's estimate
+    // holds one record-length buffer at a time (the replay's memory per row).
+    drop((buf, spec));
+    // Fourth-difference estimate; the deviations from the median in the same buffer.
     let mut d4: Vec<f64> = x
         .windows(5)
         .map(|w| w[4] - 4.0 * w[3] + 6.0 * w[2] - 4.0 * w[1] + w[0])
         .collect();
     let med = median(&mut d4);
-    let mut dev: Vec<f64> = d4.iter().map(|d| (d - med).abs()).collect();
-    let differenced = 1.4826 * median(&mut dev) / 70f64.sqrt();
+    for d in &mut d4 {
+        *d = (*d - med).abs();
+    }
+    let differenced = 1.4826 * median(&mut d4) / 70f64.sqrt();
     let lsb = quantisation_step(x);
     NoiseFloor {
         rms: spectral.min(differenced).max(lsb / 12f64.sqrt()),

@@ -145,10 +145,11 @@ pub fn check(records: &[Record], options: &CalibrationOptions) -> Result<DataChe
             lacks.is_empty() && r.len() >= 2
         })
         .collect();
-    let prepared: Vec<PreparedRecord> = usable
+    let mut prepared: Vec<PreparedRecord> = usable
         .par_iter()
         .map(|r| PreparedRecord::new(r, &options.metric))
         .collect::<Result<_, _>>()?;
+    super::replay::share_sensor_noise(&mut prepared, &options.metric);
     let mut missing = missing_data(records, &prepared);
     if prepared.is_empty() {
         missing.extend(column_notes);

@@ -338,6 +338,47 @@ pub struct PreparedRecord {
     pub cd_factor: f64,
 }
 
+/// Holds the fit's residuals of a campaign's records against one sensor noise per channel
+/// and sample rate: the smallest of the records' own estimates. The same stroke sensor,
+/// accelerometer and pressure transducers record every test of a campaign, and a record's
+/// estimate ([`noise_floor`]) can only be raised by its signal, never lowered: at 200 Hz the
+/// 10 and 20 Hz tests' ÿ harmonics fill the top of the band and their own estimates read 7–12
+/// times the accelerometer's noise, which weighed their ÿ (and an accelerometer's scale
+/// error) at almost nothing. Records at different rates keep their own (a sensor's noise per
+/// sample depends on its filter and the rate). The verdict's floors stay each record's own.
+pub fn share_sensor_noise(records: &mut [PreparedRecord], opt: &MetricOptions) {
+    let smallest = |of: &dyn Fn(&PreparedRecord) -> f64, dt: f64, recs: &[PreparedRecord]| {
+        recs.iter()
+            .filter(|r| (r.dt / dt - 1.0).abs() < 1e-6)
+            .map(of)
+            .filter(|n| *n > 0.0)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let shared: Vec<(f64, f64, [f64; 2])> = records
+        .iter()
+        .map(|r| {
+            let keep = |own: f64, campaign: f64| if campaign.is_finite() { campaign } else { own };
+            (
+                keep(r.noise_u, smallest(&|q| q.noise_u, r.dt, records)),
+                keep(r.noise_ydd, smallest(&|q| q.noise_ydd, r.dt, records)),
+                [0, 1].map(|i| keep(r.noise_p[i], smallest(&|q| q.noise_p[i], r.dt, records))),
+            )
+        })
+        .collect();
+    for (r, (u, ydd, p)) in records.iter_mut().zip(shared) {
+        r.noise_u = u;
+        if r.noise_ydd > 0.0 {
+            r.noise_ydd = ydd;
+        }
+        for (own, campaign) in r.noise_p.iter_mut().zip(p) {
+            if *own > 0.0 {
+                *own = campaign;
+            }
+        }
+        r.weigh(opt.floor_fraction);
+    }
+}
+
 impl PreparedRecord {
     /// Prepares a record (which must have `v_in` and `u`).
     pub fn new(record: &Record, opt: &MetricOptions) -> Result<Self, IdentifyError> {
@@ -368,37 +409,16 @@ impl PreparedRecord {
         let drift_decimate = ((fs / DRIFT_EVAL_RATE_HZ).round() as usize).max(1);
         let floor_ydd = record.ydd.as_deref().map(noise_floor).unwrap_or_default();
         let noise_ydd = floor_ydd.rms;
-        let gain_du = noise_gain(record.len(), |x| filtered_derivative(x, dt, lowpass_hz));
-        let gain_y = noise_gain(record.len(), |x| lowpass(x, dt, lowpass_hz));
-        let scale_du = (noise_u * gain_du)
-            .max(opt.floor_fraction * rms(&du_meas_f))
-            .max(1e-9);
-        let scale_ydd = ydd_meas_f
-            .as_ref()
-            .map(|y| {
-                (noise_ydd * gain_y)
-                    .max(opt.floor_fraction * rms(y))
-                    .max(1e-6)
-            })
-            .unwrap_or(1.0);
         let mut p_meas_f = [None, None];
         let p_raw = [record.p1.clone(), record.p2.clone()];
-        let mut scale_p = [1.0; 2];
         let mut noise_p = [0.0; 2];
         for (i, raw) in [&record.p1, &record.p2].into_iter().enumerate() {
             if let Some(p) = raw {
-                let f = lowpass(p, dt, lowpass_hz);
-                let n = noise_floor(p).rms;
-                // The floor is taken on the swing about the mean: the mean pressure (tens of
-                // bar) says nothing about how well the twin can follow it.
-                let mean = f.iter().sum::<f64>() / f.len().max(1) as f64;
-                let swing: Vec<f64> = f.iter().map(|v| v - mean).collect();
-                scale_p[i] = (n * gain_y).max(opt.floor_fraction * rms(&swing)).max(1.0);
-                noise_p[i] = n;
-                p_meas_f[i] = Some(f);
+                noise_p[i] = noise_floor(p).rms;
+                p_meas_f[i] = Some(lowpass(p, dt, lowpass_hz));
             }
         }
-        Ok(Self {
+        let mut prepared = Self {
             name,
             dt,
             len: record.len(),
@@ -411,12 +431,12 @@ impl PreparedRecord {
             decimate,
             du_meas_f,
             ydd_meas_f,
-            scale_du,
-            scale_ydd,
+            scale_du: 1.0,
+            scale_ydd: 1.0,
             noise_u,
             noise_ydd,
             p_meas_f,
-            scale_p,
+            scale_p: [1.0; 2],
             noise_p,
             floor_u,
             u_drift_meas,
@@ -431,7 +451,45 @@ impl PreparedRecord {
             p_raw,
             window: 0..record.len(),
             cd_factor: 1.0,
-        })
+        };
+        prepared.weigh(opt.floor_fraction);
+        Ok(prepared)
+    }
+
+    /// Sets the channels' weight scales from the noise estimates the record holds: each is
+    /// `max(noise through the metric's filter, floor_fraction · RMS of the filtered channel)`
+    /// (for the pressures, of its swing about the mean: the mean pressure, tens of bar, says
+    /// nothing about how well the twin follows it).
+    fn weigh(&mut self, floor_fraction: f64) {
+        let (dt, fc) = (self.dt, self.lowpass_hz);
+        let gain_du = noise_gain(self.len, |x| filtered_derivative(x, dt, fc));
+        let gain_y = noise_gain(self.len, |x| lowpass(x, dt, fc));
+        self.scale_du = (self.noise_u * gain_du)
+            .max(floor_fraction * rms(&self.du_meas_f))
+            .max(1e-9);
+        self.scale_ydd = self
+            .ydd_meas_f
+            .as_ref()
+            .map(|y| {
+                (self.noise_ydd * gain_y)
+                    .max(floor_fraction * rms(y))
+                    .max(1e-6)
+            })
+            .unwrap_or(1.0);
+        for ((scale, f), noise) in self
+            .scale_p
+            .iter_mut()
+            .zip(&self.p_meas_f)
+            .zip(self.noise_p)
+        {
+            *scale = f.as_ref().map_or(1.0, |f| {
+                let mean = f.iter().sum::<f64>() / f.len().max(1) as f64;
+                let swing = (f.iter().map(|v| (v - mean).powi(2)).sum::<f64>()
+                    / f.len().max(1) as f64)
+                    .sqrt();
+                (noise * gain_y).max(floor_fraction * swing).max(1.0)
+            });
+        }
     }
 
     /// The same record with only the samples in `window` counted in its residuals and errors.

@@ -53,7 +53,7 @@ fn friction_is_found() {
     );
     assert!((r.params.plant.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
     // What is left stays near the limit: 3.4× its floor in one band when this was written,
-    // 5.0× since the fit's weights take the sensor noise from the verdict's own estimate
+    // 4.9× since the fit's weights take the sensor noise from the verdict's own estimate
     // (2026-11-27; ÿ of the small tests in 0.5–5 Hz over their first second). A known
     // failure ([`friction_alone_is_explained`]); this bound only guards against worse.
     let worst = r.raw_error_after.worst.as_ref().map_or(0.0, |w| w.ratio);
@@ -624,11 +624,13 @@ fn rounded_overlap_is_found_with_its_edge_and_the_replay_does_not_ring() {
 /// near zero), and the search stops at three terms.
 ///
 /// KNOWN FAILURE since 2026-11-27 (README, "What fails"): with the fit's weights on the
-/// verdict's noise estimate, the search proposes Cd per direction (+20.0 %, right) and a
-/// quadratic damping of 342 ± 4 N·s²/m² (the rig's is 2000: a confident wrong value), misses
-/// the opening term, and leaves the worst raw band at 264× its floor.
+/// campaign's sensor noise (the verdict's estimate), the search proposes only Cd per
+/// direction (+18.5 % against the rig's +20 %) and misses the quadratic damping and the
+/// opening term; the worst raw band stays at hundreds of times its floor. (With the noise
+/// per record, between the two changes, it proposed a quadratic damping of 342 ± 4 N·s²/m²
+/// against the rig's 2000.)
 #[test]
-#[ignore = "known failure: quadratic damping 342 ± 4 against 2000 (README, What fails)"]
+#[ignore = "known failure: only the direction term proposed (README, What fails)"]
 fn three_effects_outside_the_library_are_proposed() {
     let fx = RigEffects {
         cd_spool: Some(0.10),
