@@ -513,12 +513,17 @@ fn a_hose_chamber_split_the_records_cannot_tell_is_reported_as_a_trade_off() {
 /// table (2020), others for other draws; sampled at 1 kHz, or at `SURVEY_RATE_HZ` (a divisor
 /// of the rig's 20 kHz, 200 Hz to 10 kHz) for the survey at other rates.
 fn records_of(seed: u64, i: usize, c: &Case) -> Vec<seat_twin::dataset::Record> {
-    let noise_seed = 500u64.wrapping_add(seed.wrapping_sub(2020).wrapping_mul(1000));
     let rate_hz = std::env::var("SURVEY_RATE_HZ")
         .ok()
         .and_then(|v| v.trim().parse().ok())
         .filter(|r: &f64| (200.0..=10_000.0).contains(r))
         .unwrap_or(1000.0);
+    records_at(seed, i, c, rate_hz)
+}
+
+/// [`records_of`] at `rate_hz`.
+fn records_at(seed: u64, i: usize, c: &Case, rate_hz: f64) -> Vec<seat_twin::dataset::Record> {
+    let noise_seed = 500u64.wrapping_add(seed.wrapping_sub(2020).wrapping_mul(1000));
     campaign_of(
         c.cd,
         c.tau,
