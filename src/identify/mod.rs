@@ -449,7 +449,7 @@ pub fn calibrate_with(
 /// step, shortened to resolve a fitted friction and to stay within the integrator's
 /// stability limit ([`replay`]); the parameters reported (and written to calibrated.toml)
 /// carry that step, so that they load and run anywhere: a friction fitted with a steep sign
-/// change (survey draw 2025 at 200 Hz, case 1) has a stability limit under the preset's
+/// change (survey draw 2025 at 200 Hz, case 2) has a stability limit under the preset's
 /// 0.5 ms, and its calibrated.toml was refused on loading.
 fn step_within_limits(mut report: CalibrationReport) -> CalibrationReport {
     let p = &mut report.params;

@@ -45,8 +45,9 @@
 //! plain spectral estimate (the top 40 % of the unwindowed spectrum), which a record's drift
 //! and start leak into: at 200 Hz it read the body accelerometer's noise 40 times too high
 //! and the stroke sensor's 30 times, so the fit weighed `ÿ` and `u̇` at almost nothing and
-//! a stroke drift (a valve offset) drove Cd to its bound. The reported error is the RMS of these weighted residuals: 1 means the twin
-//! matches the record to the sensor noise.
+//! a stroke drift (a valve offset) drove Cd to its bound. A calibration holds a campaign's
+//! records against one noise per channel ([`share_sensor_noise`]). The reported error is the
+//! RMS of these weighted residuals: 1 means the twin matches the record to the sensor noise.
 
 use super::IdentifyError;
 use crate::dataset::Record;
@@ -411,12 +412,11 @@ impl PreparedRecord {
         let noise_ydd = floor_ydd.rms;
         let mut p_meas_f = [None, None];
         let p_raw = [record.p1.clone(), record.p2.clone()];
-        let mut noise_p = [0.0; 2];
-        for (i, raw) in [&record.p1, &record.p2].into_iter().enumerate() {
-            if let Some(p) = raw {
-                noise_p[i] = noise_floor(p).rms;
-                p_meas_f[i] = Some(lowpass(p, dt, lowpass_hz));
-            }
+        let floor_p = p_raw
+            .each_ref()
+            .map(|p| p.as_deref().map(noise_floor).unwrap_or_default());
+        for (f, raw) in p_meas_f.iter_mut().zip(&p_raw) {
+            *f = raw.as_ref().map(|p| lowpass(p, dt, lowpass_hz));
         }
         let mut prepared = Self {
             name,
@@ -437,16 +437,13 @@ impl PreparedRecord {
             noise_ydd,
             p_meas_f,
             scale_p: [1.0; 2],
-            noise_p,
+            noise_p: floor_p.map(|f| f.rms),
             floor_u,
             u_drift_meas,
             scale_u_drift,
             drift_decimate,
             floor_ydd,
-            floor_p: [
-                record.p1.as_deref().map(noise_floor).unwrap_or_default(),
-                record.p2.as_deref().map(noise_floor).unwrap_or_default(),
-            ],
+            floor_p,
             lowpass_hz,
             p_raw,
             window: 0..record.len(),
