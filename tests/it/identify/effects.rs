@@ -515,11 +515,7 @@ fn a_slow_stroke_drift_outside_the_library_is_unexplained() {
         .as_str()
         .unwrap_or_default();
     assert!(left.contains(&format!("{} u ", worst.file)), "{left}");
-    let term = r
-        .proposed
-        .iter()
-        .find(|t| t.name == "command_drift")
-        .unwrap_or_else(|| panic!("no null drift proposed: {:?}", r.proposed));
+    let term = proposed(&r, "command_drift");
     let (v, sd) = (
         term.params["command_drift_v_per_s"],
         term.uncertainties["command_drift_v_per_s"],
@@ -750,11 +746,7 @@ fn a_lag_of_the_valve_command_is_proposed() {
         r.proposed, r.proposed_candidates, r.notes
     );
     assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
-    let term = r
-        .proposed
-        .iter()
-        .find(|t| t.name == "command_lag")
-        .unwrap_or_else(|| panic!("no command lag proposed: {:?}; {s}", r.proposed));
+    let term = proposed(&r, "command_lag");
     let (v, sd) = (
         term.params["command_lag_s"],
         term.uncertainties["command_lag_s"],
@@ -781,4 +773,15 @@ fn a_lag_of_the_valve_command_is_proposed() {
         "{}",
         with.summary()
     );
+}
+
+/// The proposed term `name` of `r` (panics, listing what was proposed, when it is not there).
+fn proposed<'a>(
+    r: &'a CalibrationReport,
+    name: &str,
+) -> &'a seat_twin::identify::result::ProposedTerm {
+    r.proposed
+        .iter()
+        .find(|t| t.name == name)
+        .unwrap_or_else(|| panic!("no `{name}` proposed: {:?}", r.proposed))
 }
