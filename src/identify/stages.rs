@@ -140,7 +140,10 @@ pub fn declared_fit(
         .residuals(&probe.params)
         .ok_or(IdentifyError::Cancelled)?;
     let n_eff0 = fit::effective_count(&probe_r);
-    let mass_rel_std = probe.values[2].std / probe.values[2].value * (n as f64 / n_eff0).sqrt();
+    // Relative to the declared mass, not to the probe's value: with an effect still missing,
+    // the probe's one step can take the mass far off (survey draw 2020 at 10 kHz: 80 kg
+    // from 11.7), where the same 1-σ reads as a small fraction.
+    let mass_rel_std = probe.values[2].std / nominal_mass_kg * (n as f64 / n_eff0).sqrt();
     let mass_fitted = mass_rel_std.is_finite() && mass_rel_std < options.mass_max_rel_std;
     let mut knobs: Vec<Knob> = if mass_fitted {
         vec![Knob::Cd, Knob::Tau, Knob::Mass]

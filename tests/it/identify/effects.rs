@@ -21,18 +21,22 @@ fn null_case_adds_nothing() {
     );
 }
 
-/// Friction without pressure sensors (Coulomb 40 N, Stribeck 20 N at 10 mm/s, viscous
-/// 80 N·s/m): found first, with its Stribeck velocity. The verdict is checked by
-/// [`friction_alone_is_explained`], a known failure.
+/// Friction alone, no pressure sensors (seed 2; Coulomb 40 N, Stribeck 20 N at 10 mm/s,
+/// viscous 80 N·s/m): found first, with its Stribeck velocity, and `explained`, with Cd, τ
+/// and the mass found. A known failure until 2026-11-28: the declared fit took the mass to
+/// 10.2 kg (against the rig's 11.7) before friction was there, and the re-fit with friction
+/// stayed in that valley, two bands of ÿ at 3.5–4.9× their floor. Its weighted residual is a
+/// quarter above that of the valley near the truth (2947 against 2364 with the rig's friction
+/// law, Cd and τ re-fitted, worst band 1.35×); the re-fit now also starts from the declared
+/// mass (`effects::try_effect`) and ends there (worst band 1.6×).
 #[test]
-fn friction_is_found() {
+fn friction_alone_is_explained() {
     let fx = RigEffects {
         friction: Some((40.0, 20.0, 0.01, 80.0)),
         ..Default::default()
     };
-    let r = run_with(fx, 2, false);
+    let r = check_friction(fx, 2, false);
     let s = summary(&r);
-    eprintln!("friction: {s}; effects {:?}", r.effects);
     assert_eq!(first_ranked(&r), EffectId::Friction);
     let friction = r
         .effects
@@ -47,41 +51,15 @@ fn friction_is_found() {
         (friction.params["coulomb_n"] / 40.0 - 1.0).abs() < 0.25,
         "{friction:?}"
     );
-    assert!(
-        (r.params.plant.valve.cd / (0.95 * 0.1506) - 1.0).abs() < 0.03,
-        "{s}"
-    );
-    assert!((r.params.plant.valve.tau_s - 0.019).abs() < 1.0e-3, "{s}");
-    // What is left stays near the limit: 3.4× its floor in one band when this was written,
-    // 4.9× since the fit's weights take the sensor noise from the verdict's own estimate
-    // (2026-11-27; ÿ of the small tests in 0.5–5 Hz over their first second). A known
-    // failure ([`friction_alone_is_explained`]); this bound only guards against worse.
-    let worst = r.raw_error_after.worst.as_ref().map_or(0.0, |w| w.ratio);
-    assert!(worst < 6.0, "{s}");
     // Coulomb friction acts at reversals, which sag cannot mimic: no ambiguity note.
     assert!(
         !r.notes.iter().any(|n| n.contains("about equally")),
         "{:?}",
         r.notes
     );
-}
-
-/// KNOWN FAILURE (README, "What fails"): friction alone, no pressure sensors, reads
-/// `unexplained` by two bands: ÿ in 0.5–5 Hz of the 20 Hz / 0.72 V test over its 1.5 s at
-/// 3.8× its floor and of the 5 Hz test at 3.5× (limit 3). The library holds the rig's law: at
-/// the rig's own values (Cd and τ re-fitted) every band is at 1.35× or below, since replays
-/// resolve the friction's time constant (`Params::friction_resolving_step_s`; at the 0.5 ms
-/// step that law left 2.8×). The fit settles elsewhere (Coulomb 35.9 ± 1.9 N against 40,
-/// Stribeck velocity 12.2 ± 0.7 mm/s against 10) and 8 or 20 Jacobians end at the same point.
-/// With pressure sensors, and beside an overlap, friction is `explained`.
-#[test]
-#[ignore = "known failure: two start bands at 3.5–3.8× their floor (README, What fails)"]
-fn friction_alone_is_explained() {
-    let fx = RigEffects {
-        friction: Some((40.0, 20.0, 0.01, 80.0)),
-        ..Default::default()
-    };
-    check_friction(fx, 2, false);
+    // The rig's mass is the declared 11.7 kg: the valley that held the fit had 10.2 kg.
+    let m = r.params.plant.body.mass_kg;
+    assert!((m / 11.7 - 1.0).abs() < 0.03, "mass {m} kg: {s}");
 }
 
 #[test]
