@@ -290,13 +290,10 @@ pub fn try_effect(
     );
     let mut trial_knobs = knobs.to_vec();
     trial_knobs.extend_from_slice(best.effect.knobs());
-    let mut refit = fit::fit(
-        ev,
-        &best.fit.params,
-        &trial_knobs,
-        options.max_iterations,
-        cx.bic.ratio(),
-    )?;
+    // Every re-fit here: all of `knobs` from `p`, with the full Jacobian budget.
+    let refit_from =
+        |p: &Params, knobs: &[Knob]| fit::fit(ev, p, knobs, options.max_iterations, cx.bic.ratio());
+    let mut refit = refit_from(&best.fit.params, &trial_knobs)?;
     // The mass was fitted before the effect was there and may have taken up part of it
     // (friction alone: 10.2 kg against the rig's 11.7, in a valley whose weighted residual is
     // a quarter above the one near the truth): the re-fit also starts from the declared mass,
@@ -305,13 +302,7 @@ pub fn try_effect(
         let mut declared_mass = best.fit.params;
         declared_mass.plant.body.mass_kg = preset.plant.body.mass_kg;
         if declared_mass != best.fit.params {
-            let again = fit::fit(
-                ev,
-                &declared_mass,
-                &trial_knobs,
-                options.max_iterations,
-                cx.bic.ratio(),
-            )?;
+            let again = refit_from(&declared_mass, &trial_knobs)?;
             if again.rss < refit.rss {
                 refit = again;
             }
@@ -335,13 +326,7 @@ pub fn try_effect(
         }
         let mut plain_knobs = trial_knobs.clone();
         plain_knobs.retain(|k| uncertain.iter().all(|v| v.knob != *k));
-        let plain_fit = fit::fit(
-            ev,
-            &plain,
-            &plain_knobs,
-            options.max_iterations,
-            cx.bic.ratio(),
-        )?;
+        let plain_fit = refit_from(&plain, &plain_knobs)?;
         let gain = cx.bic.value(refit.rss, trial_knobs.len())
             - cx.bic.value(plain_fit.rss, plain_knobs.len());
         // The fit's metric is low-passed and weighted; the verdict's raw measure may see what
