@@ -25,8 +25,10 @@ if [ -z "$version" ]; then
     exit 1
 fi
 if [ "$(wasm-bindgen --version 2>/dev/null | awk '{print $2}')" != "$version" ]; then
-    step "cargo install wasm-bindgen-cli --version $version"
-    cargo install wasm-bindgen-cli --version "$version"
+    # Unoptimised (opt-level 0): measured here, it compiles in 84 s instead of 190 s (2.2 CPU-min
+    # instead of 5.7) and turns this crate's wasm into the same bytes in 6 s instead of 2.
+    step "cargo install wasm-bindgen-cli --version $version (opt-level 0)"
+    CARGO_PROFILE_RELEASE_OPT_LEVEL=0 cargo install wasm-bindgen-cli --version "$version"
 fi
 
 # A target directory of its own (target/web): the wasm32 build then never waits on the lock
