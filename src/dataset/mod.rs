@@ -140,6 +140,23 @@ impl Record {
             .map(|(_, v)| v.as_str())
     }
 
+    /// The record's first `n` samples (all of it when `n` is not shorter), every column cut
+    /// alike.
+    pub fn truncated(&self, n: usize) -> Record {
+        let cut = |c: &Option<Vec<f64>>| c.as_ref().map(|v| v[..n.min(v.len())].to_vec());
+        Record {
+            t: self.t[..n.min(self.t.len())].to_vec(),
+            v_in: cut(&self.v_in),
+            u: cut(&self.u),
+            x: cut(&self.x),
+            xdd: cut(&self.xdd),
+            ydd: cut(&self.ydd),
+            p1: cut(&self.p1),
+            p2: cut(&self.p2),
+            ..self.clone()
+        }
+    }
+
     /// The column called `name` (one of [`COLUMNS`]), if present.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
         match name {

@@ -120,6 +120,63 @@ pub struct DataCheck {
     pub missing: Vec<String>,
 }
 
+/// How close \[m\] a measured stroke may come to an end stop (`±Lc/2`) before the rest of its
+/// record is left out of the calibration: [`before_end_stops`].
+pub const END_STOP_MARGIN_M: f64 = 1.0e-3;
+
+/// The shortest part \[s\] of a record before its first end-stop contact that is still used;
+/// a record that reaches a stop sooner is left out.
+pub const MIN_BEFORE_END_STOP_S: f64 = 0.5;
+
+/// The records up to their first end-stop contact, with a note for each record cut or left
+/// out. A stroke `u` that comes within [`END_STOP_MARGIN_M`] of `±stroke_m/2` ends the part
+/// that is fitted and replayed there: where the body lands on a stop depends on everything
+/// before it (an open-loop test of a flow-controlled cylinder integrates every flow error
+/// into the stroke), so a replay's error after the contact jumps with the smallest change of
+/// a parameter and no fit can follow its slope. A rig whose flow gain differs by 10 % between
+/// the spool directions walks into a stop within a second of a large sine test; fitted
+/// whole, its cost changed by +71 % and −1 % for Cd 0.1 % lower and higher, and the search
+/// beyond the library found one of its three terms; fitted up to the contacts, all three.
+pub fn before_end_stops(records: &[Record], stroke_m: f64) -> (Vec<Record>, Vec<String>) {
+    let limit = 0.5 * stroke_m - END_STOP_MARGIN_M;
+    let mut notes = Vec::new();
+    let kept = records
+        .iter()
+        .filter_map(|r| {
+            let contact =
+                r.u.as_ref()
+                    .and_then(|u| u.iter().position(|x| x.abs() >= limit));
+            let Some(i) = contact else {
+                return Some(r.clone());
+            };
+            let (at, whole) = (i as f64 * r.dt, r.duration_s());
+            let reach = format!(
+                "end stops: {}'s stroke comes within {:.1} mm of an end stop (±{:.1} mm) at \
+                 {at:.3} s",
+                r.path.display(),
+                1e3 * END_STOP_MARGIN_M,
+                500.0 * stroke_m
+            );
+            if at < MIN_BEFORE_END_STOP_S {
+                notes.push(format!(
+                    "{reach}, less than {MIN_BEFORE_END_STOP_S} s after its start: the record \
+                     was left out (the replay's error after a stop contact jumps with the \
+                     smallest change of a parameter)"
+                ));
+                None
+            } else {
+                notes.push(format!(
+                    "{reach}: calibrated and replayed up to there ({at:.3} of its {whole:.3} s; \
+                     the replay's error after a stop contact jumps with the smallest change of \
+                     a parameter)"
+                ));
+                Some(r.truncated(i))
+            }
+        })
+        .collect();
+    (kept, notes)
+}
+
 /// Prepares the records that can be replayed and checks that together they can determine the
 /// twin: long enough, sampled fast enough, excited, with the `v_in` and `u` channels
 /// ([`MIN_TOTAL_DURATION_S`], [`MIN_SAMPLE_RATE_HZ`], [`MIN_COMMAND_RMS_V`]).
@@ -204,4 +261,64 @@ pub fn insufficient_data(params: &Params, checked: DataCheck) -> CalibrationRepo
     };
     let all = if nominal.is_empty() { Vec::new() } else { all };
     insufficient_report(params, all, nominal, checked.missing, checked.notes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    /// A 3 s record at 1 kHz whose stroke runs at `speed` \[m/s\] from mid-stroke.
+    fn walking(name: &str, speed: f64) -> Record {
+        let t: Vec<f64> = (0..=3000).map(|i| i as f64 * 1e-3).collect();
+        Record {
+            path: name.into(),
+            metadata: vec![],
+            dt: 1e-3,
+            v_in: Some(t.iter().map(|t| (20.0 * t).sin()).collect()),
+            u: Some(t.iter().map(|t| speed * t).collect()),
+            x: None,
+            xdd: None,
+            ydd: Some(vec![0.0; t.len()]),
+            p1: None,
+            p2: None,
+            t,
+            warnings: vec![],
+        }
+    }
+
+    /// A stroke of ±35 mm: a record that comes within 1 mm of a stop at 1.7 s is cut there, one
+    /// that does so at 0.34 s is left out, one that stays clear is kept whole; the notes name
+    /// the files and the times.
+    #[test]
+    fn records_end_at_their_first_end_stop_contact() {
+        let recs = [
+            walking("cut.csv", 0.02),
+            walking("early.csv", -0.1),
+            walking("clear.csv", 0.01),
+        ];
+        let (kept, notes) = before_end_stops(&recs, 0.07);
+        assert_eq!(kept.len(), 2);
+        assert_eq!(kept[0].path, PathBuf::from("cut.csv"));
+        // 0.02·t ≥ 0.034 from t = 1.7 s (sample 1700; rounding may take the next one).
+        assert!((1700..=1701).contains(&kept[0].len()), "{}", kept[0].len());
+        for c in [&kept[0].v_in, &kept[0].u, &kept[0].ydd] {
+            assert_eq!(c.as_ref().unwrap().len(), kept[0].len());
+        }
+        assert!(kept[0].u.as_ref().unwrap().iter().all(|u| u.abs() < 0.034));
+        assert_eq!(kept[1], recs[2]);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(
+            notes[0].contains("cut.csv")
+                && notes[0].contains("1.70")
+                && notes[0].contains("±35.0 mm"),
+            "{}",
+            notes[0]
+        );
+        assert!(
+            notes[1].contains("early.csv") && notes[1].contains("left out"),
+            "{}",
+            notes[1]
+        );
+    }
 }

@@ -348,7 +348,9 @@ pub fn calibrate_with(
         return Err(IdentifyError::NoRecords);
     }
     let monitor = progress::Monitor::new(cancel, observer);
-    let checked = data::check(records, options)?;
+    let (records, stop_notes) = data::before_end_stops(records, params.plant.cylinder.stroke_m);
+    let mut checked = data::check(&records, options)?;
+    checked.notes.splice(0..0, stop_notes);
     if !checked.missing.is_empty() {
         return Ok(data::insufficient_data(params, checked));
     }

@@ -591,20 +591,24 @@ fn rounded_overlap_is_found_with_its_edge_and_the_replay_does_not_ring() {
 /// over 0.2 mm), a damping force quadratic in the velocity (20 N at 0.1 m/s) and a cushion
 /// spring the declared stiffness lacks (10 % of it, slightly progressive). The library
 /// cannot explain it: the verdict stays `unexplained`; the search beyond the library proposes
-/// the first three in physical words with values near the truth, and Cd and τ come out
-/// right beside them; `calibrated.toml` carries them, and with them the worst raw band falls
-/// to under a tenth of the library's. The spring is not found: at 10 % of the declared
-/// stiffness, open-loop tests of a flow-controlled cylinder hardly see it (its best ΔBIC is
-/// near zero), and the search stops at three terms.
+/// the first three in physical words, and Cd and τ come out right beside them;
+/// `calibrated.toml` carries them, and with them the worst raw band falls to under a tenth of
+/// the library's. The spring is not found: at 10 % of the declared stiffness, open-loop tests
+/// of a flow-controlled cylinder hardly see it, and the search stops at three terms.
 ///
-/// KNOWN FAILURE since 2026-11-27 (README, "What fails"): with the fit's weights on the
-/// campaign's sensor noise (the verdict's estimate), the search proposes only Cd per
-/// direction (+18.5 % against the rig's +20 %) and misses the quadratic damping and the
-/// opening term; the worst raw band stays at hundreds of times its floor. (With the noise
-/// per record, between the two changes, it proposed a quadratic damping of 342 ± 4 N·s²/m²
-/// against the rig's 2000.)
+/// The direction difference walks the body into an end stop in two of the five tests (the
+/// 2 Hz / 2.1 V and 10 Hz / 4 V sines, after about 1 s). Fitted whole, those records made the
+/// cost jump with the smallest change of a parameter, and the search found the direction term
+/// only (this test was a known failure until 2026-11-28); the calibration now uses each record
+/// up to its first end-stop contact (`identify::data::before_end_stops`).
+///
+/// The values: the direction term comes out at 0.116 (the rig's 0.10) and the quadratic
+/// damping at 2711 ± 49 N·s²/m², 36 % and 15 σ above the rig's 2000 (the laws differ only
+/// below 5 mm/s): it stands in for part of what the two-term forms miss (the spring, the
+/// opening law's shape), and its uncertainty does not say so; the opening term, linear in the opening where the rig's levels
+/// off, matches the rig's flow gain where the tests open the spool (checked below) and runs
+/// past it beyond.
 #[test]
-#[ignore = "known failure: only the direction term proposed (README, What fails)"]
 fn three_effects_outside_the_library_are_proposed() {
     let fx = RigEffects {
         cd_spool: Some(0.10),
@@ -665,14 +669,27 @@ fn three_effects_outside_the_library_are_proposed() {
     let damping = find("quadratic_damping");
     assert!(damping.1 > 1000.0 && damping.1 < 3000.0, "{damping:?}");
     let opening = find("cd_opening");
-    assert!(opening.1 > 0.05 && opening.1 < 0.25, "{opening:?}");
-    // With the opening term, the twin's Cd is the one at half travel; at small openings it
-    // is Cd·(1 − s/2), the rig's Cd before its rise.
-    let cd_small = r.params.plant.valve.cd * (1.0 - 0.5 * opening.1);
-    assert!(
-        (cd_small / (0.95 * 0.1506) - 1.0).abs() < 0.05,
-        "{cd_small}: {s}"
-    );
+    assert!(opening.1 > 0.05, "{opening:?}");
+    // The twin's law is linear in the opening, the rig's levels off over 0.2 mm: they can
+    // agree only where the tests open the spool. The largest sines open it to 0.17 mm
+    // (2.1 V) and 0.32 mm (4 V, cut at its first end-stop contact); up to 0.2 mm the twin's
+    // flow gain, Cd and both direction terms together, is the rig's within 4 %. (Beyond, the
+    // linear law runs on: at full travel it is 29 % above the rig's. The README says so.)
+    let p = &r.params;
+    for x in [
+        -0.2e-3, -0.1e-3, -0.05e-3, -0.02e-3, 0.02e-3, 0.05e-3, 0.1e-3, 0.2e-3,
+    ] {
+        let twin = p.plant.valve.cd * p.plant.corrections.edge_gains(x, p.plant.valve.xv_max_m).0;
+        let a: f64 = x;
+        let rig = 0.95
+            * 0.1506
+            * (1.0 + 0.10 * (a / 1e-4).tanh())
+            * (1.0 + 0.15 * (1.0 - (-a.abs() / 2e-4).exp()));
+        assert!(
+            (twin / rig - 1.0).abs() < 0.04,
+            "at {x} m: {twin} vs {rig}; {s}"
+        );
+    }
     assert!((r.params.plant.valve.tau_s - 0.019).abs() < 0.5e-3, "{s}");
     // calibrated.toml carries them, and the raw error with them is far below the library's.
     let c = &r.params.plant.corrections;
