@@ -149,7 +149,7 @@ pub fn before_end_stops(records: &[Record], stroke_m: f64) -> (Vec<Record>, Vec<
             let Some(i) = contact else {
                 return Some(r.clone());
             };
-            let (at, whole) = (i as f64 * r.dt, r.duration_s());
+            let (at, whole) = (r.t[i] - r.t[0], r.duration_s());
             let reach = format!(
                 "end stops: {}'s stroke comes within {:.1} mm of an end stop (±{:.1} mm) at \
                  {at:.3} s",
