@@ -153,7 +153,10 @@ impl Record {
             ydd: cut(&self.ydd),
             p1: cut(&self.p1),
             p2: cut(&self.p2),
-            ..self.clone()
+            path: self.path.clone(),
+            metadata: self.metadata.clone(),
+            dt: self.dt,
+            warnings: self.warnings.clone(),
         }
     }
 

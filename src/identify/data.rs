@@ -157,18 +157,18 @@ pub fn before_end_stops(records: &[Record], stroke_m: f64) -> (Vec<Record>, Vec<
                 1e3 * END_STOP_MARGIN_M,
                 500.0 * stroke_m
             );
+            let why = "the replay's error after a stop contact jumps with the smallest change \
+                       of a parameter";
             if at < MIN_BEFORE_END_STOP_S {
                 notes.push(format!(
                     "{reach}, less than {MIN_BEFORE_END_STOP_S} s after its start: the record \
-                     was left out (the replay's error after a stop contact jumps with the \
-                     smallest change of a parameter)"
+                     was left out ({why})"
                 ));
                 None
             } else {
                 notes.push(format!(
                     "{reach}: calibrated and replayed up to there ({at:.3} of its {whole:.3} s; \
-                     the replay's error after a stop contact jumps with the smallest change of \
-                     a parameter)"
+                     {why})"
                 ));
                 Some(r.truncated(i))
             }

@@ -605,9 +605,9 @@ fn rounded_overlap_is_found_with_its_edge_and_the_replay_does_not_ring() {
 /// The values: the direction term comes out at 0.116 (the rig's 0.10) and the quadratic
 /// damping at 2711 ± 49 N·s²/m², 36 % and 15 σ above the rig's 2000 (the laws differ only
 /// below 5 mm/s): it stands in for part of what the two-term forms miss (the spring, the
-/// opening law's shape), and its uncertainty does not say so; the opening term, linear in the opening where the rig's levels
-/// off, matches the rig's flow gain where the tests open the spool (checked below) and runs
-/// past it beyond.
+/// opening law's shape), and its uncertainty does not say so; the opening term, linear in
+/// the opening where the rig's levels off, matches the rig's flow gain where the tests open
+/// the spool (checked below) and runs past it beyond.
 #[test]
 fn three_effects_outside_the_library_are_proposed() {
     let fx = RigEffects {
