@@ -294,9 +294,11 @@ pub fn verdict(effects_added: bool, before: &RawErrorReport, after: &RawErrorRep
 }
 
 /// Sensor properties of `fit` within 3σ of exact are exact: set back in its parameters, not
-/// applied, not listed. Returns the others, as reported.
-fn set_back_exact_sensors(fit: &mut FitResult) -> Vec<SensorEstimate> {
+/// applied, not listed. Returns the others, as reported, and a note for each one set back
+/// (its estimate, so that a property near the limit of detection is not silently lost).
+fn set_back_exact_sensors(fit: &mut FitResult) -> (Vec<SensorEstimate>, Vec<String>) {
     let mut sensors = Vec::new();
+    let mut notes = Vec::new();
     for v in &fit.values {
         if let Some((channel, kind, exact)) = v.knob.sensor() {
             if (v.value - exact).abs() > 3.0 * v.std && v.std.is_finite() {
@@ -307,11 +309,27 @@ fn set_back_exact_sensors(fit: &mut FitResult) -> Vec<SensorEstimate> {
                     uncertainty: v.std,
                 });
             } else {
+                if v.std.is_finite() {
+                    // Display units: a lag in ms, an offset in its channel's unit.
+                    let (k, unit) = match (kind, channel) {
+                        ("lag", _) => (1e3, " ms"),
+                        ("offset", "ydd") => (1.0, " m/s²"),
+                        ("offset", "u") => (1e3, " mm"),
+                        _ => (1.0, ""),
+                    };
+                    notes.push(format!(
+                        "sensor {channel} {kind}: estimated {}{unit}, {:.1}σ from exact ({}{unit}), \
+                         within 3σ: not reported, the replays take it as exact",
+                        crate::format::uncertain(k * v.value, k * v.std, 0),
+                        (v.value - exact).abs() / v.std,
+                        crate::format::compact(k * exact),
+                    ));
+                }
                 v.knob.spec().set_unchecked(&mut fit.params, exact);
             }
         }
     }
-    sensors
+    (sensors, notes)
 }
 
 /// The declared parameters (Cd, τ, mass) of a fit, with their uncertainties.
@@ -374,7 +392,7 @@ pub fn report(
     let before_params = with_numerics_of(found.declared.fit.params, params);
     let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
-    let sensors = set_back_exact_sensors(&mut current);
+    let (sensors, sensor_notes) = set_back_exact_sensors(&mut current);
     let replay = |p: &Params, recs| -> Result<Vec<Replay>, IdentifyError> {
         let r = replay_all(p, recs)?;
         monitor.advance();
@@ -386,7 +404,7 @@ pub fn report(
             let mut fit = prop.fit.clone();
             fit.params = with_numerics_of(fit.params, params);
             // Its sensor properties are set back the same way (the report lists the library's).
-            set_back_exact_sensors(&mut fit);
+            let _ = set_back_exact_sensors(&mut fit);
             let reps = replay_all(&fit.params, all)?;
             let sims: Vec<_> = reps.iter().map(|r| &r.sim).collect();
             let raw = raw_error_report(all, &sims, options.raw_error_limit);
@@ -563,7 +581,7 @@ pub fn report(
         replays_after,
         replays_nominal: found.nominal.replays,
         records: found.campaign.all,
-        notes: found.notes,
+        notes: found.notes.into_iter().chain(sensor_notes).collect(),
         missing: Vec::new(),
         split: found.campaign.split,
         error_training: Some(error_training),

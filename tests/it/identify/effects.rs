@@ -540,6 +540,21 @@ fn sensor_scale_and_lag_are_found_as_sensors_not_effects() {
     assert_eq!(r.verdict, Verdict::NoMissingEffect, "{s}");
     assert!((r.params.plant.valve.tau_s - 0.019).abs() < 0.3e-3, "{s}");
     assert!((r.params.sensors.ydd_scale - scale.value).abs() < 1e-12);
+    // The accelerometer has no offset: it was estimated with the others, found within 3σ of
+    // none, not reported and not applied, and a note gives its estimate.
+    assert!(
+        !r.sensors.iter().any(|e| e.kind == "offset"),
+        "{:?}",
+        r.sensors
+    );
+    assert_eq!(r.params.sensors.ydd_offset_m_s2, 0.0);
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.starts_with("sensor ydd offset: estimated") && n.contains("not reported")),
+        "{:?}",
+        r.notes
+    );
     let json = identify::report::report_json(&r);
     assert_eq!(
         json["sensors"].as_array().map(Vec::len),
