@@ -105,11 +105,15 @@ pub fn feature_correlations(
         for (p, r) in records.iter().zip(replays) {
             let vpk = p.v_in.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let sd = rms(&p.du_meas_f).max(1e-12);
+            // The acceleration residual and its measured channel's RMS, once per record.
+            let acc = match (&r.residual_ydd, &p.ydd_meas_f) {
+                (Some(ra), Some(ym)) => Some((ra, rms(ym).max(1e-12))),
+                _ => None,
+            };
             for i in (0..p.len).step_by(p.decimate) {
                 let x = f(p, r, i, vpk);
                 v_pairs.push((x, r.residual_du[i] / sd));
-                if let (Some(ra), Some(ym)) = (&r.residual_ydd, &p.ydd_meas_f) {
-                    let sa = rms(ym).max(1e-12);
+                if let Some((ra, sa)) = acc {
                     a_pairs.push((x, ra[i] / sa));
                 }
             }
