@@ -310,12 +310,12 @@ fn set_back_exact_sensors(fit: &mut FitResult) -> (Vec<SensorEstimate>, Vec<Stri
                 });
             } else {
                 if v.std.is_finite() {
-                    // Display units: a lag in ms, an offset in its channel's unit.
-                    let (k, unit) = match (kind, channel) {
-                        ("lag", _) => (1e3, " ms"),
-                        ("offset", "ydd") => (1.0, " m/s²"),
-                        ("offset", "u") => (1e3, " mm"),
-                        _ => (1.0, ""),
+                    // In the parameter table's display unit (a lag in ms).
+                    let (_, k, unit) = super::units::display_unit(v.knob.name());
+                    let unit = if unit.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" {unit}")
                     };
                     notes.push(format!(
                         "sensor {channel} {kind}: estimated {}{unit}, {:.1}σ from exact ({}{unit}), \
