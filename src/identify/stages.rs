@@ -311,18 +311,13 @@ fn set_back_exact_sensors(fit: &mut FitResult) -> (Vec<SensorEstimate>, Vec<Stri
             } else {
                 if v.std.is_finite() {
                     // In the parameter table's display unit (a lag in ms).
-                    let (_, k, unit) = super::units::display_unit(v.knob.name());
-                    let unit = if unit.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" {unit}")
-                    };
+                    let name = v.knob.name();
                     notes.push(format!(
-                        "sensor {channel} {kind}: estimated {}{unit}, {:.1}σ from exact ({}{unit}), \
+                        "sensor {channel} {kind}: estimated {}, {:.1}σ from exact ({}), \
                          within 3σ: not reported, the replays take it as exact",
-                        crate::format::uncertain(k * v.value, k * v.std, 0),
+                        super::units::format_parameter(name, v.value, v.std),
                         (v.value - exact).abs() / v.std,
-                        crate::format::compact(k * exact),
+                        super::units::format_value(name, exact),
                     ));
                 }
                 v.knob.spec().set_unchecked(&mut fit.params, exact);

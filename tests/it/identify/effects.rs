@@ -548,10 +548,18 @@ fn sensor_scale_and_lag_are_found_as_sensors_not_effects() {
         r.sensors
     );
     assert_eq!(r.params.sensors.ydd_offset_m_s2, 0.0);
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.starts_with("sensor ydd offset: estimated"));
+    // The estimate in the parameter table's symbol and display unit, then the exact value.
     assert!(
+        note.is_some_and(|n| n.contains("estimated ÿ_0 = ") && n.contains(" m/s², ")),
+        "{:?}",
         r.notes
-            .iter()
-            .any(|n| n.starts_with("sensor ydd offset: estimated") && n.contains("not reported")),
+    );
+    assert!(
+        note.is_some_and(|n| n.contains("σ from exact (0.0000 m/s²)") && n.contains("not reported")),
         "{:?}",
         r.notes
     );
