@@ -506,20 +506,49 @@ pub fn search(
             let after = worst_raw_ratio(cx, campaign, params, &trial.refit.params)?;
             // Its size determined and more than 2σ from "off", and every uncertainty of the
             // re-fit finite: an effect tried below the bar must not leave the fit degenerate,
-            // nor enter at no size only to let the others' fit move on.
-            let size = best.effect.knobs()[0];
-            let off = {
-                let mut p = trial.refit.params;
-                size.set(&mut p, 0.0);
-                size.value(&p)
-            };
-            let determinate = trial.refit.values.iter().all(|v| v.std.is_finite())
-                && trial
+            // nor enter at no size only to let the others' fit move on. Compliance has two
+            // sizes: the chambers' modulus and the hoses' (soft hoses beside stiff chambers
+            // leave the first at "off").
+            let sized = |k: Knob| {
+                let off = {
+                    let mut p = trial.refit.params;
+                    k.set(&mut p, 0.0);
+                    k.value(&p)
+                };
+                trial
                     .refit
                     .values
                     .iter()
-                    .filter(|v| v.knob == size)
-                    .all(|v| v.is_determined() && (v.value - off).abs() > 2.0 * v.std);
+                    .find(|v| v.knob == k)
+                    .map(|v| (v, v.is_determined() && (v.value - off).abs() > 2.0 * v.std))
+            };
+            let sizes: &[Knob] = match best.effect {
+                EffectId::Compliance => &[Knob::Compliance, Knob::HoseCompliance],
+                e => &e.knobs()[..1],
+            };
+            let sized: Vec<_> = sizes.iter().filter_map(|&k| sized(k)).collect();
+            // What leaves the re-fit indeterminate, in the note's words.
+            let mut why: Vec<String> = trial
+                .refit
+                .values
+                .iter()
+                .filter(|v| !v.std.is_finite())
+                .map(|v| format!("{}'s uncertainty is not determined", v.name))
+                .collect();
+            if !sized.iter().any(|(_, ok)| *ok) {
+                let shown: Vec<String> = sized
+                    .iter()
+                    .map(|(v, _)| super::units::format_parameter(&v.name, v.value, v.std))
+                    .collect();
+                why.insert(
+                    0,
+                    format!(
+                        "its size is undetermined or within 2σ of none ({})",
+                        shown.join(", ")
+                    ),
+                );
+            }
+            let determinate = why.is_empty();
             let lowers_raw = after <= REFINEMENT_MAX_RAW_RATIO * before;
             let kept = trial.improves && determinate && lowers_raw;
             notes.push(format!(
@@ -533,10 +562,9 @@ pub fn search(
                 100.0 * min_gain,
                 if after < before { "lowers" } else { "leaves" },
                 if determinate {
-                    ""
+                    String::new()
                 } else {
-                    ", but its size is undetermined or within 2σ of none, or another parameter \
-                     is left undetermined"
+                    format!(", but {}", why.join(", "))
                 },
                 if kept { "added" } else { "not added" }
             ));
