@@ -308,6 +308,27 @@ pub fn try_effect(
             }
         }
     }
+    // A leakage growth the re-fit leaves uncertain may have stopped in the wrong valley (on
+    // its bound, the coefficient near zero: a law all quadratic in Δp): the re-fit also starts
+    // from growths over two decades, the leakage at 5 MPa kept, and the deepest is kept.
+    if best.effect == EffectId::Leakage
+        && refit
+            .values
+            .iter()
+            .any(|v| v.knob == Knob::LeakageGrowth && !v.is_determined())
+    {
+        let l = refit.params.plant.effects.leakage;
+        let at_ref = l.coefficient_m3_per_s_pa * (1.0 + l.growth_per_pa * 5e6);
+        for growth in [1e-8, 3e-8, 1e-7, 3e-7] {
+            let mut p = refit.params;
+            p.plant.effects.leakage.growth_per_pa = growth;
+            p.plant.effects.leakage.coefficient_m3_per_s_pa = at_ref / (1.0 + growth * 5e6);
+            let again = refit_from(&p, &trial_knobs)?;
+            if again.rss < refit.rss {
+                refit = again;
+            }
+        }
+    }
     // A refinement the records leave uncertain is weighed against the plain law: the plain
     // law re-fitted is kept unless the refinement lowers the criterion by more than
     // REFINEMENT_MIN_DBIC or the raw error's worst band by a quarter (rather than reporting a
