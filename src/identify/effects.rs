@@ -318,11 +318,12 @@ pub fn try_effect(
             .any(|v| v.knob == Knob::LeakageGrowth && !v.is_determined())
     {
         let l = refit.params.plant.effects.leakage;
-        let at_ref = l.coefficient_m3_per_s_pa * (1.0 + l.growth_per_pa * 5e6);
+        let at_ref = l.coefficient_m3_per_s_pa * (1.0 + l.growth_per_pa * LEAKAGE_REF_DP_PA);
         for growth in [1e-8, 3e-8, 1e-7, 3e-7] {
             let mut p = refit.params;
             p.plant.effects.leakage.growth_per_pa = growth;
-            p.plant.effects.leakage.coefficient_m3_per_s_pa = at_ref / (1.0 + growth * 5e6);
+            p.plant.effects.leakage.coefficient_m3_per_s_pa =
+                at_ref / (1.0 + growth * LEAKAGE_REF_DP_PA);
             let again = refit_from(&p, &trial_knobs)?;
             if again.rss < refit.rss {
                 refit = again;
@@ -389,6 +390,10 @@ const REFINEMENT_MIN_DBIC: f64 = -10.0;
 /// law's at which an uncertain refinement is kept on the raw measure alone: it must take a
 /// quarter off.
 const REFINEMENT_MAX_RAW_RATIO: f64 = 0.75;
+
+/// Pressure difference at which a leakage re-fit's extra starts keep the fitted leakage
+/// [Pa]: 5 MPa, a typical |Δp| across the piston in the tests.
+const LEAKAGE_REF_DP_PA: f64 = 5e6;
 
 /// The raw error ([`raw_error`](super::raw_error), the verdict's measure) of `p` replayed
 /// on every record at the preset's step.
@@ -530,7 +535,7 @@ pub fn search(
             // nor enter at no size only to let the others' fit move on. Compliance has two
             // sizes: the chambers' modulus and the hoses' (soft hoses beside stiff chambers
             // leave the first at "off").
-            let sized = |k: Knob| {
+            let size_of = |k: Knob| {
                 let off = {
                     let mut p = trial.refit.params;
                     k.set(&mut p, 0.0);
@@ -547,7 +552,7 @@ pub fn search(
                 EffectId::Compliance => &[Knob::Compliance, Knob::HoseCompliance],
                 e => &e.knobs()[..1],
             };
-            let sized: Vec<_> = sizes.iter().filter_map(|&k| sized(k)).collect();
+            let sized: Vec<_> = sizes.iter().filter_map(|&k| size_of(k)).collect();
             // What leaves the re-fit indeterminate, in the note's words.
             let mut why: Vec<String> = trial
                 .refit
