@@ -40,12 +40,21 @@ pub const DEFAULT_LIMIT: f64 = 3.0;
 /// Lower edge of the band above the rig's motion [Hz], where the measured channels hold the
 /// sensor noise and the oil-column mode's ringing (about 77 Hz, almost undamped) after each
 /// command step. The replay does not carry the platform's content there (its excitation is
-/// low-passed at 20 Hz, [`super::replay::EXCITATION_CONDITIONING`]), and it times a ringing
-/// started by a command step only to within its RK4 step (0.1 ms, 5 % of a 77 Hz period: with
-/// the right model the first second of a sine test leaves 6× the white floor there). So in
-/// this band the measure holds the twin's own RMS against the measured channel's RMS (never
-/// below the white noise): it is above the limit when the replay rings, as a twin with a
-/// sharp overlap edge does on a rig with rounded lands.
+/// low-passed at 20 Hz, [`super::replay::EXCITATION_CONDITIONING`]). In this band the verdict's
+/// measure holds the twin's own RMS against the measured channel's RMS (never below the white
+/// noise): it is above the limit when the replay rings, as a twin with a sharp overlap edge
+/// does on a rig with rounded lands.
+///
+/// The residual there is also taken sample by sample ([`BandError::residual_rms`]) and reported
+/// where it is above the limit ([`RawErrorReport::ringing`]), but it is not part of the verdict:
+/// the fit sees the channels low-passed at 25 Hz only, so nothing fits the ringing's timing. It
+/// was kept out on the belief that the twin's RK4 step mistimes the ringing even with the right
+/// model; measured on 2026-11-28 that is not so (the right model leaves 1.0–1.2× the white
+/// floor there at 200 Hz–10 kHz on the test rig, the demo campaign's calibrated twin ≤ 1.7×).
+/// What does mistime it is a mass (or oil stiffness) a few per cent off, which the low band
+/// hardly constrains: at 200 Hz the calibrated mass of the test rig's null campaigns lands
+/// 1.3–2.6 % high (within its 1-σ of 2.7 %), and the ringing after each sine test's start
+/// step then leaves 2–7× the white floor in the first second.
 pub const OIL_COLUMN_BAND_HZ: f64 = 25.0;
 
 /// The definition, as reported.
@@ -57,7 +66,11 @@ channel's floor in that band: the white-noise share sigma·sqrt(B/(fs/2)) for a 
 the measured channel's content in the band (its RMS; for the band with DC the whole channel's \
 RMS about its mean), the twin's numerical resolution; in the band above 25 Hz (oil-column ringing, \
 no platform content in the replay) the twin's own RMS there over max(measured RMS there, \
-white share) instead, so a replay that rings is above the limit; sigma = white-noise RMS estimated from the measured channel (the smaller \
+white share) instead, so a replay that rings is above the limit (the residual there, sample by \
+sample, is reported beside it as residual_rms and residual_ratio, against the white-noise share of \
+the campaign's noise for the channel (the smallest of its records' sigma at that rate) combined \
+with the 0.1 % resolution part, and listed under ringing where above the limit; the verdict does \
+not use it); sigma = white-noise RMS estimated from the measured channel (the smaller \
 of the top 40 % of its detrended Hann spectrum and 1.4826·MAD of its 4th difference / √70), at \
 least q/√12 when the samples lie on a quantisation grid of step q; 1 = the sensor's noise";
 
@@ -76,6 +89,16 @@ pub struct BandError {
     pub ratio: f64,
     /// The time window `[start, end]` [s] where the band's residual is largest.
     pub window_s: [f64; 2],
+    /// In the band above [`OIL_COLUMN_BAND_HZ`] only: the residual's own RMS there (twin −
+    /// measured, sample by sample) [SI unit of the channel], which the verdict does not use
+    /// (see [`OIL_COLUMN_BAND_HZ`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_rms: Option<f64>,
+    /// Its ratio to the white-noise share of the campaign's noise for the channel (the fit's,
+    /// the smallest of its records' estimates) combined with [`RESOLUTION`] of the measured
+    /// content there [-].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_ratio: Option<f64>,
 }
 
 /// One raw channel of one record.
@@ -157,6 +180,10 @@ pub struct RawErrorReport {
     pub above: Vec<Exceedance>,
     /// The largest ratio anywhere (also when at the floor).
     pub worst: Option<Exceedance>,
+    /// Bands above [`OIL_COLUMN_BAND_HZ`] whose residual, taken sample by sample
+    /// ([`BandError::residual_ratio`]), is above the limit, worst first: the twin rings as
+    /// much as the record but not in time with it. Reported, not part of the verdict.
+    pub ringing: Vec<Exceedance>,
 }
 
 impl RawErrorReport {
@@ -175,15 +202,16 @@ impl RawErrorReport {
             (None, _) => "no raw channel to compare".into(),
             (Some(w), None) => format!(
                 "every record and raw channel at its noise floor (largest band ratio {:.2} ≤ \
-                 {:.1}: {})",
+                 {:.1}: {}){}",
                 w.ratio,
                 self.limit,
-                w.describe()
+                w.describe(),
+                self.ringing_text()
             ),
             (Some(_), Some(_)) => {
                 let list: Vec<String> = self.above.iter().take(5).map(|e| e.describe()).collect();
                 format!(
-                    "{} record band(s) above {:.1}× the noise floor; worst: {}{}",
+                    "{} record band(s) above {:.1}× the noise floor; worst: {}{}{}",
                     self.above.len(),
                     self.limit,
                     list.join("; "),
@@ -191,10 +219,27 @@ impl RawErrorReport {
                         format!("; and {} more", self.above.len() - 5)
                     } else {
                         String::new()
-                    }
+                    },
+                    self.ringing_text()
                 )
             }
         }
+    }
+
+    /// `""`, or where the twin's ringing above [`OIL_COLUMN_BAND_HZ`] is not in time with the
+    /// record's ([`Self::ringing`]), as a clause to append.
+    fn ringing_text(&self) -> String {
+        let Some(first) = self.ringing.first() else {
+            return String::new();
+        };
+        format!(
+            ". Above {OIL_COLUMN_BAND_HZ} Hz the twin rings as much as the record but not in \
+             time with it in {} band(s), worst {} (the residual sample by sample, against the \
+             campaign's white noise there; not part of the verdict, which compares the RMS \
+             there: a mass or oil stiffness a few % off mistimes the oil-column ringing)",
+            self.ringing.len(),
+            first.describe()
+        )
     }
 }
 
@@ -208,18 +253,22 @@ pub fn window_s(duration_s: f64) -> f64 {
 pub fn record_raw_error(rec: &PreparedRecord, sim: &SimChannels) -> RecordRawError {
     let w = rec.window.clone();
     let mut channels = Vec::new();
-    let mut push = |name: &str, unit: &str, twin: &[f64], meas: &[f64], noise: NoiseFloor| {
+    // The record's own noise floor for the verdict's bands; the campaign's noise of the
+    // channel (the fit's, [`super::replay::share_sensor_noise`]) for the residual sample by
+    // sample above the motion, where a record's own estimate is raised by its ringing.
+    let mut push = |name: &str, unit: &str, twin: &[f64], meas: &[f64], noise, campaign| {
         let m = &meas[w.clone()];
         let e: Vec<f64> = twin[w.clone()].iter().zip(m).map(|(a, b)| a - b).collect();
-        channels.push(channel_raw_error(name, unit, &e, m, rec.dt, w.start, noise));
+        let c = channel_raw_error(name, unit, &e, m, rec.dt, w.start, noise, campaign);
+        channels.push(c);
     };
-    push("u", "m", &sim.u, &rec.u, rec.floor_u);
+    push("u", "m", &sim.u, &rec.u, rec.floor_u, rec.noise_u);
     if let Some(y) = &rec.ydd {
-        push("ydd", "m/s^2", &sim.ydd, y, rec.floor_ydd);
+        push("ydd", "m/s^2", &sim.ydd, y, rec.floor_ydd, rec.noise_ydd);
     }
     for (k, (name, twin)) in [("p1", &sim.p1), ("p2", &sim.p2)].into_iter().enumerate() {
         if let Some(p) = &rec.p_raw[k] {
-            push(name, "Pa", twin, p, rec.floor_p[k]);
+            push(name, "Pa", twin, p, rec.floor_p[k], rec.noise_p[k]);
         }
     }
     RecordRawError {
@@ -231,7 +280,9 @@ pub fn record_raw_error(rec: &PreparedRecord, sim: &SimChannels) -> RecordRawErr
 /// One channel's residual `e` (sampled every `dt`, its first sample at index `start` of the
 /// record) against the noise floor `noise`, band by band; `measured` is the measured channel
 /// on the same samples (its content in a band sets the resolution part of the floor,
-/// [`RESOLUTION`]).
+/// [`RESOLUTION`]). Above [`OIL_COLUMN_BAND_HZ`] the residual sample by sample is held
+/// against the white noise `sample_noise` [SI] (the campaign's estimate for the channel).
+#[allow(clippy::too_many_arguments)]
 pub fn channel_raw_error(
     name: &str,
     unit: &str,
@@ -240,6 +291,7 @@ pub fn channel_raw_error(
     dt: f64,
     start: usize,
     noise: NoiseFloor,
+    sample_noise: f64,
 ) -> ChannelRawError {
     // The Nyquist frequency, rounded to a millihertz for the band's name.
     let nyquist = (0.5e3 / dt).round() / 1e3;
@@ -285,13 +337,29 @@ pub fn channel_raw_error(
             // plant turns a relative flow error at any frequency into drift).
             let content = if b[0] <= 0.0 { swing } else { rms(sig) };
             let above_motion = b[0] >= OIL_COLUMN_BAND_HZ;
-            // Above the rig's motion: the twin's own content (twin = residual + measured)
-            // against what was measured there, never below the white noise.
-            let (r, floor) = if above_motion {
-                let twin: Vec<f64> = part.iter().zip(sig).map(|(e, m)| e + m).collect();
-                (rms(&twin), white.max(rms(sig)))
+            let sample_floor = if above_motion {
+                let white = sample_noise * ((b[1] - b[0]) / nyquist).sqrt();
+                white.hypot(RESOLUTION * content)
             } else {
-                (r, white.hypot(RESOLUTION * content))
+                white.hypot(RESOLUTION * content)
+            };
+            // Above the rig's motion: the twin's own content (twin = residual + measured)
+            // against what was measured there, never below the white noise; the residual
+            // itself is kept beside it.
+            let (rms_v, floor, residual) = if above_motion {
+                let twin: Vec<f64> = part.iter().zip(sig).map(|(e, m)| e + m).collect();
+                (rms(&twin), white.max(rms(sig)), Some(r))
+            } else {
+                (r, sample_floor, None)
+            };
+            let ratio_of = |r: f64, floor: f64| {
+                if floor > 0.0 {
+                    r / floor
+                } else if r > 0.0 {
+                    f64::INFINITY
+                } else {
+                    0.0
+                }
             };
             let (mut best, mut at) = (-1.0, (0, len));
             for k in 0..count {
@@ -303,19 +371,15 @@ pub fn channel_raw_error(
             }
             BandError {
                 band_hz: *b,
-                rms: r,
+                rms: rms_v,
                 floor,
-                ratio: if floor > 0.0 {
-                    r / floor
-                } else if r > 0.0 {
-                    f64::INFINITY
-                } else {
-                    0.0
-                },
+                ratio: ratio_of(rms_v, floor),
                 window_s: [
                     t0 + at.0 as f64 * dt,
                     t0 + at.1.saturating_sub(1) as f64 * dt,
                 ],
+                residual_rms: residual,
+                residual_ratio: residual.map(|r| ratio_of(r, sample_floor)),
             }
         })
         .collect();
@@ -339,38 +403,52 @@ pub fn raw_error_report(
         .zip(sims)
         .map(|(r, s)| record_raw_error(r, s))
         .collect();
-    let mut all: Vec<Exceedance> = records
-        .iter()
-        .flat_map(|r| {
-            r.channels.iter().flat_map(move |c| {
-                c.bands.iter().map(move |b| Exceedance {
-                    file: r.file.clone(),
-                    channel: c.channel.clone(),
-                    band_hz: b.band_hz,
-                    window_s: b.window_s,
-                    ratio: b.ratio,
+    report_of(records, limit)
+}
+
+/// The measure over `records`, held against `limit`.
+pub fn report_of(records: Vec<RecordRawError>, limit: f64) -> RawErrorReport {
+    let exceedances = |ratio: fn(&BandError) -> Option<f64>| -> Vec<Exceedance> {
+        let mut all: Vec<Exceedance> = records
+            .iter()
+            .flat_map(|r| {
+                r.channels.iter().flat_map(move |c| {
+                    c.bands.iter().filter_map(move |b| {
+                        ratio(b).map(|ratio| Exceedance {
+                            file: r.file.clone(),
+                            channel: c.channel.clone(),
+                            band_hz: b.band_hz,
+                            window_s: b.window_s,
+                            ratio,
+                        })
+                    })
                 })
             })
-        })
-        .collect();
-    all.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
-    let worst = all.first().cloned();
-    let above = all
+            .collect();
+        all.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
+        all
+    };
+    let all = exceedances(|b| Some(b.ratio));
+    // Above, or not a number: not at the floor.
+    let over = |e: &Exceedance| {
+        !matches!(
+            e.ratio.partial_cmp(&limit),
+            Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+        )
+    };
+    let ringing = exceedances(|b| b.residual_ratio)
         .into_iter()
-        .filter(|e| {
-            // Above, or not a number: not at the floor.
-            !matches!(
-                e.ratio.partial_cmp(&limit),
-                Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
-            )
-        })
-        .collect::<Vec<_>>();
+        .filter(over)
+        .collect();
+    let worst = all.first().cloned();
+    let above = all.into_iter().filter(over).collect::<Vec<_>>();
     RawErrorReport {
         definition: DEFINITION.into(),
         limit,
         records,
         above,
         worst,
+        ringing,
     }
 }
 
@@ -402,7 +480,7 @@ mod tests {
             .map(|(i, v)| v + (i as f64 * dt).sin())
             .collect();
         let twin_minus_meas: Vec<f64> = e.iter().map(|v| -v).collect();
-        let c = channel_raw_error("ydd", "m/s^2", &e, &m, dt, 0, noise);
+        let c = channel_raw_error("ydd", "m/s^2", &e, &m, dt, 0, noise, noise.rms);
         assert_eq!(c.bands.len(), 4);
         assert_eq!(c.bands[3].band_hz, [25.0, 500.0]);
         for b in &c.bands[1..3] {
@@ -417,7 +495,16 @@ mod tests {
         );
         // A twin with exactly the measured content there (residual = −measured noise + the
         // twin's nothing) reads 0 … 1: it does not ring.
-        let quiet = channel_raw_error("ydd", "m/s^2", &twin_minus_meas, &e, dt, 0, noise);
+        let quiet = channel_raw_error(
+            "ydd",
+            "m/s^2",
+            &twin_minus_meas,
+            &e,
+            dt,
+            0,
+            noise,
+            noise.rms,
+        );
         assert!(quiet.bands[3].ratio < 0.05, "{:?}", quiet.bands[3]);
         assert!(c.bands[0].ratio < 0.2, "{:?}", c.bands[0]);
     }
@@ -444,7 +531,7 @@ mod tests {
         let drift: Vec<f64> = (0..n)
             .map(|i| -5e-4 * (i as f64 / n as f64).powi(2))
             .collect();
-        let c = channel_raw_error("u", "m", &drift, &meas, dt, 0, floor);
+        let c = channel_raw_error("u", "m", &drift, &meas, dt, 0, floor, floor.rms);
         let w = c.worst().unwrap();
         assert_eq!(w.band_hz, [0.0, 0.5]);
         assert!(w.ratio > 10.0, "{w:?}");
@@ -471,13 +558,64 @@ mod tests {
             .collect();
         let floor = noise_floor(&meas);
         let e_ring: Vec<f64> = ring.iter().zip(&noise).map(|(r, v)| r - v).collect();
-        let ringing = channel_raw_error("ydd", "m/s^2", &e_ring, &meas, dt, 0, floor);
+        let ringing = channel_raw_error("ydd", "m/s^2", &e_ring, &meas, dt, 0, floor, floor.rms);
         let w = ringing.worst().unwrap();
         assert_eq!(w.band_hz, [25.0, 500.0]);
         assert!(w.ratio > 3.0, "{w:?}");
         let e_quiet: Vec<f64> = noise.iter().map(|v| -v).collect();
-        let quiet = channel_raw_error("ydd", "m/s^2", &e_quiet, &meas, dt, 0, floor);
+        let quiet = channel_raw_error("ydd", "m/s^2", &e_quiet, &meas, dt, 0, floor, floor.rms);
         assert!(quiet.bands.iter().all(|b| b.ratio < 1.5), "{quiet:?}");
+    }
+
+    /// A twin that rings as much as the record, at 0.9 % lower frequency (its mass 1.8 %
+    /// high), after a command step: the verdict's ratio above 25 Hz stays at 1, the residual
+    /// sample by sample is far above the floor, and the report says so in its summary while
+    /// still at the floor.
+    #[test]
+    fn a_mistimed_ringing_is_reported_beside_the_verdict() {
+        let dt = 1e-3;
+        let n = 2000;
+        let noise = noisy(n, 0.08, 11);
+        let ring = |f: f64| -> Vec<f64> {
+            (0..n)
+                .map(|i| {
+                    let t = i as f64 * dt;
+                    4.0 * (-t / 0.3).exp() * (2.0 * std::f64::consts::PI * f * t).sin()
+                })
+                .collect()
+        };
+        let meas: Vec<f64> = ring(77.0).iter().zip(&noise).map(|(r, v)| r + v).collect();
+        let twin = ring(77.0 * (1.0 - 0.009));
+        let e: Vec<f64> = twin.iter().zip(&meas).map(|(a, b)| a - b).collect();
+        let c = channel_raw_error("ydd", "m/s^2", &e, &meas, dt, 0, noise_floor(&meas), 0.08);
+        let top = &c.bands[3];
+        assert!(top.ratio < 1.1, "{top:?}");
+        let sample = top.residual_ratio.expect("reported above 25 Hz");
+        assert!(sample > DEFAULT_LIMIT, "{top:?}");
+        assert!(top.window_s[0] < 0.5, "{top:?}");
+        assert!(c.bands[..3].iter().all(|b| b.residual_ratio.is_none()));
+        let r = report_of(
+            vec![RecordRawError {
+                file: "sine.csv".into(),
+                channels: vec![c],
+            }],
+            DEFAULT_LIMIT,
+        );
+        assert!(r.at_floor(), "{}", r.summary());
+        assert_eq!(r.ringing.len(), 1);
+        let s = r.summary();
+        assert!(
+            s.contains("not in time with it") && s.contains("sine.csv ydd 25–500 Hz"),
+            "{s}"
+        );
+        // The same twin in time with the record: nothing to report.
+        let e0: Vec<f64> = noise.iter().map(|v| -v).collect();
+        let c0 = channel_raw_error("ydd", "m/s^2", &e0, &meas, dt, 0, noise_floor(&meas), 0.08);
+        assert!(
+            c0.bands[3].residual_ratio.unwrap() < 1.5,
+            "{:?}",
+            c0.bands[3]
+        );
     }
 
     /// The bands tile the spectrum: the parts add up to the signal.

@@ -34,6 +34,7 @@ fn raw_error_json(e: &super::raw_error::RawErrorReport) -> Value {
         "summary": e.summary(),
         "worst": e.worst,
         "above": e.above,
+        "ringing": e.ringing,
         "records": e.records,
     })
 }
@@ -188,7 +189,7 @@ fn raw_error_markdown(s: &mut String, r: &CalibrationReport) {
     );
     let _ = writeln!(
         s,
-        "| record | channel | noise σ | worst ratio before | worst ratio after | its band | its window [s] |\n|---|---|---|---|---|---|---|"
+        "| record | channel | noise σ | worst ratio before | worst ratio after | its band | its window [s] | above 25 Hz sample by sample, after (not in the verdict) |\n|---|---|---|---|---|---|---|---|"
     );
     for (rb, ra) in b.records.iter().zip(&a.records) {
         for (cb, ca) in rb.channels.iter().zip(&ra.channels) {
@@ -197,7 +198,7 @@ fn raw_error_markdown(s: &mut String, r: &CalibrationReport) {
             };
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.3e} {} | {} | {} | {} | {}–{} |",
+                "| {} | {} | {:.3e} {} | {} | {} | {} | {}–{} | {} |",
                 ra.file,
                 ca.channel,
                 ca.noise.rms,
@@ -206,7 +207,11 @@ fn raw_error_markdown(s: &mut String, r: &CalibrationReport) {
                 num(wa.ratio, 2),
                 band_text(wa.band_hz),
                 num(wa.window_s[0], 1),
-                num(wa.window_s[1], 1)
+                num(wa.window_s[1], 1),
+                ca.bands
+                    .iter()
+                    .find_map(|b| b.residual_ratio)
+                    .map_or("—".into(), |v| num(v, 2))
             );
         }
     }
