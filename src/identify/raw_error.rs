@@ -337,12 +337,14 @@ pub fn channel_raw_error(
             // plant turns a relative flow error at any frequency into drift).
             let content = if b[0] <= 0.0 { swing } else { rms(sig) };
             let above_motion = b[0] >= OIL_COLUMN_BAND_HZ;
-            let sample_floor = if above_motion {
-                let white = sample_noise * ((b[1] - b[0]) / nyquist).sqrt();
-                white.hypot(RESOLUTION * content)
+            // The residual sample by sample: against the record's white share below the
+            // motion's top, the campaign's above it.
+            let sample_white = if above_motion {
+                sample_noise * ((b[1] - b[0]) / nyquist).sqrt()
             } else {
-                white.hypot(RESOLUTION * content)
+                white
             };
+            let sample_floor = sample_white.hypot(RESOLUTION * content);
             // Above the rig's motion: the twin's own content (twin = residual + measured)
             // against what was measured there, never below the white noise; the residual
             // itself is kept beside it.
