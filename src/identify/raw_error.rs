@@ -236,7 +236,7 @@ impl RawErrorReport {
             ". Above {OIL_COLUMN_BAND_HZ} Hz the twin rings as much as the record but not in \
              time with it in {} band(s), worst {} (the residual sample by sample, against the \
              campaign's white noise there; not part of the verdict, which compares the RMS \
-             there: a mass or oil stiffness a few % off mistimes the oil-column ringing)",
+             there; one cause: a mass or oil stiffness a few % off shifts the oil column's mode)",
             self.ringing.len(),
             first.describe()
         )
