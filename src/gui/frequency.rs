@@ -392,8 +392,14 @@ pub fn frequency_ui(
     ui.horizontal_wrapped(|ui| {
         dwell_status_ui(ui, dwell, params, unstable);
         ui.separator();
-        ui.checkbox(&mut *view.phase_unwrapped, "unwrapped phase")
-            .on_hover_text("Off: phase wrapped into ±180°. On: continuous (unwrapped) phase.");
+        // A fixed id: the dwell status before it has one to three widgets as the dwell
+        // waits, runs or ends, and an auto id would change with them, so a click that
+        // arrives as the status changes (an accessibility action does) would miss.
+        let fixed = egui::UiBuilder::new().scope_id(egui::Id::unique("frequency.phase_unwrapped"));
+        ui.scope_builder(fixed, |ui| {
+            ui.checkbox(&mut *view.phase_unwrapped, "unwrapped phase")
+                .on_hover_text("Off: phase wrapped into ±180°. On: continuous (unwrapped) phase.");
+        });
     });
     let show_dwell = dwell_shown(curves, dwell, params);
     let hidden = view.hidden;
