@@ -89,6 +89,7 @@ pub mod raw_error;
 pub mod replay;
 pub mod report;
 pub mod result;
+pub mod ringing;
 pub mod stages;
 #[cfg(test)]
 mod testdata;

@@ -378,7 +378,6 @@ pub fn report(
     options: &CalibrationOptions,
     monitor: &Monitor<'_>,
 ) -> Result<CalibrationReport, IdentifyError> {
-    monitor.enter(Stage::Report, 7);
     let (all, fit_recs, val_recs) = (
         &found.campaign.all,
         &found.campaign.fit,
@@ -387,7 +386,26 @@ pub fn report(
     let before_params = with_numerics_of(found.declared.fit.params, params);
     let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
-    let (sensors, sensor_notes) = set_back_exact_sensors(&mut current);
+    let (sensors, mut sensor_notes) = set_back_exact_sensors(&mut current);
+    // The calibrated twin's replays; when they ring out of time with the records, the mass
+    // is searched again for that ringing (and the replays are those of the mass kept).
+    let replays_after = replay_all(&current.params, all)?;
+    let sims_after: Vec<_> = replays_after.iter().map(|r| &r.sim).collect();
+    let raw_error_after = raw_error_report(all, &sims_after, options.raw_error_limit);
+    let (replays_after, raw_error_after) = match super::ringing::refine_mass(
+        &mut current,
+        all,
+        &raw_error_after,
+        options.raw_error_limit,
+        monitor,
+    )? {
+        Some((refined, replays, raw)) => {
+            sensor_notes.push(refined.note());
+            (replays, raw)
+        }
+        None => (replays_after, raw_error_after),
+    };
+    monitor.enter(Stage::Report, 7);
     let replay = |p: &Params, recs| -> Result<Vec<Replay>, IdentifyError> {
         let r = replay_all(p, recs)?;
         monitor.advance();
@@ -421,7 +439,7 @@ pub fn report(
     let w_before = weighted_of(all, &replays_before);
     let error_before = summary(all, &replays_before, &w_before);
     let diagnostics_before = diagnostics(all, &replays_before, &w_before);
-    let replays_after = replay(&current.params, all)?;
+    monitor.advance();
     let w_after = weighted_of(all, &replays_after);
     let error_after = summary(all, &replays_after, &w_after);
     let diagnostics_after = diagnostics(all, &replays_after, &w_after);
@@ -456,9 +474,7 @@ pub fn report(
         .collect(),
     };
     let sims_before: Vec<_> = replays_before.iter().map(|r| &r.sim).collect();
-    let sims_after: Vec<_> = replays_after.iter().map(|r| &r.sim).collect();
     let raw_error_before = raw_error_report(all, &sims_before, options.raw_error_limit);
-    let raw_error_after = raw_error_report(all, &sims_after, options.raw_error_limit);
     // A parameter that drifts through the campaign is not in the library, however well the
     // twin follows each record with its own value.
     let verdict = if found.drifts.is_empty() {

@@ -660,3 +660,47 @@ fn a_growing_leakage_beside_an_offset_is_refitted_from_several_growths() {
         assert!((value - truth).abs() < 3.0 * std, "{name}: {leakage:?}");
     }
 }
+
+/// Case 12 of the 2026 draw at 200 Hz (no hidden effect): the fits, which see the channels
+/// below 25 Hz, left the mass at 11.93 ± 0.32 kg against the rig's 11.7, inside its 1-σ, and
+/// the oil column's ringing after each command step ran 1 % off in frequency. The replayed ÿ
+/// was then further from the records than the nominal preset's (0.093 → 0.212 m/s² above the
+/// noise). The mass is now searched again, within 2σ, for that ringing
+/// (`identify::ringing`): it lands on the rig's mass and the calibrated.toml, replayed,
+/// halves the nominal error on u and ÿ; the verdict stays `no_missing_effect`.
+#[test]
+fn a_mistimed_ringing_at_200_hz_puts_the_mass_on_the_rigs() {
+    let (seed, i) = (2026, 12);
+    let c = cases(seed).swap_remove(i);
+    let recs = records_at(seed, i, &c, 200.0);
+    let r = calibrate_paper(&recs);
+    let s = super::rig::summary(&r);
+    assert_eq!(r.verdict, Verdict::NoMissingEffect, "{s}");
+    assert!(
+        r.notes.iter().any(|n| n.contains("searched again")),
+        "{:?}",
+        r.notes
+    );
+    let mass = r
+        .calibrated
+        .iter()
+        .find(|v| v.knob == identify::fit::Knob::Mass)
+        .expect("the mass is fitted");
+    let truth = seat_twin::params::Params::paper().plant.body.mass_kg;
+    assert!((mass.value / truth - 1.0).abs() < 0.005, "{mass:?}");
+    assert!((mass.value - truth).abs() < 3.0 * mass.std, "{mass:?}");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("calibrated.toml");
+    identify::report::calibrated_preset(&r)
+        .save(&path)
+        .expect("save");
+    let cal = Preset::load(&path).expect("load");
+    let (nominal, after) = (
+        above_noise(&Preset::paper(), &recs),
+        above_noise(&cal, &recs),
+    );
+    assert!(
+        (0..2).all(|k| after[k] <= 0.5 * nominal[k]),
+        "above the noise, u and ÿ: nominal {nominal:?}, calibrated {after:?}"
+    );
+}
