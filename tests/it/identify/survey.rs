@@ -344,15 +344,7 @@ fn randomised_rigs_confusion_table() {
                 ));
             }
         }
-        // calibrated.toml, saved and loaded, replayed independently.
-        let dir = tempfile::tempdir().expect("temp dir");
-        let path = dir.path().join("calibrated.toml");
-        identify::report::calibrated_preset(&r)
-            .save(&path)
-            .expect("save");
-        let cal = Preset::load(&path).expect("load");
-        let nominal = above_noise(&Preset::paper(), &recs);
-        let after = above_noise(&cal, &recs);
+        let (nominal, after) = replayed_above_noise(&r, &recs);
         let halved = (0..2).all(|k| after[k] <= 0.5 * nominal[k]);
         replay_ok += usize::from(halved);
         if only.is_some() {
@@ -534,6 +526,21 @@ fn records_at(seed: u64, i: usize, c: &Case, rate_hz: f64) -> Vec<seat_twin::dat
     )
 }
 
+/// The raw error above the noise on u and ÿ ([`above_noise`]) of `recs` replayed with the
+/// paper's preset and with `r`'s calibrated.toml, saved, loaded and replayed independently.
+fn replayed_above_noise(
+    r: &CalibrationReport,
+    recs: &[seat_twin::dataset::Record],
+) -> ([f64; 2], [f64; 2]) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("calibrated.toml");
+    identify::report::calibrated_preset(r)
+        .save(&path)
+        .expect("save");
+    let cal = Preset::load(&path).expect("load");
+    (above_noise(&Preset::paper(), recs), above_noise(&cal, recs))
+}
+
 /// Calibrates case `i` of the draw `seed` as the survey does.
 fn survey_case(seed: u64, i: usize) -> (Case, CalibrationReport) {
     let c = cases(seed).swap_remove(i);
@@ -689,16 +696,7 @@ fn a_mistimed_ringing_at_200_hz_puts_the_mass_on_the_rigs() {
     let truth = seat_twin::params::Params::paper().plant.body.mass_kg;
     assert!((mass.value / truth - 1.0).abs() < 0.005, "{mass:?}");
     assert!((mass.value - truth).abs() < 3.0 * mass.std, "{mass:?}");
-    let dir = tempfile::tempdir().expect("temp dir");
-    let path = dir.path().join("calibrated.toml");
-    identify::report::calibrated_preset(&r)
-        .save(&path)
-        .expect("save");
-    let cal = Preset::load(&path).expect("load");
-    let (nominal, after) = (
-        above_noise(&Preset::paper(), &recs),
-        above_noise(&cal, &recs),
-    );
+    let (nominal, after) = replayed_above_noise(&r, &recs);
     assert!(
         (0..2).all(|k| after[k] <= 0.5 * nominal[k]),
         "above the noise, u and ÿ: nominal {nominal:?}, calibrated {after:?}"
