@@ -390,16 +390,14 @@ pub fn frequency_ui(
     let unstable = curves.unstable();
     // Wrapped, so that a long status (progress, failures) never widens the column.
     ui.horizontal_wrapped(|ui| {
-        dwell_status_ui(ui, dwell, params, unstable);
+        // In a scope, which takes one auto id whatever it holds: the dwell status has one to
+        // three widgets as the dwell waits, runs or ends, and the checkbox's auto id (counted
+        // from the widgets before it) would change with them, so a click that arrives as the
+        // status changes (an accessibility action does) would miss.
+        ui.scope(|ui| dwell_status_ui(ui, dwell, params, unstable));
         ui.separator();
-        // A fixed id: the dwell status before it has one to three widgets as the dwell
-        // waits, runs or ends, and an auto id would change with them, so a click that
-        // arrives as the status changes (an accessibility action does) would miss.
-        let fixed = egui::UiBuilder::new().scope_id(egui::Id::unique("frequency.phase_unwrapped"));
-        ui.scope_builder(fixed, |ui| {
-            ui.checkbox(&mut *view.phase_unwrapped, "unwrapped phase")
-                .on_hover_text("Off: phase wrapped into ±180°. On: continuous (unwrapped) phase.");
-        });
+        ui.checkbox(&mut *view.phase_unwrapped, "unwrapped phase")
+            .on_hover_text("Off: phase wrapped into ±180°. On: continuous (unwrapped) phase.");
     });
     let show_dwell = dwell_shown(curves, dwell, params);
     let hidden = view.hidden;

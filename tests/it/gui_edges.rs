@@ -255,9 +255,9 @@ fn phase_is_wrapped_by_default_and_unwrapped_on_request() {
         assert!(shown.iter().all(|p| p.y > -180.0 && p.y <= 180.0));
     }
     // Through its accessibility node, not a pointer at its last position: the live layout
-    // moves the checkbox between frames. Its id is fixed too: with an auto id, it changed
-    // when the dwell status before it changed its widgets, and the click was lost (two CI
-    // runs failed so, 2026-11-28).
+    // moves the checkbox between frames. And the dwell status before it sits in a scope:
+    // without it the checkbox's auto id changed when the status changed its widgets, and
+    // the click was lost (two CI runs failed so, 2026-11-28).
     h.get_by_label("unwrapped phase").click_accesskit();
     h.run_steps(2);
     assert!(h.state().settings.phase_unwrapped);
