@@ -84,9 +84,9 @@ impl MassRefined {
     }
 }
 
-/// Searches `fit`'s mass again when `first` (the raw error measure of `first_replays`, the
-/// replays of `recs` with `fit.params`) flags a ringing; sets it in `fit` and returns the
-/// new replays and measure when it is kept. `limit` is the measure's limit.
+/// Searches `fit`'s mass again when `first` (the raw error measure of `recs` replayed with
+/// `fit.params`) flags a ringing; sets it in `fit` and returns the new replays and measure
+/// when it is kept. `limit` is the measure's limit.
 pub fn refine_mass(
     fit: &mut FitResult,
     recs: &[PreparedRecord],
@@ -160,7 +160,9 @@ pub fn refine_mass(
         }
     }
     for _ in 2..REFINE {
-        let m = if ec < ed {
+        // The minimum lies left of `d` (a new inner point `c`) or right of `c` (a new `d`).
+        let left = ec < ed;
+        let m = if left {
             (b, d, ed) = (d, c, ec);
             c = b - g * (b - a);
             c
@@ -170,7 +172,7 @@ pub fn refine_mass(
             d
         };
         let (e, run) = evaluate(m)?;
-        if m == c {
+        if left {
             ec = e;
         } else {
             ed = e;

@@ -386,24 +386,21 @@ pub fn report(
     let before_params = with_numerics_of(found.declared.fit.params, params);
     let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
-    let (sensors, mut sensor_notes) = set_back_exact_sensors(&mut current);
+    let (sensors, sensor_notes) = set_back_exact_sensors(&mut current);
     // The calibrated twin's replays; when they ring out of time with the records, the mass
     // is searched again for that ringing (and the replays are those of the mass kept).
     let replays_after = replay_all(&current.params, all)?;
     let sims_after: Vec<_> = replays_after.iter().map(|r| &r.sim).collect();
     let raw_error_after = raw_error_report(all, &sims_after, options.raw_error_limit);
-    let (replays_after, raw_error_after) = match super::ringing::refine_mass(
+    let (replays_after, raw_error_after, ringing_note) = match super::ringing::refine_mass(
         &mut current,
         all,
         &raw_error_after,
         options.raw_error_limit,
         monitor,
     )? {
-        Some((refined, replays, raw)) => {
-            sensor_notes.push(refined.note());
-            (replays, raw)
-        }
-        None => (replays_after, raw_error_after),
+        Some((refined, replays, raw)) => (replays, raw, Some(refined.note())),
+        None => (replays_after, raw_error_after, None),
     };
     monitor.enter(Stage::Report, 7);
     let replay = |p: &Params, recs| -> Result<Vec<Replay>, IdentifyError> {
@@ -592,7 +589,12 @@ pub fn report(
         replays_after,
         replays_nominal: found.nominal.replays,
         records: found.campaign.all,
-        notes: found.notes.into_iter().chain(sensor_notes).collect(),
+        notes: found
+            .notes
+            .into_iter()
+            .chain(sensor_notes)
+            .chain(ringing_note)
+            .collect(),
         missing: Vec::new(),
         split: found.campaign.split,
         error_training: Some(error_training),
