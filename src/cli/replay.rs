@@ -128,6 +128,23 @@ impl Run for ReplayArgs {
                 .map(|y| format!(", ydd {y:.3} m/s^2"))
                 .unwrap_or_default()
         );
+        if let Some(b) = e.before_end_stop {
+            eprintln!(
+                "note: the measured stroke comes within {:.1} mm of an end stop (±{:.1} mm) at \
+                 {:.3} s; up to there ({} samples, the part a calibration fits) the RMS error \
+                 is u {:.3} mm{}. After the contact the error is mostly the stop's impact, \
+                 which the twin takes a little sooner, later or not at all with the smallest \
+                 change of a parameter",
+                1e3 * identify::data::END_STOP_MARGIN_M,
+                500.0 * params.plant.cylinder.stroke_m,
+                b.at_s,
+                b.samples,
+                1e3 * b.u,
+                b.ydd
+                    .map(|y| format!(", ydd {y:.3} m/s^2"))
+                    .unwrap_or_default()
+            );
+        }
         Ok(Outcome::Done)
     }
 }

@@ -128,6 +128,13 @@ pub const END_STOP_MARGIN_M: f64 = 1.0e-3;
 /// a record that reaches a stop sooner is left out.
 pub const MIN_BEFORE_END_STOP_S: f64 = 0.5;
 
+/// The first sample of a measured stroke `u` \[m\] that comes within [`END_STOP_MARGIN_M`] of
+/// an end stop (`±stroke_m/2`), if any: where [`before_end_stops`] cuts a record.
+pub fn first_end_stop_contact(u: &[f64], stroke_m: f64) -> Option<usize> {
+    let limit = 0.5 * stroke_m - END_STOP_MARGIN_M;
+    u.iter().position(|x| x.abs() >= limit)
+}
+
 /// The records up to their first end-stop contact, with a note for each record cut or left
 /// out. A stroke `u` that comes within [`END_STOP_MARGIN_M`] of `±stroke_m/2` ends the part
 /// that is fitted and replayed there: where the body lands on a stop depends on everything
@@ -138,14 +145,13 @@ pub const MIN_BEFORE_END_STOP_S: f64 = 0.5;
 /// whole, its cost changed by +71 % and −1 % for Cd 0.1 % lower and higher, and the search
 /// beyond the library found one of its three terms; fitted up to the contacts, all three.
 pub fn before_end_stops(records: &[Record], stroke_m: f64) -> (Vec<Record>, Vec<String>) {
-    let limit = 0.5 * stroke_m - END_STOP_MARGIN_M;
     let mut notes = Vec::new();
     let kept = records
         .iter()
         .filter_map(|r| {
             let contact =
                 r.u.as_ref()
-                    .and_then(|u| u.iter().position(|x| x.abs() >= limit));
+                    .and_then(|u| first_end_stop_contact(u, stroke_m));
             let Some(i) = contact else {
                 return Some(r.clone());
             };

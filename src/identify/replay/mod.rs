@@ -63,7 +63,7 @@ pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
 mod errors;
 mod streamed;
 pub use errors::{ChannelErrors, RawChannel, RawErrors};
-pub use streamed::{StreamedErrors, replay_streamed};
+pub use streamed::{BeforeEndStop, StreamedErrors, replay_streamed};
 
 /// Cut-off of the zero-phase low-pass applied to the recorded platform motion before it drives
 /// the twin [Hz] (see the [module docs](self)); at most 0.3 × the sample rate.

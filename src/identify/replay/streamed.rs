@@ -22,6 +22,24 @@ pub struct StreamedErrors {
     pub u: f64,
     /// RMS error of the filtered body acceleration [m/s²], if measured.
     pub ydd: Option<f64>,
+    /// The same errors up to the measured stroke's first end-stop contact, when it has one.
+    pub before_end_stop: Option<BeforeEndStop>,
+}
+
+/// The errors of a replay up to the measured stroke's first end-stop contact
+/// ([`crate::identify::data::first_end_stop_contact`]): the part of the record a calibration
+/// fits and replays. After the contact the error is mostly the stop's impact, which the twin
+/// takes a little sooner, later or not at all with the smallest change of a parameter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BeforeEndStop {
+    /// Time of the contact from the record's start [s].
+    pub at_s: f64,
+    /// Samples before the contact.
+    pub samples: usize,
+    /// RMS error of the relative displacement over those samples [m].
+    pub u: f64,
+    /// RMS error of the filtered body acceleration over those samples [m/s²], if measured.
+    pub ydd: Option<f64>,
 }
 
 /// [`crate::identify::replay()`] of a long record in bounded memory: every sample of the twin goes to `sample`
@@ -73,6 +91,10 @@ pub fn replay_streamed(
         (sum / a.len().max(1) as f64).sqrt()
     };
     let u = diff_rms(&u_sim, &u_meas);
+    let contact =
+        crate::identify::data::first_end_stop_contact(&u_meas, params.plant.cylinder.stroke_m)
+            .filter(|&c| c > 0);
+    let u_before = contact.map(|c| diff_rms(&u_sim[..c], &u_meas[..c]));
     let du_meas_f = filtered_derivative(&u_meas, dt, lowpass_hz);
     drop(u_meas);
     let du_sim_f = filtered_derivative(&u_sim, dt, lowpass_hz);
@@ -80,9 +102,18 @@ pub fn replay_streamed(
     let du = diff_rms(&du_sim_f, &du_meas_f);
     let du_nrmse = du / rms(&du_meas_f).max(1e-12);
     drop((du_sim_f, du_meas_f));
-    let ydd = record.ydd.take().map(|ym| {
+    let ydd_filtered = record.ydd.take().map(|ym| {
         let ym = lowpass(&ym, dt, lowpass_hz);
-        diff_rms(&lowpass(&ydd_sim, dt, lowpass_hz), &ym)
+        (lowpass(&ydd_sim, dt, lowpass_hz), ym)
+    });
+    let ydd = ydd_filtered.as_ref().map(|(s, m)| diff_rms(s, m));
+    let before_end_stop = contact.zip(u_before).map(|(c, u)| BeforeEndStop {
+        at_s: record.t[c] - record.t[0],
+        samples: c,
+        u,
+        ydd: ydd_filtered
+            .as_ref()
+            .map(|(s, m)| diff_rms(&s[..c], &m[..c])),
     });
     Ok(StreamedErrors {
         samples: len,
@@ -90,6 +121,7 @@ pub fn replay_streamed(
         du_nrmse,
         u,
         ydd,
+        before_end_stop,
     })
 }
 
@@ -127,5 +159,36 @@ mod tests {
             (h.du, h.du_nrmse, h.u, h.ydd)
         );
         assert_eq!(e.samples, h.samples);
+        assert_eq!(e.before_end_stop, None);
+    }
+
+    /// A measured stroke that reaches an end stop: the errors up to the contact are those of
+    /// the record cut there (the cut a calibration makes), replayed on its own; the stroke's
+    /// bit for bit (the twin runs forward in time), the filtered ÿ's to its filter's edge.
+    #[test]
+    fn errors_up_to_an_end_stop_contact_are_those_of_the_record_cut_there() {
+        let params = crate::identify::testdata::true_params();
+        let mut rec = crate::identify::testdata::twin_record(&params, 2.0, "a.csv");
+        let stroke = Params::paper().plant.cylinder.stroke_m;
+        let contact = 1500;
+        if let Some(u) = rec.u.as_mut() {
+            u[contact] = 0.5 * stroke - 0.5e-3;
+        }
+        let e = replay_streamed(
+            &Params::paper(),
+            rec.clone(),
+            &MetricOptions::default(),
+            |_, _| {},
+        )
+        .unwrap();
+        let b = e.before_end_stop.expect("a contact");
+        assert_eq!(b.samples, contact);
+        assert!((b.at_s - 1.5).abs() < 1e-12, "{}", b.at_s);
+        let cut = crate::identify::replay(&Params::paper(), &rec.truncated(contact)).unwrap();
+        assert_eq!(b.u, cut.errors.u);
+        let (y, yc) = (b.ydd.unwrap(), cut.errors.ydd.unwrap());
+        assert!((y / yc - 1.0).abs() < 0.05, "{y} against {yc}");
+        // The whole record's errors include the sample at the stop.
+        assert!(e.u > b.u);
     }
 }

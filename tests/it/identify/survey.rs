@@ -318,6 +318,7 @@ fn randomised_rigs_confusion_table() {
     let mut params_in = 0;
     let mut misses = Vec::new();
     let mut replay_ok = 0;
+    let mut replay_ok_before_stops = 0;
     let started = std::time::Instant::now();
     // `SURVEY_CASES=1,2,19` runs only those cases (for development; the table then counts them);
     // `SURVEY_RATE_HZ=200` samples the records at 200 Hz instead of 1 kHz.
@@ -347,6 +348,20 @@ fn randomised_rigs_confusion_table() {
         let (nominal, after) = replayed_above_noise(&r, &recs);
         let halved = (0..2).all(|k| after[k] <= 0.5 * nominal[k]);
         replay_ok += usize::from(halved);
+        // The same up to the records' end-stop contacts, where a record reaches one.
+        let before_stops = replayed_above_noise_before_stops(&r, &recs);
+        let halved_before_stops =
+            before_stops.map_or(halved, |(n, a)| (0..2).all(|k| a[k] <= 0.5 * n[k]));
+        replay_ok_before_stops += usize::from(halved_before_stops);
+        let stops = before_stops.map_or(String::new(), |(n, a)| {
+            format!(
+                " (up to the end-stop contacts: u {:.1}→{:.1} µm, ÿ {:.3}→{:.3} m/s²)",
+                1e6 * n[0],
+                1e6 * a[0],
+                n[1],
+                a[1]
+            )
+        });
         if only.is_some() {
             eprintln!("case {i} in full: {}", super::rig::summary(&r));
             for n in &r.notes {
@@ -364,7 +379,7 @@ fn randomised_rigs_confusion_table() {
         let verdict_ok = r.verdict == c.class.right_verdict();
         let fx_ok = effects_right(c, &r);
         eprintln!(
-            "case {i:2} {:<30} {:<45} verdict {:<18} {} effects {:?} proposed {:?} drifts {:?} sensors {:?}; u {:.1}→{:.1} µm, ÿ {:.3}→{:.3} m/s² above noise; {secs:.1} s",
+            "case {i:2} {:<30} {:<45} verdict {:<18} {} effects {:?} proposed {:?} drifts {:?} sensors {:?}; u {:.1}→{:.1} µm, ÿ {:.3}→{:.3} m/s² above noise{stops}; {secs:.1} s",
             c.class.name(),
             c.label,
             r.verdict.name(),
@@ -431,8 +446,10 @@ fn randomised_rigs_confusion_table() {
     eprintln!(
         "\n{table}\nverdict right: {right}/{}; verdict and effects right: {both}/{}; \
          truth within 3σ: {params_in}/{params_total} fitted parameters; calibrated.toml \
-         replayed leaves ≤ ½ the nominal error above noise on u and ÿ: {replay_ok}/{}; \
-         {:.0} s\nparameters outside 3σ:\n{}",
+         replayed leaves ≤ ½ the nominal error above noise on u and ÿ: {replay_ok}/{} \
+         (whole records; up to the end-stop contacts, the part a calibration fits: \
+         {replay_ok_before_stops}/{}); {:.0} s\nparameters outside 3σ:\n{}",
+        rows.len(),
         rows.len(),
         rows.len(),
         rows.len(),
@@ -539,6 +556,17 @@ fn replayed_above_noise(
         .expect("save");
     let cal = Preset::load(&path).expect("load");
     (above_noise(&Preset::paper(), recs), above_noise(&cal, recs))
+}
+
+/// [`replayed_above_noise`] of `recs` cut at their first end-stop contact, as a calibration
+/// cuts them (`identify::data::before_end_stops`), or `None` when no record reaches a stop.
+fn replayed_above_noise_before_stops(
+    r: &CalibrationReport,
+    recs: &[seat_twin::dataset::Record],
+) -> Option<([f64; 2], [f64; 2])> {
+    let stroke = Preset::paper().params.plant.cylinder.stroke_m;
+    let (cut, notes) = identify::data::before_end_stops(recs, stroke);
+    (!notes.is_empty()).then(|| replayed_above_noise(r, &cut))
 }
 
 /// Calibrates case `i` of the draw `seed` as the survey does.
