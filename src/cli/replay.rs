@@ -117,6 +117,10 @@ impl Run for ReplayArgs {
         let Some(e) = errors else {
             anyhow::bail!("the replay of {} made no sample", data.display());
         };
+        let ydd_text = |ydd: Option<f64>| {
+            ydd.map(|y| format!(", ydd {y:.3} m/s^2"))
+                .unwrap_or_default()
+        };
         println!(
             "{} samples replayed to {}; RMS error: du {:.3} mm/s ({:.1} %), u {:.3} mm{}",
             e.samples,
@@ -124,9 +128,7 @@ impl Run for ReplayArgs {
             1e3 * e.du,
             100.0 * e.du_nrmse,
             1e3 * e.u,
-            e.ydd
-                .map(|y| format!(", ydd {y:.3} m/s^2"))
-                .unwrap_or_default()
+            ydd_text(e.ydd)
         );
         if let Some(b) = e.before_end_stop {
             eprintln!(
@@ -140,9 +142,7 @@ impl Run for ReplayArgs {
                 b.at_s,
                 b.samples,
                 1e3 * b.u,
-                b.ydd
-                    .map(|y| format!(", ydd {y:.3} m/s^2"))
-                    .unwrap_or_default()
+                ydd_text(b.ydd)
             );
         }
         Ok(Outcome::Done)

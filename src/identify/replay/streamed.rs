@@ -91,10 +91,11 @@ pub fn replay_streamed(
         (sum / a.len().max(1) as f64).sqrt()
     };
     let u = diff_rms(&u_sim, &u_meas);
+    // The first end-stop contact and u's error before it (u_meas is dropped below).
     let contact =
         crate::identify::data::first_end_stop_contact(&u_meas, params.plant.cylinder.stroke_m)
-            .filter(|&c| c > 0);
-    let u_before = contact.map(|c| diff_rms(&u_sim[..c], &u_meas[..c]));
+            .filter(|&c| c > 0)
+            .map(|c| (c, diff_rms(&u_sim[..c], &u_meas[..c])));
     let du_meas_f = filtered_derivative(&u_meas, dt, lowpass_hz);
     drop(u_meas);
     let du_sim_f = filtered_derivative(&u_sim, dt, lowpass_hz);
@@ -107,7 +108,7 @@ pub fn replay_streamed(
         (lowpass(&ydd_sim, dt, lowpass_hz), ym)
     });
     let ydd = ydd_filtered.as_ref().map(|(s, m)| diff_rms(s, m));
-    let before_end_stop = contact.zip(u_before).map(|(c, u)| BeforeEndStop {
+    let before_end_stop = contact.map(|(c, u)| BeforeEndStop {
         at_s: record.t[c] - record.t[0],
         samples: c,
         u,
