@@ -42,8 +42,8 @@ pub enum Stage {
     },
     /// Every drift candidate fitted on each record alone ([`super::drift`]).
     Drifts,
-    /// The mass searched again for the oil column's ringing ([`super::ringing`]; only when
-    /// the calibrated twin rings out of time with the records).
+    /// The mass or the oil's stiffness searched again for the oil column's ringing
+    /// ([`super::ringing`]; only when the calibrated twin rings out of time with the records).
     Ringing,
     /// Final replays at the preset's step, errors, diagnostics and the verdict.
     Report,
@@ -68,7 +68,9 @@ impl fmt::Display for Stage {
                 write!(f, "corrections beyond the library (round {round})")
             }
             Stage::Drifts => f.write_str("parameters record by record (drifts)"),
-            Stage::Ringing => f.write_str("the mass against the oil column's ringing"),
+            Stage::Ringing => {
+                f.write_str("the mass or the oil's stiffness against the oil column's ringing")
+            }
             Stage::Report => f.write_str("diagnostics"),
         }
     }

@@ -392,7 +392,7 @@ pub fn report(
     let replays_after = replay_all(&current.params, all)?;
     let sims_after: Vec<_> = replays_after.iter().map(|r| &r.sim).collect();
     let raw_error_after = raw_error_report(all, &sims_after, options.raw_error_limit);
-    let (replays_after, raw_error_after, ringing_note) = match super::ringing::refine_mass(
+    let (replays_after, raw_error_after, ringing_note) = match super::ringing::refine_for_ringing(
         &mut current,
         all,
         &raw_error_after,

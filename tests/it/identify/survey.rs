@@ -730,3 +730,43 @@ fn a_mistimed_ringing_at_200_hz_puts_the_mass_on_the_rigs() {
         "above the noise, u and ÿ: nominal {nominal:?}, calibrated {after:?}"
     );
 }
+
+/// Case 20 of the 2024 draw at 200 Hz (a 37 µm overlap beside hoses at 0.61 GPa, chambers
+/// at 0.9): `explained` with both effects and every band at its floor, but the calibrated
+/// hoses read 0.642 GPa (inside their 1-σ of 0.056), so the oil column's ringing after each
+/// command step ran out of time with the records: sample by sample 220× the noise above
+/// 25 Hz, and the replayed ÿ 6.0 m/s² above the noise against 9.6 nominal. The mass is not
+/// fitted here, so its search for the ringing did nothing; the hoses' modulus is now searched
+/// the same way, within 2σ, and lands on the rig's: the replay halves the error.
+#[test]
+fn a_mistimed_ringing_at_200_hz_puts_soft_hoses_on_the_rigs() {
+    let (seed, i) = (2024, 20);
+    let c = cases(seed).swap_remove(i);
+    let recs = records_at(seed, i, &c, 200.0);
+    let r = calibrate_paper(&recs);
+    let s = super::rig::summary(&r);
+    assert!(effects_right(&c, &r), "{s}");
+    assert_eq!(r.verdict, Verdict::Explained, "{s}");
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.contains("hoses' bulk modulus, searched again")),
+        "{:?}",
+        r.notes
+    );
+    let compliance = r
+        .effects
+        .iter()
+        .find(|e| e.effect == EffectId::Compliance)
+        .expect("compliance found");
+    let hose = c.fx.compliance.expect("a compliance rig").0;
+    let name = "hose_bulk_modulus_pa";
+    let (value, std) = (compliance.params[name], compliance.uncertainties[name]);
+    assert!((value / hose - 1.0).abs() < 0.02, "{compliance:?}");
+    assert!((value - hose).abs() < 3.0 * std, "{compliance:?}");
+    let (nominal, after) = replayed_above_noise(&r, &recs);
+    assert!(
+        (0..2).all(|k| after[k] <= 0.5 * nominal[k]),
+        "above the noise, u and ÿ: nominal {nominal:?}, calibrated {after:?}"
+    );
+}
