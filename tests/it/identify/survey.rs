@@ -705,10 +705,7 @@ fn a_growing_leakage_beside_an_offset_is_refitted_from_several_growths() {
 /// halves the nominal error on u and ÿ; the verdict stays `no_missing_effect`.
 #[test]
 fn a_mistimed_ringing_at_200_hz_puts_the_mass_on_the_rigs() {
-    let (seed, i) = (2026, 12);
-    let c = cases(seed).swap_remove(i);
-    let recs = records_at(seed, i, &c, 200.0);
-    let r = calibrate_paper(&recs);
+    let (_, recs, r) = calibrated_at_200_hz(2026, 12);
     let s = super::rig::summary(&r);
     assert_eq!(r.verdict, Verdict::NoMissingEffect, "{s}");
     assert!(
@@ -724,11 +721,7 @@ fn a_mistimed_ringing_at_200_hz_puts_the_mass_on_the_rigs() {
     let truth = seat_twin::params::Params::paper().plant.body.mass_kg;
     assert!((mass.value / truth - 1.0).abs() < 0.005, "{mass:?}");
     assert!((mass.value - truth).abs() < 3.0 * mass.std, "{mass:?}");
-    let (nominal, after) = replayed_above_noise(&r, &recs);
-    assert!(
-        (0..2).all(|k| after[k] <= 0.5 * nominal[k]),
-        "above the noise, u and ÿ: nominal {nominal:?}, calibrated {after:?}"
-    );
+    assert_replay_halves(&r, &recs);
 }
 
 /// Case 20 of the 2024 draw at 200 Hz (a 37 µm overlap beside hoses at 0.61 GPa, chambers
@@ -740,10 +733,7 @@ fn a_mistimed_ringing_at_200_hz_puts_the_mass_on_the_rigs() {
 /// the same way, within 2σ, and lands on the rig's: the replay halves the error.
 #[test]
 fn a_mistimed_ringing_at_200_hz_puts_soft_hoses_on_the_rigs() {
-    let (seed, i) = (2024, 20);
-    let c = cases(seed).swap_remove(i);
-    let recs = records_at(seed, i, &c, 200.0);
-    let r = calibrate_paper(&recs);
+    let (c, recs, r) = calibrated_at_200_hz(2024, 20);
     let s = super::rig::summary(&r);
     assert!(effects_right(&c, &r), "{s}");
     assert_eq!(r.verdict, Verdict::Explained, "{s}");
@@ -764,7 +754,24 @@ fn a_mistimed_ringing_at_200_hz_puts_soft_hoses_on_the_rigs() {
     let (value, std) = (compliance.params[name], compliance.uncertainties[name]);
     assert!((value / hose - 1.0).abs() < 0.02, "{compliance:?}");
     assert!((value - hose).abs() < 3.0 * std, "{compliance:?}");
-    let (nominal, after) = replayed_above_noise(&r, &recs);
+    assert_replay_halves(&r, &recs);
+}
+
+/// Case `i` of the draw `seed`, its records sampled at 200 Hz, and their calibration.
+fn calibrated_at_200_hz(
+    seed: u64,
+    i: usize,
+) -> (Case, Vec<seat_twin::dataset::Record>, CalibrationReport) {
+    let c = cases(seed).swap_remove(i);
+    let recs = records_at(seed, i, &c, 200.0);
+    let r = calibrate_paper(&recs);
+    (c, recs, r)
+}
+
+/// `r`'s calibrated.toml, replayed on `recs`, leaves at most half the nominal error above the
+/// noise on u and ÿ.
+fn assert_replay_halves(r: &CalibrationReport, recs: &[seat_twin::dataset::Record]) {
+    let (nominal, after) = replayed_above_noise(r, recs);
     assert!(
         (0..2).all(|k| after[k] <= 0.5 * nominal[k]),
         "above the noise, u and ÿ: nominal {nominal:?}, calibrated {after:?}"
