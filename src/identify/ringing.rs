@@ -75,7 +75,7 @@ pub struct RingingRefined {
 
 /// The parameters that set the oil column's mode and that the channels below
 /// [`OIL_COLUMN_BAND_HZ`] leave least sure: the mass, and the oil's stiffness through the
-/// compliance's moduli (the hoses' when they have their own, the chambers' otherwise).
+/// compliance's moduli (the chambers', and the hoses' when they have their own).
 pub const MODE_KNOBS: [Knob; 3] = [Knob::Mass, Knob::HoseCompliance, Knob::Compliance];
 
 impl RingingRefined {
