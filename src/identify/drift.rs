@@ -12,7 +12,12 @@
 //!    order of magnitude at least [`DRIFT_MIN_RANK_CORRELATION`]; 3 records: monotone), as a
 //!    warming or a wearing does.
 //!
-//! A scatter that fails 3 is the mark of a model-form error (the parameter absorbs an effect
+//! With four records or more, 1 and 2 must also hold with any one record left out: a drift
+//! moves every record, while one record that a model-form error sets apart (the random ride
+//! among sines, last in the campaign's order) lifts the χ² and, by its place, the rank
+//! correlation too.
+//!
+//! A scatter that fails 3 (or the test without one record) is the mark of a model-form error (the parameter absorbs an effect
 //! that depends on the test's amplitude or frequency), not of a drift: it is noted, not
 //! reported as a drift.
 
@@ -88,20 +93,42 @@ pub fn is_drift(values: &[f64], stds: &[f64]) -> Option<(f64, f64)> {
     if values.len() < DRIFT_MIN_RECORDS || stds.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
         return None;
     }
-    let (chi2, mean) = scatter(values, stds);
-    let (lo, hi) = values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(*v), b.max(*v))
-        });
+    let (chi2, _) = scatter(values, stds);
     let rho = rank_correlation(values);
     let ordered = if values.len() == 3 {
         rho.abs() > 0.99
     } else {
         rho.abs() >= DRIFT_MIN_RANK_CORRELATION
     };
-    (chi2 > DRIFT_CHI2 && (hi - lo) > DRIFT_MIN_RELATIVE_RANGE * mean.abs() && ordered)
-        .then_some((chi2, rho))
+    (large_scatter(values, stds) && ordered && not_one_record(values, stds)).then_some((chi2, rho))
+}
+
+/// Criteria 1 and 2 of the [module docs](self): a scatter beyond the uncertainties and a range
+/// beyond [`DRIFT_MIN_RELATIVE_RANGE`] of the mean.
+fn large_scatter(values: &[f64], stds: &[f64]) -> bool {
+    let (chi2, mean) = scatter(values, stds);
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(*v), b.max(*v))
+        });
+    chi2 > DRIFT_CHI2 && (hi - lo) > DRIFT_MIN_RELATIVE_RANGE * mean.abs()
+}
+
+/// Whether [`large_scatter`] holds with each record left out in turn (four records or more;
+/// with three, one left out leaves too few to tell).
+fn not_one_record(values: &[f64], stds: &[f64]) -> bool {
+    values.len() <= DRIFT_MIN_RECORDS
+        || (0..values.len()).all(|i| {
+            let rest = |x: &[f64]| -> Vec<f64> {
+                x.iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != i)
+                    .map(|(_, v)| *v)
+                    .collect()
+            };
+            large_scatter(&rest(values), &rest(stds))
+        })
 }
 
 /// Per-record fits of every drift candidate of `params` on `records` (whole records, in the
@@ -185,8 +212,9 @@ pub fn find(
                 if chi2 > DRIFT_CHI2 && values.len() >= DRIFT_MIN_RECORDS {
                     notes.push(format!(
                         "`{name}` fitted on each record alone scatters more than its \
-                         uncertainty (χ²/dof = {chi2:.0}) but without a trend through the \
-                         campaign, so it is reported as model-form error, not as a drift: {}",
+                         uncertainty (χ²/dof = {chi2:.0}) but not as a trend through the \
+                         campaign (none, or only one record set apart), so it is reported as \
+                         model-form error, not as a drift: {}",
                         listed.join(", ")
                     ));
                 }
@@ -242,5 +270,22 @@ mod tests {
         // Too few records.
         assert!(is_drift(&v[..2], &s[..2]).is_none());
         assert!((rank_correlation(&[3.0, 2.0, 1.0]) + 1.0).abs() < 1e-12);
+    }
+
+    /// The chambers' modulus fitted record by record on case 25 of the 2025 survey draw at
+    /// 200 Hz (soft hoses, the split between hoses and chambers not told by the sines): four
+    /// sines agree, the ride, last in the campaign, reads a third higher. Ordered by its place
+    /// (rank correlation 0.9) and far beyond the uncertainties, but one record: not a drift.
+    #[test]
+    fn one_record_apart_is_not_a_drift() {
+        let v = [0.669e9, 0.661e9, 0.6712e9, 0.6733e9, 0.8963e9];
+        let s = [0.045e9, 0.081e9, 0.0049e9, 0.0065e9, 0.0095e9];
+        assert!(rank_correlation(&v) >= DRIFT_MIN_RANK_CORRELATION);
+        assert!(scatter(&v, &s).0 > DRIFT_CHI2);
+        assert!(is_drift(&v, &s).is_none());
+        // A drift of one record in five, as in the survey's drift rigs (Cd +3 % per record),
+        // stays a drift with any record left out.
+        let cd: Vec<f64> = (0..5).map(|i| 0.15 * (1.0 + 0.03 * i as f64)).collect();
+        assert!(is_drift(&cd, &[2e-4; 5]).is_some());
     }
 }

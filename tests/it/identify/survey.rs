@@ -638,13 +638,16 @@ fn softer_hoses_beside_an_overlap_are_found_on_a_fine_modulus_grid() {
 }
 
 /// Case 20 of the development draw at 200 Hz (a 39 µm overlap beside hoses at 0.61 GPa, the
-/// chambers as declared): compliance removed 36 % of the residual after the overlap, under
-/// the 40 % bar, and was tried on the raw error (worst band 10.8× its floor → 2.2×). It was
-/// refused as "of no size", because the rule read only the chambers' modulus, which the re-fit
-/// rightly left at the oil's. Compliance's size is now either modulus: `explained`, the hoses
-/// within 3σ of the rig's.
+/// chambers as declared). On compliance's two-dimensional start grid it removed 36 % of the
+/// residual after the overlap, under the 40 % bar, and was tried on the raw error (worst band
+/// 10.8× its floor → 2.2×); it was then refused as "of no size", because that rule read only
+/// the chambers' modulus, which the re-fit rightly left at the oil's (fixed: either modulus
+/// is compliance's size). Since the grid runs along the total compliance (2026-11-29) its
+/// screening fit clears the bar by itself, so this case no longer takes the raw-error path.
+/// It now takes the hoses' own search for the oil column's ringing (the fit's hoses, 0.593
+/// GPa, mistime it): `explained`, the hoses within 2 % and 3σ of the rig's.
 #[test]
-fn soft_hoses_tried_on_the_raw_error_count_by_the_hoses_modulus() {
+fn soft_hoses_beside_an_overlap_at_200_hz_are_found_and_their_ringing_timed() {
     let (seed, i) = (2020, 20);
     let c = cases(seed).swap_remove(i);
     let r = calibrate_paper(&records_at(seed, i, &c, 200.0));
@@ -654,7 +657,7 @@ fn soft_hoses_tried_on_the_raw_error_count_by_the_hoses_modulus() {
     assert!(
         r.notes
             .iter()
-            .any(|n| n.contains("`compliance` removed") && n.ends_with(": added")),
+            .any(|n| n.contains("hoses' bulk modulus, searched again")),
         "{:?}",
         r.notes
     );
@@ -668,6 +671,7 @@ fn soft_hoses_tried_on_the_raw_error_count_by_the_hoses_modulus() {
         compliance.params["hose_bulk_modulus_pa"],
         compliance.uncertainties["hose_bulk_modulus_pa"],
     );
+    assert!((value / hose - 1.0).abs() < 0.02, "{compliance:?}");
     assert!((value - hose).abs() < 3.0 * std, "{compliance:?}");
 }
 
@@ -726,34 +730,51 @@ fn a_mistimed_ringing_at_200_hz_puts_the_mass_on_the_rigs() {
 
 /// Case 20 of the 2024 draw at 200 Hz (a 37 µm overlap beside hoses at 0.61 GPa, chambers
 /// at 0.9): `explained` with both effects and every band at its floor, but the calibrated
-/// hoses read 0.642 GPa (inside their 1-σ of 0.056), so the oil column's ringing after each
-/// command step ran out of time with the records: sample by sample 220× the noise above
-/// 25 Hz, and the replayed ÿ 6.0 m/s² above the noise against 9.6 nominal. The mass is not
-/// fitted here, so its search for the ringing did nothing; the hoses' modulus is now searched
-/// the same way, within 2σ, and lands on the rig's: the replay halves the error.
+/// hoses once read 0.642 GPa (inside their 1-σ of 0.056), so the oil column's ringing after
+/// each command step ran out of time with the records: sample by sample 220× the noise above
+/// 25 Hz, and the replayed ÿ 6.0 m/s² above the noise against 9.6 nominal. The moduli are
+/// searched again for that ringing (`identify::ringing`). The records see the total
+/// compliance of hoses and chambers, not its split (the report says the two trade off), so
+/// the test holds the total against the rig's: the oil column's stiffness within 2 %, each
+/// modulus within 3σ, and the calibrated.toml, replayed, halves the nominal error.
 #[test]
-fn a_mistimed_ringing_at_200_hz_puts_soft_hoses_on_the_rigs() {
+fn a_mistimed_ringing_at_200_hz_puts_the_oil_stiffness_on_the_rigs() {
     let (c, recs, r) = calibrated_at_200_hz(2024, 20);
     let s = super::rig::summary(&r);
     assert!(effects_right(&c, &r), "{s}");
     assert_eq!(r.verdict, Verdict::Explained, "{s}");
     assert!(
-        r.notes
-            .iter()
-            .any(|n| n.contains("hoses' bulk modulus, searched again")),
+        r.notes.iter().any(|n| n.contains("searched again")),
         "{:?}",
         r.notes
     );
-    let compliance = r
+    let (hoses, chambers) = c.fx.compliance.expect("a compliance rig");
+    let mut rig = seat_twin::params::Params::paper();
+    let compliance = &mut rig.plant.effects.compliance;
+    compliance.enabled = true;
+    compliance.effective_bulk_modulus_pa = chambers;
+    compliance.hose_bulk_modulus_pa = hoses;
+    let total = |p: &seat_twin::params::Params| {
+        let d = seat_twin::params::derived(p);
+        d.c_chamber + d.c_hose
+    };
+    let ratio = total(&r.params) / total(&rig);
+    assert!(
+        (ratio - 1.0).abs() < 0.02,
+        "total compliance {ratio} of the rig's; {s}"
+    );
+    let fitted = r
         .effects
         .iter()
         .find(|e| e.effect == EffectId::Compliance)
         .expect("compliance found");
-    let hose = c.fx.compliance.expect("a compliance rig").0;
-    let name = "hose_bulk_modulus_pa";
-    let (value, std) = (compliance.params[name], compliance.uncertainties[name]);
-    assert!((value / hose - 1.0).abs() < 0.02, "{compliance:?}");
-    assert!((value - hose).abs() < 3.0 * std, "{compliance:?}");
+    for (name, truth) in [
+        ("effective_bulk_modulus_pa", chambers),
+        ("hose_bulk_modulus_pa", hoses),
+    ] {
+        let (value, std) = (fitted.params[name], fitted.uncertainties[name]);
+        assert!((value - truth).abs() < 3.0 * std, "{name}: {fitted:?}");
+    }
     assert_replay_halves(&r, &recs);
 }
 
