@@ -17,9 +17,9 @@
 //! among sines, last in the campaign's order) lifts the χ² and, by its place, the rank
 //! correlation too.
 //!
-//! A scatter that fails 3 (or the test without one record) is the mark of a model-form error (the parameter absorbs an effect
-//! that depends on the test's amplitude or frequency), not of a drift: it is noted, not
-//! reported as a drift.
+//! A scatter that fails 3 (or the test without one record) is the mark of a model-form error
+//! (the parameter absorbs an effect that depends on the test's amplitude or frequency), not
+//! of a drift: it is noted, not reported as a drift.
 
 use super::IdentifyError;
 use super::fit::{self, Evaluator, Knob};
