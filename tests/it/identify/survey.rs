@@ -321,7 +321,8 @@ fn randomised_rigs_confusion_table() {
     let mut replay_ok_before_stops = 0;
     let started = std::time::Instant::now();
     // `SURVEY_CASES=1,2,19` runs only those cases (for development; the table then counts them);
-    // `SURVEY_RATE_HZ=200` samples the records at 200 Hz instead of 1 kHz.
+    // `SURVEY_RATE_HZ=200` samples the records at 200 Hz instead of 1 kHz; `SURVEY_OUT=dir`
+    // writes each case's report (below).
     let only: Option<Vec<usize>> = std::env::var("SURVEY_CASES")
         .ok()
         .map(|v| v.split(',').filter_map(|s| s.trim().parse().ok()).collect());
@@ -362,6 +363,12 @@ fn randomised_rigs_confusion_table() {
                 a[1]
             )
         });
+        // `SURVEY_OUT=dir` writes each case's report, calibrated.toml and plots into
+        // `dir/case-NN` (for development: to look at a case's residuals).
+        if let Ok(out) = std::env::var("SURVEY_OUT") {
+            let dir = std::path::Path::new(&out).join(format!("case-{i:02}"));
+            identify::report::write_all(&r, &dir, Some(secs)).expect("report written");
+        }
         if only.is_some() {
             eprintln!("case {i} in full: {}", super::rig::summary(&r));
             for n in &r.notes {
