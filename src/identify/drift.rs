@@ -93,26 +93,26 @@ pub fn is_drift(values: &[f64], stds: &[f64]) -> Option<(f64, f64)> {
     if values.len() < DRIFT_MIN_RECORDS || stds.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
         return None;
     }
-    let (chi2, _) = scatter(values, stds);
+    let chi2 = large_scatter(values, stds)?;
     let rho = rank_correlation(values);
     let ordered = if values.len() == 3 {
         rho.abs() > 0.99
     } else {
         rho.abs() >= DRIFT_MIN_RANK_CORRELATION
     };
-    (large_scatter(values, stds) && ordered && not_one_record(values, stds)).then_some((chi2, rho))
+    (ordered && not_one_record(values, stds)).then_some((chi2, rho))
 }
 
 /// Criteria 1 and 2 of the [module docs](self): a scatter beyond the uncertainties and a range
-/// beyond [`DRIFT_MIN_RELATIVE_RANGE`] of the mean.
-fn large_scatter(values: &[f64], stds: &[f64]) -> bool {
+/// beyond [`DRIFT_MIN_RELATIVE_RANGE`] of the mean; the χ²/dof where both hold.
+fn large_scatter(values: &[f64], stds: &[f64]) -> Option<f64> {
     let (chi2, mean) = scatter(values, stds);
     let (lo, hi) = values
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
             (a.min(*v), b.max(*v))
         });
-    chi2 > DRIFT_CHI2 && (hi - lo) > DRIFT_MIN_RELATIVE_RANGE * mean.abs()
+    (chi2 > DRIFT_CHI2 && (hi - lo) > DRIFT_MIN_RELATIVE_RANGE * mean.abs()).then_some(chi2)
 }
 
 /// Whether [`large_scatter`] holds with each record left out in turn (four records or more;
@@ -127,7 +127,7 @@ fn not_one_record(values: &[f64], stds: &[f64]) -> bool {
                     .map(|(_, v)| *v)
                     .collect()
             };
-            large_scatter(&rest(values), &rest(stds))
+            large_scatter(&rest(values), &rest(stds)).is_some()
         })
 }
 
