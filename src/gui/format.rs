@@ -3,7 +3,7 @@
 //! optimiser's stop reason in words.
 
 pub use crate::format::{compact, value_pm};
-use crate::identify::effects::REFINEMENTS;
+use crate::identify::refine::REFINEMENTS;
 use crate::params::Params;
 
 /// Symbol, display scale (display = SI × scale), unit of a fitted parameter by its report

@@ -8,6 +8,7 @@ use super::evaluate::{replay_all, weighted_of, with_numerics_of};
 use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
 use super::progress::Stage;
 use super::raw_error::{RawErrorReport, raw_error_report};
+use super::refine::{self, REFINEMENT_MAX_RAW_RATIO, REFINEMENT_MIN_DBIC};
 use super::replay::{PreparedRecord, SimChannels, rms};
 use super::result::CandidateScore;
 use super::{CalibrationOptions, EffectId, IdentifyError};
@@ -274,7 +275,7 @@ pub struct Trial {
     /// Whether it lowers the held-out error by at least
     /// [`CalibrationOptions::min_validation_gain`] (a NaN error does not).
     pub improves: bool,
-    /// Refinements of the effect's law ([`REFINEMENTS`]) the first re-fit left uncertain and
+    /// Refinements of the effect's law ([`REFINEMENTS`](refine::REFINEMENTS)) the first re-fit left uncertain and
     /// the criterion did not keep, with that fit's value and uncertainty: the plain law was
     /// re-fitted instead.
     pub pinned: Vec<FittedValue>,
@@ -320,62 +321,11 @@ pub fn try_effect(
             }
         }
     }
-    // A leakage growth the re-fit leaves uncertain may have stopped in the wrong valley (on
-    // its bound, the coefficient near zero: a law all quadratic in Δp): the re-fit also starts
-    // from growths over two decades, the leakage at 5 MPa kept, and the deepest is kept.
-    if best.effect == EffectId::Leakage
-        && refit
-            .values
-            .iter()
-            .any(|v| v.knob == Knob::LeakageGrowth && !v.is_determined())
-    {
-        let l = refit.params.plant.effects.leakage;
-        let at_ref = l.coefficient_m3_per_s_pa * (1.0 + l.growth_per_pa * LEAKAGE_REF_DP_PA);
-        for growth in [1e-8, 3e-8, 1e-7, 3e-7] {
-            let mut p = refit.params;
-            p.plant.effects.leakage.growth_per_pa = growth;
-            p.plant.effects.leakage.coefficient_m3_per_s_pa =
-                at_ref / (1.0 + growth * LEAKAGE_REF_DP_PA);
-            let again = refit_from(&p, &trial_knobs)?;
-            if again.rss < refit.rss {
-                refit = again;
-            }
-        }
+    if best.effect == EffectId::Leakage {
+        refit = refine::with_growth_starts(cx, refit, &trial_knobs)?;
     }
-    // A refinement the records leave uncertain is weighed against the plain law: the plain
-    // law re-fitted is kept unless the refinement lowers the criterion by more than
-    // REFINEMENT_MIN_DBIC or the raw error's worst band by a quarter (rather than reporting a
-    // value of either sign, or a trade-off between two moduli the records cannot tell apart).
-    let uncertain: Vec<FittedValue> = refit
-        .values
-        .iter()
-        .filter(|v| REFINEMENTS.contains(&v.knob) && !v.is_determined())
-        .cloned()
-        .collect();
-    let mut pinned = Vec::new();
-    if !uncertain.is_empty() {
-        let mut plain = refit.params;
-        for v in &uncertain {
-            v.knob.set(&mut plain, 0.0);
-        }
-        let mut plain_knobs = trial_knobs.clone();
-        plain_knobs.retain(|k| uncertain.iter().all(|v| v.knob != *k));
-        let plain_fit = refit_from(&plain, &plain_knobs)?;
-        let gain = cx.bic.value(refit.rss, trial_knobs.len())
-            - cx.bic.value(plain_fit.rss, plain_knobs.len());
-        // The fit's metric is low-passed and weighted; the verdict's raw measure may see what
-        // the refinement explains (a leakage growing with Δp drifts the stroke slowly).
-        let raw_gain = || -> Result<f64, IdentifyError> {
-            let refined = worst_raw_ratio(cx, campaign, preset, &refit.params)?;
-            let plain = worst_raw_ratio(cx, campaign, preset, &plain_fit.params)?;
-            Ok(refined / plain)
-        };
-        if gain > REFINEMENT_MIN_DBIC && raw_gain()? > REFINEMENT_MAX_RAW_RATIO {
-            refit = plain_fit;
-            trial_knobs = plain_knobs;
-            pinned = uncertain;
-        }
-    }
+    let weighed = refine::weigh(cx, campaign, preset, refit, trial_knobs)?;
+    let (refit, trial_knobs, pinned) = (weighed.fit, weighed.knobs, weighed.pinned);
     let validation_rms = validation_rms(&refit.params, cx.validation)?;
     ev.monitor.advance();
     Ok(Trial {
@@ -386,26 +336,6 @@ pub fn try_effect(
         pinned,
     })
 }
-
-/// Knobs that refine an effect's law beyond its size: hoses softer than the chambers, a
-/// leakage coefficient growing with the pressure across the piston. Where the records leave
-/// one uncertain (a 1-σ over half its value) and it earns its place neither by the criterion
-/// (ΔBIC < −10) nor on the raw error (its worst band a quarter lower), the effect keeps its
-/// plain law (one modulus for hoses and chambers, a fixed gap).
-pub const REFINEMENTS: [Knob; 2] = [Knob::HoseCompliance, Knob::LeakageGrowth];
-
-/// ΔBIC (refined law against plain law) below which an uncertain refinement is kept: −10,
-/// "very strong" on the usual scale, as for the sensor properties.
-const REFINEMENT_MIN_DBIC: f64 = -10.0;
-
-/// Largest ratio of the refined law's worst raw band ([`worst_raw_ratio`]) to the plain
-/// law's at which an uncertain refinement is kept on the raw measure alone: it must take a
-/// quarter off.
-const REFINEMENT_MAX_RAW_RATIO: f64 = 0.75;
-
-/// Pressure difference at which a leakage re-fit's extra starts keep the fitted leakage
-/// [Pa]: 5 MPa, a typical |Δp| across the piston in the tests.
-const LEAKAGE_REF_DP_PA: f64 = 5e6;
 
 /// The raw error ([`raw_error`](super::raw_error), the verdict's measure) of `p` replayed
 /// on every record at the preset's step.
@@ -426,7 +356,7 @@ pub fn raw_error_at(
 
 /// The largest ratio of the raw error to its noise floor in any band of any record
 /// ([`raw_error_at`]).
-fn worst_raw_ratio(
+pub(super) fn worst_raw_ratio(
     cx: &SearchContext<'_>,
     campaign: &Campaign,
     preset: &Params,
@@ -546,6 +476,7 @@ pub fn search(
     let mut added: Vec<Added> = Vec::new();
     let mut candidates = Vec::new();
     let mut notes = Vec::new();
+    let mut pinned = Vec::new();
     let mut remaining: Vec<EffectId> = options
         .candidates
         .iter()
@@ -759,6 +690,7 @@ pub fn search(
                 }
             ));
         }
+        pinned.extend(trial.pinned);
         knobs = trial.knobs;
         added.push(Added {
             effect: best.effect,
@@ -768,6 +700,14 @@ pub fn search(
         });
         current = trial.refit;
         current_val = trial_val;
+    }
+    let revisited = refine::revisit(cx, campaign, params, &current, &knobs, &pinned, current_val)?;
+    if let Some(r) = revisited {
+        notes.push(r.note);
+        if r.kept {
+            current = r.fit;
+            knobs = r.knobs;
+        }
     }
     // The hoses' and chambers' moduli, where both were fitted: their split's profile.
     let split = super::profile::hose_split(

@@ -86,6 +86,7 @@ pub mod profile;
 pub mod progress;
 pub mod proposed;
 pub mod raw_error;
+pub mod refine;
 pub mod replay;
 pub mod report;
 pub mod result;
