@@ -20,3 +20,4 @@ mod effects;
 mod records;
 mod rig;
 mod survey;
+mod survey_cases;
