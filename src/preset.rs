@@ -210,10 +210,13 @@ pub enum PresetError {
         message: String,
     },
     /// A value outside its range.
-    #[error("{file}: {error}")]
+    #[error("{file}: {}{error}", located(*.at))]
     Invalid {
         /// The file.
         file: PathBuf,
+        /// 1-based line and column of the value, where the file sets it (a default that
+        /// another value puts out of range has none).
+        at: Option<(usize, usize)>,
         /// The range error.
         error: ParamError,
     },
@@ -227,6 +230,43 @@ pub enum PresetError {
         /// Version in the file.
         found: u32,
     },
+}
+
+/// "line L, column C: " for a located error, "" for one without a place.
+fn located(at: Option<(usize, usize)>) -> String {
+    at.map(|(line, column)| format!("line {line}, column {column}: "))
+        .unwrap_or_default()
+}
+
+/// The segments of a dotted parameter name: `per_record.cd."a.csv"` → per_record, cd, a.csv.
+fn segments(name: &str) -> Vec<String> {
+    let mut out = vec![String::new()];
+    let mut quoted = false;
+    for c in name.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            '.' if !quoted => out.push(String::new()),
+            c => out.last_mut().expect("one segment at least").push(c),
+        }
+    }
+    out
+}
+
+/// The byte offset in `text` of the value of the dotted parameter `name`, where the file sets
+/// it.
+fn value_offset(text: &str, name: &str) -> Option<usize> {
+    use toml::de::{DeTable, DeValue};
+    fn find<'t, 'i>(table: &'t DeTable<'i>, path: &[String]) -> Option<usize> {
+        let (first, rest) = path.split_first()?;
+        let (_, v) = table.iter().find(|(k, _)| k.get_ref().as_ref() == first)?;
+        match (rest.is_empty(), v.get_ref()) {
+            (true, _) => Some(v.span().start),
+            (false, DeValue::Table(t)) => find(t, rest),
+            (false, _) => None,
+        }
+    }
+    let doc = DeTable::parse(text).ok()?;
+    find(doc.get_ref(), &segments(name))
 }
 
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
@@ -326,9 +366,20 @@ impl Preset {
             .params
             .validate()
             .and_then(|()| preset.per_record.validate())
-            .map_err(|error| PresetError::Invalid {
-                file: file.to_path_buf(),
-                error,
+            .map_err(|error| {
+                let at = match &error {
+                    ParamError::OutOfRange { name, .. } => value_offset(text, name),
+                    // It names its key first, between backticks.
+                    ParamError::Inconsistent(msg) => msg
+                        .split('`')
+                        .nth(1)
+                        .and_then(|name| value_offset(text, name)),
+                };
+                PresetError::Invalid {
+                    file: file.to_path_buf(),
+                    at: at.map(|o| line_column(text, o)),
+                    error,
+                }
             })?;
         Ok(preset)
     }
@@ -548,6 +599,34 @@ mod tests {
     fn out_of_range_names_the_parameter() {
         let e = Preset::from_toml("[body]\nmass_kg = 0\n", Path::new("m.toml")).unwrap_err();
         assert!(e.to_string().contains("body.mass_kg"), "{e}");
+    }
+
+    #[test]
+    fn out_of_range_names_its_line_and_column() {
+        let cases = [
+            (
+                "[preset]\nname = \"x\"\n\n[valve]\ncd = -1\n",
+                "v.toml: line 5, column 6: parameter `valve.cd` = -1 is outside the allowed \
+                 range [0.001, 1] (dimensionless)",
+            ),
+            (
+                "[effects.friction]\nenabled = true\ncoulomb_n   = -5\n",
+                "v.toml: line 3, column 15: parameter `effects.friction.coulomb_n` = -5 is \
+                 outside the allowed range [0, 5000] N",
+            ),
+            (
+                "[effects]\nfriction = { enabled = true, coulomb_n = 1e9 }\n",
+                "v.toml: line 2, column 42: parameter `effects.friction.coulomb_n`",
+            ),
+            (
+                "[per_record.cd]\n\"a.b.csv\" = 7\n",
+                "v.toml: line 2, column 13: parameter `per_record.cd.\"a.b.csv\"` = 7",
+            ),
+        ];
+        for (text, expected) in cases {
+            let e = Preset::from_toml(text, Path::new("v.toml")).unwrap_err();
+            assert!(e.to_string().starts_with(expected), "{e}");
+        }
     }
 
     #[test]

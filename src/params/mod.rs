@@ -35,10 +35,11 @@ pub use table::{Display, PARAMS, ParamSpec, describe, spec};
 pub enum ParamError {
     /// A value outside `[min, max]` (or not finite).
     #[error(
-        "parameter `{name}` = {} is outside the allowed range [{}, {}] {unit}",
+        "parameter `{name}` = {} is outside the allowed range [{}, {}]{}",
         crate::format::general(*.value),
         crate::format::general(*.min),
-        crate::format::general(*.max)
+        crate::format::general(*.max),
+        unit_suffix(unit)
     )]
     OutOfRange {
         /// Dotted name as in the preset file, e.g. `valve.cd`.
@@ -55,6 +56,15 @@ pub enum ParamError {
     /// Two parameters that are individually valid but not together.
     #[error("parameters are inconsistent: {0}")]
     Inconsistent(String),
+}
+
+/// " m" after a range for a unit, " (dimensionless)" for the table's "-".
+fn unit_suffix(unit: &str) -> String {
+    match unit {
+        "" => String::new(),
+        "-" => " (dimensionless)".into(),
+        u => format!(" {u}"),
+    }
 }
 
 /// Checks `min <= value <= max` and finiteness.
