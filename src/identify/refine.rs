@@ -32,6 +32,21 @@ const LEAKAGE_REF_DP_PA: f64 = 5e6;
 /// Leakage growths [1/Pa] a re-fit also starts from, over two decades.
 const LEAKAGE_GROWTHS: [f64; 4] = [1e-8, 3e-8, 1e-7, 3e-7];
 
+/// A fit of `knobs` from `from`, with the search's Jacobian budget.
+fn fit_from(
+    cx: &SearchContext<'_>,
+    from: &Params,
+    knobs: &[Knob],
+) -> Result<FitResult, IdentifyError> {
+    fit::fit(
+        cx.ev,
+        from,
+        knobs,
+        cx.options.max_iterations,
+        cx.bic.ratio(),
+    )
+}
+
 /// `p` with the leakage's growth set to `growth`, the leakage at [`LEAKAGE_REF_DP_PA`] kept.
 fn with_growth(p: &Params, growth: f64) -> Params {
     let l = p.plant.effects.leakage;
@@ -58,13 +73,7 @@ pub fn with_growth_starts(
         .any(|v| v.knob == Knob::LeakageGrowth && !v.is_determined())
     {
         for growth in LEAKAGE_GROWTHS {
-            let again = fit::fit(
-                cx.ev,
-                &with_growth(&best.params, growth),
-                knobs,
-                cx.options.max_iterations,
-                cx.bic.ratio(),
-            )?;
+            let again = fit_from(cx, &with_growth(&best.params, growth), knobs)?;
             if again.rss < best.rss {
                 best = again;
             }
@@ -113,13 +122,7 @@ pub fn weigh(
     }
     let mut plain_knobs = knobs.clone();
     plain_knobs.retain(|k| uncertain.iter().all(|v| v.knob != *k));
-    let plain_fit = fit::fit(
-        cx.ev,
-        &plain,
-        &plain_knobs,
-        cx.options.max_iterations,
-        cx.bic.ratio(),
-    )?;
+    let plain_fit = fit_from(cx, &plain, &plain_knobs)?;
     let gain =
         cx.bic.value(refit.rss, knobs.len()) - cx.bic.value(plain_fit.rss, plain_knobs.len());
     // The fit's metric is low-passed and weighted; the verdict's raw measure may see what
@@ -197,14 +200,7 @@ pub fn revisit(
             }
             set_knobs.push(v.knob);
         }
-        let first = fit::fit(
-            cx.ev,
-            &from,
-            &set_knobs,
-            cx.options.max_iterations,
-            cx.bic.ratio(),
-        )?;
-        let fit = with_growth_starts(cx, first, &set_knobs)?;
+        let fit = with_growth_starts(cx, fit_from(cx, &from, &set_knobs)?, &set_knobs)?;
         let score = cx.bic.value(fit.rss, set_knobs.len()) - base;
         let after = worst_raw_ratio(cx, campaign, preset, &fit.params)?;
         let validation = validation_rms(&fit.params, &campaign.validation)?;
