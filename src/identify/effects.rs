@@ -3,15 +3,16 @@
 //! parameters and kept only if it lowers the held-out error ([`try_effect`]); [`search`] runs
 //! the rounds.
 
+#[cfg(doc)]
+use super::CalibrationOptions;
+use super::context::{SearchContext, validation_rms, worst_raw_ratio};
 use super::data::Campaign;
-use super::evaluate::{replay_all, weighted_of, with_numerics_of};
-use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
+use super::fit::{self, Evaluator, FitResult, FittedValue, Knob};
 use super::progress::Stage;
-use super::raw_error::{RawErrorReport, raw_error_report};
 use super::refine::{self, REFINEMENT_MAX_RAW_RATIO, REFINEMENT_MIN_DBIC};
-use super::replay::{PreparedRecord, SimChannels, rms};
+use super::replay::PreparedRecord;
 use super::result::CandidateScore;
-use super::{CalibrationOptions, EffectId, IdentifyError};
+use super::{EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
 
@@ -196,18 +197,6 @@ pub struct Ranked {
     pub gain: f64,
 }
 
-/// What every round of the search works with.
-pub struct SearchContext<'a> {
-    /// Replays of the fit records.
-    pub ev: &'a Evaluator<'a>,
-    /// BIC counts of the declared fit.
-    pub bic: Bic,
-    /// The held-out records.
-    pub validation: &'a [PreparedRecord],
-    /// The options.
-    pub options: &'a CalibrationOptions,
-}
-
 /// Fits every effect of `remaining` on top of `current` (in parallel; the mass stays fixed)
 /// with [`CalibrationOptions::screen_iterations`] Jacobians, and ranks them by ΔBIC, best
 /// first.
@@ -255,12 +244,6 @@ pub fn rank_candidates(
     }
     ranked.sort_by(|a, b| a.score.total_cmp(&b.score));
     Ok(ranked)
-}
-
-/// Weighted RMS error of `p` on the held-out records.
-pub fn validation_rms(p: &Params, validation: &[PreparedRecord]) -> Result<f64, IdentifyError> {
-    let reps = replay_all(p, validation)?;
-    Ok(rms(&weighted_of(validation, &reps)))
 }
 
 /// An effect re-fitted with all parameters, and its validation.
@@ -335,35 +318,6 @@ pub fn try_effect(
         validation_rms,
         pinned,
     })
-}
-
-/// The raw error ([`raw_error`](super::raw_error), the verdict's measure) of `p` replayed
-/// on every record at the preset's step.
-pub fn raw_error_at(
-    cx: &SearchContext<'_>,
-    campaign: &Campaign,
-    preset: &Params,
-    p: &Params,
-) -> Result<RawErrorReport, IdentifyError> {
-    let reps = replay_all(&with_numerics_of(*p, preset), &campaign.all)?;
-    let sims: Vec<&SimChannels> = reps.iter().map(|r| &r.sim).collect();
-    Ok(raw_error_report(
-        &campaign.all,
-        &sims,
-        cx.options.raw_error_limit,
-    ))
-}
-
-/// The largest ratio of the raw error to its noise floor in any band of any record
-/// ([`raw_error_at`]).
-pub(super) fn worst_raw_ratio(
-    cx: &SearchContext<'_>,
-    campaign: &Campaign,
-    preset: &Params,
-    p: &Params,
-) -> Result<f64, IdentifyError> {
-    let report = raw_error_at(cx, campaign, preset, p)?;
-    Ok(report.worst.map_or(f64::INFINITY, |w| w.ratio))
 }
 
 /// An effect the search added.

@@ -74,6 +74,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod context;
 pub mod data;
 pub mod diagnose;
 pub mod drift;
@@ -517,7 +518,7 @@ fn library_pass(
     let declared = stages::declared_fit(&ev, start, params.plant.body.mass_kg, options)?;
     let mut notes = declared.notes.clone();
     let bic = fit::Bic::at(&ev, &declared.fit)?;
-    let cx = effects::SearchContext {
+    let cx = context::SearchContext {
         ev: &ev,
         bic,
         validation: &campaign.validation,
@@ -559,7 +560,7 @@ fn library_pass(
     // record's own Cd.
     if !search.added.is_empty()
         && !drifts.iter().any(|d| d.parameter == Knob::Cd.name())
-        && !effects::raw_error_at(&cx, campaign, params, &final_params)?.at_floor()
+        && !context::raw_error_at(&cx, campaign, params, &final_params)?.at_floor()
     {
         let (plain, _) = drift::find(&declared.fit.params, &campaign.all, bic.ratio(), monitor)?;
         if let Some(d) = plain.into_iter().find(|d| d.parameter == Knob::Cd.name()) {
@@ -593,14 +594,14 @@ fn library_pass(
 /// ([`raw_error`]), and when [`CalibrationOptions::max_proposed`] allows it.
 fn beyond_the_library(
     params: &Params,
-    cx: &effects::SearchContext<'_>,
+    cx: &context::SearchContext<'_>,
     campaign: &data::Campaign,
     search: &effects::EffectSearch,
 ) -> Result<Option<proposed::Proposal>, IdentifyError> {
     if cx.options.max_proposed == 0 {
         return Ok(None);
     }
-    if effects::raw_error_at(cx, campaign, params, &search.current.params)?.at_floor() {
+    if context::raw_error_at(cx, campaign, params, &search.current.params)?.at_floor() {
         return Ok(None);
     }
     proposed::search(cx, &search.current, &search.knobs)

@@ -9,7 +9,8 @@
 //! *proposed*: the verdict stays the library's, and the report says in physical words what the
 //! terms are and whether they bring every raw channel to its floor.
 
-use super::effects::{SearchContext, best_of, validation_rms};
+use super::context::{SearchContext, validation_rms};
+use super::effects::best_of;
 use super::fit::{self, FitResult, Knob};
 use super::progress::Stage;
 use super::result::{ProposedScore, ProposedTerm};

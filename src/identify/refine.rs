@@ -5,8 +5,8 @@
 //! hidden it.
 
 use super::IdentifyError;
+use super::context::{SearchContext, validation_rms, worst_raw_ratio};
 use super::data::Campaign;
-use super::effects::{SearchContext, validation_rms, worst_raw_ratio};
 use super::fit::{self, FitResult, FittedValue, Knob};
 use crate::params::Params;
 
