@@ -258,9 +258,9 @@ pub struct Trial {
     /// Whether it lowers the held-out error by at least
     /// [`CalibrationOptions::min_validation_gain`] (a NaN error does not).
     pub improves: bool,
-    /// Refinements of the effect's law ([`REFINEMENTS`](refine::REFINEMENTS)) the first re-fit left uncertain and
-    /// the criterion did not keep, with that fit's value and uncertainty: the plain law was
-    /// re-fitted instead.
+    /// Refinements of the effect's law ([`REFINEMENTS`](refine::REFINEMENTS)) the first
+    /// re-fit left uncertain and the criterion did not keep, with that fit's value and
+    /// uncertainty: the plain law was re-fitted instead.
     pub pinned: Vec<FittedValue>,
 }
 
