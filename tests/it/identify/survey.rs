@@ -364,10 +364,12 @@ fn randomised_rigs_confusion_table() {
             )
         });
         // `SURVEY_OUT=dir` writes each case's report, calibrated.toml and plots into
-        // `dir/case-NN` (for development: to look at a case's residuals).
+        // `dir/case-NN`, and its records into `dir/case-NN/records` (for development: to look at
+        // a case's residuals, or to replay its records with the CLI).
         if let Ok(out) = std::env::var("SURVEY_OUT") {
             let dir = std::path::Path::new(&out).join(format!("case-{i:02}"));
             identify::report::write_all(&r, &dir, Some(secs)).expect("report written");
+            write_records(&recs, &dir.join("records"));
         }
         if only.is_some() {
             eprintln!("case {i} in full: {}", super::rig::summary(&r));
@@ -546,4 +548,29 @@ fn replayed_above_noise_before_stops(
     let stroke = Preset::paper().params.plant.cylinder.stroke_m;
     let (cut, notes) = identify::data::before_end_stops(recs, stroke);
     (!notes.is_empty()).then(|| replayed_above_noise(r, &cut))
+}
+
+/// Writes `recs` as CSV files into `dir` (named as the records are), for the CLI to read.
+fn write_records(recs: &[seat_twin::dataset::Record], dir: &std::path::Path) {
+    std::fs::create_dir_all(dir).expect("records dir");
+    for rec in recs {
+        let mut cols: Vec<(&str, &Vec<f64>)> = vec![("t", &rec.t)];
+        for (name, col) in [
+            ("v_in", &rec.v_in),
+            ("u", &rec.u),
+            ("x", &rec.x),
+            ("xdd", &rec.xdd),
+            ("ydd", &rec.ydd),
+            ("p1", &rec.p1),
+            ("p2", &rec.p2),
+        ] {
+            if let Some(c) = col {
+                cols.push((name, c));
+            }
+        }
+        let header: Vec<&str> = cols.iter().map(|(n, _)| *n).collect();
+        let rows = (0..rec.t.len()).map(|i| cols.iter().map(|(_, c)| c[i]).collect());
+        seat_twin::dataset::write_csv_atomic(&dir.join(&rec.path), &header, &[], rows)
+            .expect("record written");
+    }
 }
