@@ -12,11 +12,13 @@
 //! friction case record `p1`, `p2` too (0.2 bar noise, 12-bit on 250 bar).
 //!
 //! `rig` holds the true rig and the campaign helpers; `effects` checks the verdicts for every
-//! library effect, the pairs and an effect outside the library; `records` checks the replay
+//! library effect and the pairs; `outside` those for effects outside the library, which are
+//! proposed beyond it; `records` checks the replay
 //! of the raw records, degenerate data and the held-out claims of `calibrated.toml`.
 
 mod campaigns;
 mod effects;
+mod outside;
 mod records;
 mod rig;
 mod survey;
