@@ -372,7 +372,12 @@ fn randomised_rigs_confusion_table() {
             write_records(&recs, &dir.join("records"));
         }
         if only.is_some() {
-            eprintln!("case {i} in full: {}", super::rig::summary(&r));
+            eprintln!(
+                "case {i} in full (truth: cd {:.6}, tau {:.6} s): {}",
+                c.cd,
+                c.tau,
+                super::rig::summary(&r)
+            );
             for n in &r.notes {
                 eprintln!("  note: {n}");
             }
