@@ -31,10 +31,8 @@ fn confounding_hint(a: EffectId, b: EffectId, recs: &[PreparedRecord]) -> &'stat
 
 /// Coarse starts for a candidate effect's fit: its first parameter on a log grid (both signs
 /// for a signed one), the others at 0, gives the best of the grid and "off". For compliance
-/// a finer grid and its best valleys ([`compliance_starts`]). For friction
-/// also the best of a Stribeck peak at a few Stribeck velocities from there: a friction law
-/// with and without its peak are different valleys of the fit (a peak's start can look worse
-/// before the fit and end better, or the other way round), so both are fitted.
+/// a finer grid and its best valleys ([`compliance_starts`]); for friction a finer grid of
+/// the Coulomb force, its best valleys and a Stribeck peak from each ([`friction_starts`]).
 pub fn multi_start(
     ev: &Evaluator<'_>,
     current: &Params,
@@ -76,26 +74,72 @@ pub fn multi_start(
         return compliance_starts(ev, &starts);
     }
     let best = best_of(ev, &starts)?.unwrap_or(off);
-    if e != EffectId::Friction {
-        return Ok(vec![best]);
+    if e == EffectId::Friction {
+        return friction_starts(ev, &off, best);
     }
-    // The Stribeck velocity does nothing while the Stribeck force is 0, so a fit started
-    // there leaves it where the parameters hold it: also start from a Stribeck peak of half
-    // the Coulomb force found above, at velocities spread over a decade.
-    let peaks: Vec<Params> = [0.002, 0.005, 0.01, 0.02]
-        .iter()
-        .map(|&velocity| {
-            let mut p = best;
-            let friction = &mut p.plant.effects.friction;
-            friction.stribeck_n = 0.5 * friction.coulomb_n;
-            friction.stribeck_velocity_m_s = velocity;
+    Ok(vec![best])
+}
+
+/// How many valleys of the Coulomb force's grid friction's fit starts from.
+const FRICTION_VALLEYS: usize = 2;
+
+/// Ratio of neighbouring Coulomb forces on friction's start grid.
+const FRICTION_STEP: f64 = 1.5;
+
+/// Friction's starts, from `off` (friction on at its preset shape, all forces 0) and `coarse`
+/// (the best of the coarse grid every effect starts from, 0, 1, 3, 10, 30 and 100 N):
+/// * `coarse`, and the [`FRICTION_VALLEYS`] lowest local minima of the fit records' residual along the
+///   Coulomb force, 1 N to 290 N in steps of [`FRICTION_STEP`] (0 N, friction off, is the
+///   grid's first point). Before the fit that residual is rough along the Coulomb force: an
+///   open-loop replay turns each change of where the stroke sticks into drift. On case 2 of
+///   the 2029 survey draw at 200 Hz (the rig: 48 N Coulomb, 96 N·s/m viscous, a 12 N
+///   Stribeck peak, beside a 35 µm overlap) it read 14 599 at 11 N, 17 718 at 38 N, 9938 at
+///   58 N and 14 827 at 86 N. The grid 1, 3, 10, 30, 100 N started the fit at 10 N, which
+///   ended at 12 N and 0.4 N·s/m having removed a fifth of the residual; from 58 N it ends at
+///   55 N and removes 84 %, and its re-fit finds the rig's law. The coarse grid's best stays
+///   among the starts: on case 1 of the 2020 draw at 200 Hz (friction alone, 36 N) the
+///   valleys alone ended at 18 N with the smoothing at its bound, Cd and τ outside 3σ,
+///   where the fit from 30 N finds the rig's law;
+/// * from each, a Stribeck peak of half its Coulomb force at the best of a few Stribeck
+///   velocities spread over a decade: the Stribeck velocity does nothing while the Stribeck
+///   force is 0, so a fit started there leaves it where the parameters hold it, and a law
+///   with and without its peak are different valleys of the fit (a peak's start can look
+///   worse before the fit and end better, or the other way round).
+fn friction_starts(
+    ev: &Evaluator<'_>,
+    off: &Params,
+    coarse: Params,
+) -> Result<Vec<Params>, IdentifyError> {
+    let grid: Vec<Params> = std::iter::once(0.0)
+        .chain((0..15).map(|k| 0.1 * FRICTION_STEP.powi(k)))
+        .map(|g| {
+            let mut p = *off;
+            Knob::FrictionCoulomb.set(&mut p, g);
             p
         })
         .collect();
-    match best_of(ev, &peaks)? {
-        Some(peak) if peak != best => Ok(vec![best, peak]),
-        _ => Ok(vec![best]),
+    let mut out: Vec<Params> = Vec::with_capacity(2 * FRICTION_VALLEYS + 2);
+    let mut bases = vec![coarse];
+    bases.extend(lowest_valleys(ev, &grid, FRICTION_VALLEYS)?);
+    for valley in bases {
+        let peaks: Vec<Params> = [0.002, 0.005, 0.01, 0.02]
+            .iter()
+            .map(|&velocity| {
+                let mut p = valley;
+                let friction = &mut p.plant.effects.friction;
+                friction.stribeck_n = 0.5 * friction.coulomb_n;
+                friction.stribeck_velocity_m_s = velocity;
+                p
+            })
+            .collect();
+        let peak = best_of(ev, &peaks)?;
+        for p in std::iter::once(valley).chain(peak) {
+            if !out.contains(&p) {
+                out.push(p);
+            }
+        }
     }
+    Ok(out)
 }
 
 /// How many valleys of the modulus' grid compliance's fit starts from.
@@ -121,6 +165,16 @@ const COMPLIANCE_STEPS: i32 = 88;
 /// The grid had been two-dimensional (the chambers' modulus in steps of 1.2 times five hose
 /// ratios, 70 points), whose total compliance stepped by up to 20 % and missed that valley.
 fn compliance_starts(ev: &Evaluator<'_>, grid: &[Params]) -> Result<Vec<Params>, IdentifyError> {
+    lowest_valleys(ev, grid, COMPLIANCE_VALLEYS)
+}
+
+/// The `k` lowest local minima of the fit records' residual along `grid` (a line of
+/// parameter sets), lowest first.
+fn lowest_valleys(
+    ev: &Evaluator<'_>,
+    grid: &[Params],
+    k: usize,
+) -> Result<Vec<Params>, IdentifyError> {
     let costs = costs_of(ev, grid)?;
     let n = costs.len();
     let mut minima: Vec<usize> = (0..n)
@@ -131,11 +185,7 @@ fn compliance_starts(ev: &Evaluator<'_>, grid: &[Params]) -> Result<Vec<Params>,
         })
         .collect();
     minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
-    Ok(minima
-        .into_iter()
-        .take(COMPLIANCE_VALLEYS)
-        .map(|k| grid[k])
-        .collect())
+    Ok(minima.into_iter().take(k).map(|i| grid[i]).collect())
 }
 
 /// `p` (one modulus for hoses and chambers) with the hoses softer than the chambers by

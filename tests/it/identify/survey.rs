@@ -60,8 +60,8 @@ pub(super) struct Case {
     pub(super) fx: RigEffects,
     library: Vec<EffectId>,
     pressures: bool,
-    cd: f64,
-    tau: f64,
+    pub(super) cd: f64,
+    pub(super) tau: f64,
 }
 
 /// A realistic magnitude of each library effect, drawn in a range around the single-effect
