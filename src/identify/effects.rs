@@ -88,9 +88,9 @@ const FRICTION_STEP: f64 = 1.5;
 
 /// Friction's starts, from `off` (friction on at its preset shape, all forces 0) and `coarse`
 /// (the best of the coarse grid every effect starts from, 0, 1, 3, 10, 30 and 100 N):
-/// * `coarse`, and the [`FRICTION_VALLEYS`] lowest local minima of the fit records' residual along the
-///   Coulomb force, 1 N to 290 N in steps of [`FRICTION_STEP`] (0 N, friction off, is the
-///   grid's first point). Before the fit that residual is rough along the Coulomb force: an
+/// * `coarse`, and the [`FRICTION_VALLEYS`] lowest local minima of the fit records' residual
+///   along the Coulomb force, 1 N to 290 N in steps of [`FRICTION_STEP`] (0 N, friction off,
+///   is the grid's first point). Before the fit that residual is rough along the Coulomb force: an
 ///   open-loop replay turns each change of where the stroke sticks into drift. On case 2 of
 ///   the 2029 survey draw at 200 Hz (the rig: 48 N Coulomb, 96 N·s/m viscous, a 12 N
 ///   Stribeck peak, beside a 35 µm overlap) it read 14 599 at 11 N, 17 718 at 38 N, 9938 at
