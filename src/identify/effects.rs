@@ -7,7 +7,7 @@
 use super::CalibrationOptions;
 use super::context::{SearchContext, validation_rms, worst_raw_ratio};
 use super::data::Campaign;
-use super::fit::{self, Evaluator, FitResult, FittedValue, Knob};
+use super::fit::{self, Evaluator, FitResult, FittedValue, Knob, Screened};
 use super::progress::Stage;
 use super::refine::{self, REFINEMENT_MAX_RAW_RATIO, REFINEMENT_MIN_DBIC};
 use super::replay::PreparedRecord;
@@ -240,7 +240,7 @@ pub struct Ranked {
     /// The effect.
     pub effect: EffectId,
     /// Its screening fit (current knobs but the mass, and the effect's).
-    pub fit: FitResult,
+    pub fit: Screened,
     /// ΔBIC against the current model (negative = better).
     pub score: f64,
     /// Share of the current residual sum of squares it removes [-].
@@ -261,15 +261,15 @@ pub fn rank_candidates(
     ev.monitor
         .enter(Stage::Candidates { round }, remaining.len());
     let screen_knobs: Vec<Knob> = knobs.iter().copied().filter(|k| *k != Knob::Mass).collect();
-    let results: Vec<Result<(EffectId, FitResult), IdentifyError>> = remaining
+    let results: Vec<Result<(EffectId, Screened), IdentifyError>> = remaining
         .par_iter()
         .map(|&e| {
             let mut ks = screen_knobs.clone();
             ks.extend_from_slice(e.knobs());
             // From each start, keeping the fit with the smallest residual.
-            let mut best: Option<FitResult> = None;
+            let mut best: Option<Screened> = None;
             for p0 in multi_start(ev, &current.params, e)? {
-                let f = fit::fit(ev, &p0, &ks, options.screen_iterations, bic.ratio())?;
+                let f = fit::screen(ev, &p0, &ks, options.screen_iterations)?;
                 if best.as_ref().is_none_or(|b| f.rss < b.rss) {
                     best = Some(f);
                 }

@@ -11,7 +11,7 @@ use super::IdentifyError;
 use super::progress::{Monitor, StopReason};
 use super::replay::PreparedRecord;
 use crate::params::{ParamSpec, Params, spec};
-use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt, MinimizationReport};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -540,15 +540,25 @@ fn covariance(jac: &DMatrix<f64>, s2: f64) -> Option<DMatrix<f64>> {
     Some(cov)
 }
 
-/// Fits `knobs` starting from their values in `start`, with at most `max_jacobians`
-/// Jacobians. `n_eff_ratio` = n_eff/n of the residual, for the uncertainties.
-pub fn fit(
-    ev: &Evaluator<'_>,
+/// A screening fit's outcome: where the fit ended and its residual, without uncertainties
+/// (see [`screen`]).
+#[derive(Debug, Clone)]
+pub struct Screened {
+    /// The parameters with the fitted values set.
+    pub params: Params,
+    /// Sum of squared weighted residuals at the result.
+    pub rss: f64,
+}
+
+/// The Levenberg–Marquardt minimum of `knobs` from their values in `start`, with at most
+/// `max_jacobians` Jacobians: the optimiser's state, its report, and the best residual sum of
+/// squares with its θ.
+fn minimise<'a, 'b>(
+    ev: &'a Evaluator<'b>,
     start: &Params,
-    knobs: &[Knob],
+    knobs: &'a [Knob],
     max_jacobians: usize,
-    n_eff_ratio: f64,
-) -> Result<FitResult, IdentifyError> {
+) -> Result<(Problem<'a, 'b>, MinimizationReport<f64>, f64, DVector<f64>), IdentifyError> {
     let theta0 = DVector::from_iterator(knobs.len(), knobs.iter().map(|k| k.theta(start)));
     let problem = Problem {
         ev,
@@ -566,7 +576,6 @@ pub fn fit(
         .with_xtol(1e-4)
         .with_patience(20)
         .with_stepbound(1.0);
-    let evals_before = ev.monitor.evaluations();
     let (problem, report) = lm.minimize(problem);
     ev.monitor.check()?;
     let (rss, theta) = match problem.best.lock().ok().and_then(|b| b.clone()) {
@@ -576,6 +585,36 @@ pub fn fit(
             (r.norm_squared(), theta0)
         }
     };
+    Ok((problem, report, rss, theta))
+}
+
+/// A screening fit: [`fit`]'s minimum without its uncertainties, which cost one more
+/// Jacobian wherever the fit ended on a step (a screening fit's are never read: the search
+/// ranks candidates by their residual and re-fits the best with [`fit`]).
+pub fn screen(
+    ev: &Evaluator<'_>,
+    start: &Params,
+    knobs: &[Knob],
+    max_jacobians: usize,
+) -> Result<Screened, IdentifyError> {
+    let (_, _, rss, theta) = minimise(ev, start, knobs, max_jacobians)?;
+    Ok(Screened {
+        params: params_at(start, knobs, &theta),
+        rss,
+    })
+}
+
+/// Fits `knobs` starting from their values in `start`, with at most `max_jacobians`
+/// Jacobians. `n_eff_ratio` = n_eff/n of the residual, for the uncertainties.
+pub fn fit(
+    ev: &Evaluator<'_>,
+    start: &Params,
+    knobs: &[Knob],
+    max_jacobians: usize,
+    n_eff_ratio: f64,
+) -> Result<FitResult, IdentifyError> {
+    let evals_before = ev.monitor.evaluations();
+    let (problem, report, rss, theta) = minimise(ev, start, knobs, max_jacobians)?;
     let jac = match problem.last_jacobian.lock().ok().and_then(|l| l.clone()) {
         Some((t, j)) if t == theta => Some(j),
         _ => None,

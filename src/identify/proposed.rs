@@ -239,13 +239,13 @@ pub fn search(
         ev.monitor
             .enter(Stage::Proposed { round }, remaining.len() + 1);
         let screen: Vec<Knob> = knobs.iter().copied().filter(|k| *k != Knob::Mass).collect();
-        let fits: Vec<Result<(CorrectionId, FitResult), IdentifyError>> = remaining
+        let fits: Vec<Result<(CorrectionId, fit::Screened), IdentifyError>> = remaining
             .par_iter()
             .map(|&c| {
                 let mut ks = screen.clone();
                 ks.extend_from_slice(c.knobs());
                 let p0 = multi_start(cx, &current.params, c)?;
-                let f = fit::fit(ev, &p0, &ks, options.screen_iterations, cx.bic.ratio())?;
+                let f = fit::screen(ev, &p0, &ks, options.screen_iterations)?;
                 ev.monitor.advance();
                 Ok((c, f))
             })
