@@ -195,6 +195,15 @@ fn lowest_valleys(
     end: GridEnd,
 ) -> Result<Vec<Params>, IdentifyError> {
     let costs = costs_of(ev, grid)?;
+    Ok(valley_indices(&costs, k, end)
+        .into_iter()
+        .map(|i| grid[i])
+        .collect())
+}
+
+/// The indices of the `k` lowest local minima of `costs` (a NaN is none), lowest first; its
+/// last index is one only if `end` is [`GridEnd::Closed`].
+fn valley_indices(costs: &[f64], k: usize, end: GridEnd) -> Vec<usize> {
     let n = costs.len();
     let mut minima: Vec<usize> = (0..n)
         .filter(|&i| {
@@ -208,7 +217,8 @@ fn lowest_valleys(
         })
         .collect();
     minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
-    Ok(minima.into_iter().take(k).map(|i| grid[i]).collect())
+    minima.truncate(k);
+    minima
 }
 
 /// `p` (one modulus for hoses and chambers) with the hoses softer than the chambers by
@@ -762,4 +772,26 @@ pub fn search(
         candidates,
         notes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Friction's residual before the fit on the 200 Hz test of soft hoses beside an
+    /// overlap (shape only): rough along the Coulomb force, and lowest at the grid's last
+    /// point, where it still falls.
+    #[test]
+    fn an_open_grid_end_is_no_valley_and_a_closed_one_is() {
+        let costs = [5.0, 4.0, 6.0, 3.5, 7.0, 5.5, 2.0];
+        assert_eq!(valley_indices(&costs, 2, GridEnd::Closed), vec![6, 3]);
+        assert_eq!(valley_indices(&costs, 2, GridEnd::Open), vec![3, 1]);
+        // The first point (the effect off) is a valley at either end's setting.
+        let rising = [1.0, 2.0, 3.0];
+        assert_eq!(valley_indices(&rising, 3, GridEnd::Open), vec![0]);
+        // A NaN (a replay that blew up) is no valley, and neither is a point beside it: its
+        // cost there is not known to be higher.
+        let gap = [3.0, f64::NAN, 2.0, 4.0, 1.0, 5.0];
+        assert_eq!(valley_indices(&gap, 3, GridEnd::Open), vec![4]);
+    }
 }
