@@ -71,7 +71,9 @@ pub mod experiments;
 pub mod export;
 pub mod format;
 pub mod fsutil;
-#[cfg(feature = "gui")]
+// Left out of the library's unit-test build: the app's own tests are integration tests
+// (`tests/it/gui_parts`), so a cold `cargo test` compiles `gui` once, not twice.
+#[cfg(all(feature = "gui", not(test)))]
 pub mod gui;
 pub mod identify;
 pub mod model;

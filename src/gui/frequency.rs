@@ -11,7 +11,7 @@ mod dwell;
 mod stability;
 
 pub use curves::{Analytic, Curve, Curves, PlantCache};
-pub use dwell::Dwell;
+pub use dwell::{Dwell, DwellPoint, dwell_steps};
 pub use stability::{margin_text, stability_ui};
 
 use super::plotkit::{self, LegendItem, Swatch, legend_ui, wrap_deg, y_axis, y_marks};

@@ -26,7 +26,7 @@ pub fn interactive_options(params: &Params) -> TuneOptions {
 
 /// Tuning `p` with `o` as job steps (a [`tune::TuneRun`]: the baseline, one optimiser
 /// iteration, one robustness check per step), with the job's progress and cancel.
-fn tune_steps(p: Params, o: TuneOptions) -> impl FnMut(&JobCtx) -> Step<TuneResult> + Send {
+pub fn tune_steps(p: Params, o: TuneOptions) -> impl FnMut(&JobCtx) -> Step<TuneResult> + Send {
     let mut run: Option<tune::TuneRun> = None;
     move |ctx| {
         let run = match &mut run {
@@ -355,75 +355,4 @@ fn pareto_plot(ui: &mut egui::Ui, front: &[Evaluation], selected: Option<usize>)
         .filter(|&(_, d)| d < 20.0)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(i, _)| i)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::gui::job::{Runner, pump, wait_pumping};
-    use std::time::{Duration, Instant};
-
-    fn short() -> TuneOptions {
-        TuneOptions {
-            tune_seeds: vec![1],
-            heldout_seeds: vec![101],
-            duration_s: 6.0,
-            max_evaluations: 12,
-            ..TuneOptions::default()
-        }
-    }
-
-    fn run_on(runner: Runner) -> (Result<TuneResult, String>, (usize, usize)) {
-        let noop: Waker = std::sync::Arc::new(|| {});
-        let job = Job::spawn_steps_on(runner, "t", noop, tune_steps(Params::paper(), short()));
-        let t0 = Instant::now();
-        let mut seen = Vec::new();
-        loop {
-            if let Some(r) = job.poll() {
-                if runner == Runner::Frames {
-                    // Progress seen advancing between frames, not only at the end.
-                    assert!(seen.windows(2).any(|w| w[0] < w[1]), "{seen:?}");
-                }
-                return (r, job.progress());
-            }
-            assert!(
-                t0.elapsed() < Duration::from_secs(300),
-                "the tune never ended"
-            );
-            if pump(Duration::from_millis(8)) {
-                seen.push(job.progress().0);
-            } else {
-                std::thread::sleep(Duration::from_millis(5));
-            }
-        }
-    }
-
-    /// Tune in the web's frames gives the desktop thread's result bit for bit, with the same
-    /// progress, and the result is `tune`'s own.
-    #[test]
-    fn tune_in_frames_equals_the_threaded_tune() {
-        let (threaded, progress_t) = run_on(Runner::Thread);
-        let (sliced, progress_f) = run_on(Runner::Frames);
-        let json = |r: &TuneResult| serde_json::to_string(r).unwrap();
-        let (threaded, sliced) = (threaded.unwrap(), sliced.unwrap());
-        assert_eq!(json(&threaded), json(&sliced));
-        assert_eq!(progress_t, progress_f);
-        let direct = tune::tune(&Params::paper(), &short(), None).unwrap();
-        assert_eq!(json(&direct), json(&sliced));
-    }
-
-    #[test]
-    fn a_tune_in_frames_is_cancelled() {
-        let noop: Waker = std::sync::Arc::new(|| {});
-        let job = Job::spawn_steps_on(
-            Runner::Frames,
-            "t",
-            noop,
-            tune_steps(Params::paper(), short()),
-        );
-        pump(Duration::ZERO);
-        job.cancel();
-        let r = wait_pumping(&job, Duration::from_secs(60), "cancel not honoured");
-        assert_eq!(r.unwrap_err(), tune::TuneError::Cancelled.to_string());
-    }
 }

@@ -20,17 +20,3 @@ pub fn db(mag: f64) -> f64 {
 pub fn deg(rad: f64) -> f64 {
     rad.to_degrees()
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn conversions_at_known_points() {
-        assert_eq!(0.035 * MM_PER_M, 35.0);
-        assert!((100e5 * BAR_PER_PA - 100.0).abs() < 1e-12);
-        assert!((1e-3 / 60.0 * LPM_PER_M3_S - 1.0).abs() < 1e-12);
-        assert!((db(10.0) - 20.0).abs() < 1e-12);
-        assert!((deg(std::f64::consts::PI) - 180.0).abs() < 1e-12);
-    }
-}

@@ -15,6 +15,7 @@ mod gui;
 mod gui_edges;
 mod gui_lab;
 mod gui_measured;
+mod gui_parts;
 mod gui_session;
 mod gui_use;
 mod gui_web;

@@ -7,21 +7,28 @@ use crate::gui::job::{Job, JobCtx, Step, Waker};
 
 /// One simulated dwell frequency, streamed back by the dwell job.
 #[derive(Debug, PartialEq)]
-enum DwellPoint {
+pub enum DwellPoint {
+    /// The twin's transmissibility there.
     Point {
+        /// Frequency [Hz].
         freq_hz: f64,
+        /// Transmissibility ÿ/ẍ [-], complex.
         value: Complex64,
+        /// The controller's plant response there, when the run gave one.
         bode: Option<Complex64>,
     },
+    /// The run at that frequency failed.
     Failed {
+        /// Frequency [Hz].
         freq_hz: f64,
+        /// Why, for the user.
         reason: String,
     },
 }
 
 /// The dwell sweep of the twin with `p` as job steps: one frequency of `freqs` per step, its
 /// point sent as it is done; stops at the next step when cancelled.
-fn dwell_steps(
+pub fn dwell_steps(
     p: Params,
     freqs: Vec<f64>,
 ) -> impl FnMut(&JobCtx<DwellPoint>) -> Step<()> + Send + 'static {
@@ -235,45 +242,5 @@ impl Dwell {
                 p.y = u.to_degrees();
             }
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::gui::job::{Runner, wait_pumping};
-    use std::sync::Arc;
-    use std::time::Duration;
-
-    fn run_on(runner: Runner, freqs: Vec<f64>) -> (Result<(), String>, Vec<DwellPoint>) {
-        let noop: Waker = Arc::new(|| {});
-        let job = Job::spawn_steps_on(runner, "t", noop, dwell_steps(Params::paper(), freqs));
-        let end = wait_pumping(&job, Duration::from_secs(60), "the dwell never ended");
-        (end, job.drain().collect())
-    }
-
-    /// The dwell in slices (the web's frames) gives the thread's points bit for bit, and each
-    /// point is the library's sine dwell at that frequency.
-    #[test]
-    fn dwell_in_frames_equals_the_threaded_dwell() {
-        let freqs = vec![0.8, 2.5, 9.0];
-        let (end_t, threaded) = run_on(Runner::Thread, freqs.clone());
-        let (end_f, sliced) = run_on(Runner::Frames, freqs.clone());
-        assert_eq!(end_t, Ok(()));
-        assert_eq!(end_f, Ok(()));
-        assert_eq!(threaded.len(), 3);
-        assert_eq!(threaded, sliced);
-        let reference = sine_dwell::simulated_transmissibility(
-            &Params::paper(),
-            ModelKind::Twin,
-            2.5,
-            &DwellOptions::default(),
-        )
-        .unwrap();
-        assert!(
-            matches!(sliced[1], DwellPoint::Point { value, .. } if value == reference),
-            "{:?}",
-            sliced[1]
-        );
     }
 }
