@@ -12,9 +12,10 @@ pub enum DwellPoint {
     Point {
         /// Frequency [Hz].
         freq_hz: f64,
-        /// Transmissibility ÿ/ẍ [-], complex.
+        /// The twin's transmissibility ÿ/ẍ [-] by a sine dwell.
         value: Complex64,
-        /// The controller's plant response there, when the run gave one.
+        /// The plant's `u̇/V_in` [m/(s·V)] by an open-loop dwell, up to
+        /// [`BODE_DWELL_MAX_HZ`](super::BODE_DWELL_MAX_HZ) (`None` above).
         bode: Option<Complex64>,
     },
     /// The run at that frequency failed.
