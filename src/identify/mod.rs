@@ -93,8 +93,7 @@ pub mod report;
 pub mod result;
 pub mod ringing;
 pub mod stages;
-#[cfg(test)]
-mod testdata;
+pub mod testdata;
 pub mod units;
 
 use crate::dataset::Record;
@@ -657,14 +656,36 @@ pub fn calibrate(
 mod tests {
     use super::*;
 
+    /// A report as a calibration of the paper preset ends it: verdict `no_missing_effect`,
+    /// Cd and τ determined (the final fit's own numbers are the integration tests' business;
+    /// these tests are about what happens to a report after it).
+    fn calibrated_report() -> CalibrationReport {
+        let empty = data::DataCheck {
+            records: Vec::new(),
+            notes: Vec::new(),
+            missing: Vec::new(),
+        };
+        let mut r = data::insufficient_data(&Params::paper(), empty);
+        r.verdict = Verdict::NoMissingEffect;
+        let p = &r.params.plant.valve;
+        r.calibrated = [(Knob::Cd, p.cd, 0.002 * p.cd), (Knob::Tau, p.tau_s, 2e-4)]
+            .map(|(knob, value, std)| fit::FittedValue {
+                knob,
+                name: knob.name().to_string(),
+                value,
+                std,
+            })
+            .to_vec();
+        r
+    }
+
     /// A calibration whose fitted friction changes sign steeply (the survey's draw 2025 at
     /// 200 Hz, case 2: a step limit of 0.26 ms and a resolving step of 0.11 ms under the
     /// preset's 0.5 ms) reports parameters that carry the step its replays ran at, so that
     /// they validate and calibrated.toml loads; before, it was refused on loading.
     #[test]
     fn calibrated_parameters_carry_a_step_their_friction_can_run_at() {
-        let rec = testdata::twin_record(&testdata::true_params(), 3.0, "a.csv");
-        let mut r = calibrate(&Params::paper(), &[rec], &Default::default(), &|_| true).unwrap();
+        let mut r = calibrated_report();
         assert_eq!(
             step_within_limits(r.clone()).params,
             r.params,
@@ -689,9 +710,7 @@ mod tests {
     /// names τ with its value, and no calibrated.toml is written. A determined τ is kept.
     #[test]
     fn an_undetermined_final_tau_is_insufficient_data() {
-        let rec = testdata::twin_record(&testdata::true_params(), 3.0, "a.csv");
-        let good = calibrate(&Params::paper(), &[rec], &Default::default(), &|_| true).unwrap();
-        assert_ne!(good.verdict, Verdict::InsufficientData);
+        let good = calibrated_report();
         assert_eq!(refuse_undetermined(good.clone()).verdict, good.verdict);
         let mut bad = good;
         let tau = bad
@@ -739,7 +758,7 @@ mod tests {
     /// `false`; no records at all is an error, not a report.
     #[test]
     fn calibrate_callback_reads_stages_and_cancels() {
-        let rec = testdata::twin_record(&testdata::true_params(), 3.0, "a.csv");
+        let rec = testdata::twin_record(&testdata::true_params(), 3.0, "a.csv").unwrap();
         let seen = std::sync::Mutex::new(Vec::new());
         let r = calibrate(
             &Params::paper(),

@@ -609,63 +609,7 @@ pub fn report(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::identify::Progress;
-    use crate::identify::data;
     use crate::identify::replay::{PreparedRecord, SimChannels};
-    use crate::identify::testdata::{true_params, twin_record};
-    use std::sync::atomic::AtomicBool;
-
-    /// The declared fit, on records the twin made with Cd 10 % low and τ 2 ms long, starts
-    /// from the paper's values and recovers both (the data are noise-free, so to a fraction
-    /// of a per cent), with uncertainties that cover the truth and nothing undetermined.
-    #[test]
-    fn declared_fit_recovers_known_cd_and_tau() {
-        let truth = true_params();
-        let records = [
-            twin_record(&truth, 3.0, "a.csv"),
-            twin_record(&truth, 3.0, "b.csv"),
-        ];
-        let options = CalibrationOptions::default();
-        let checked = data::check(&records, &options).unwrap();
-        assert!(checked.missing.is_empty(), "{:?}", checked.missing);
-        let campaign = data::split(checked.records);
-        let cancel = AtomicBool::new(false);
-        let stages = std::sync::Mutex::new(Vec::new());
-        let observer = |p: &Progress| stages.lock().unwrap().push(p.stage);
-        let monitor = Monitor::new(&cancel, &observer);
-        let ev = Evaluator {
-            records: &campaign.fit,
-            monitor: &monitor,
-        };
-        let start = fit_params(&Params::paper(), &options);
-        let d = declared_fit(&ev, &start, start.plant.body.mass_kg, &options).unwrap();
-        assert!(d.undetermined.is_empty(), "{:?}", d.undetermined);
-        let value = |k: Knob| d.fit.values.iter().find(|v| v.knob == k).unwrap();
-        let (cd, tau) = (value(Knob::Cd), value(Knob::Tau));
-        assert!(
-            (cd.value / truth.plant.valve.cd - 1.0).abs() < 2e-3,
-            "Cd {} ± {} vs {}",
-            cd.value,
-            cd.std,
-            truth.plant.valve.cd
-        );
-        assert!(
-            (tau.value - truth.plant.valve.tau_s).abs() < 5e-5,
-            "τ {} ± {} vs {}",
-            tau.value,
-            tau.std,
-            truth.plant.valve.tau_s
-        );
-        // The starting point was far off: the fit moved, by the whole error.
-        assert!((start.plant.valve.cd - truth.plant.valve.cd).abs() > 0.05 * truth.plant.valve.cd);
-        assert!(d.notes.iter().any(|n| n.starts_with(&format!(
-            "declared-parameter fit stopped: {} after",
-            d.fit.termination
-        ))));
-        // The observer saw the stage, and Jacobians as its work.
-        assert!(stages.lock().unwrap().contains(&Stage::DeclaredFit));
-        assert!(monitor.evaluations() > 0);
-    }
 
     /// A 12-bit stroke record (10 µm noise) of a 2 Hz motion, and the twin's replay of it:
     /// the same motion, its own noise, plus `drift` [m] at time `t` [s].

@@ -1,6 +1,7 @@
-//! Synthetic records for the unit tests: made by the twin itself with known parameters, so a
-//! stage has a known answer.
+//! Synthetic records made by the twin itself with known parameters, so that a calibration
+//! stage has a known answer: for the tests, and for trying the calibration without a rig.
 
+use super::IdentifyError;
 use super::replay::{MetricOptions, PreparedRecord};
 use crate::dataset::Record;
 use crate::params::Params;
@@ -8,8 +9,10 @@ use std::f64::consts::PI;
 
 /// A measured record of `secs` at 1 kHz made by the twin with `params`: the valve driven in
 /// open loop by `0.6·sin(2π·3t) + 0.4·sin(2π·9t)` V, the platform still, `u` and `ÿ` as the
-/// twin gives them (noise-free).
-pub(crate) fn twin_record(params: &Params, secs: f64, name: &str) -> Record {
+/// twin gives them (noise-free). An error when `params` do not validate or the twin cannot
+/// replay them.
+pub fn twin_record(params: &Params, secs: f64, name: &str) -> Result<Record, IdentifyError> {
+    params.validate()?;
     let dt = 1e-3;
     let n = (secs / dt).round() as usize + 1;
     let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
@@ -31,16 +34,14 @@ pub(crate) fn twin_record(params: &Params, secs: f64, name: &str) -> Record {
         p2: None,
         warnings: vec![],
     };
-    let sim = PreparedRecord::new(&rec, &MetricOptions::default())
-        .and_then(|p| p.simulate(params))
-        .unwrap_or_else(|e| panic!("the twin replays its own record: {e}"));
+    let sim = PreparedRecord::new(&rec, &MetricOptions::default())?.simulate(params)?;
     rec.u = Some(sim.u);
     rec.ydd = Some(sim.ydd);
-    rec
+    Ok(rec)
 }
 
 /// The paper preset with Cd 10 % low and τ 2 ms longer: "the rig" of the tests.
-pub(crate) fn true_params() -> Params {
+pub fn true_params() -> Params {
     let mut p = Params::paper();
     p.plant.valve.cd *= 0.9;
     p.plant.valve.tau_s += 2e-3;

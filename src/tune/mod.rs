@@ -663,39 +663,6 @@ fn check_options(o: &TuneOptions) -> Result<(), TuneError> {
 mod tests {
     use super::*;
 
-    /// The stepped search (one optimiser iteration per step, for the web app's frames) gives
-    /// what argmin's `Executor` gives in one call: the same evaluations in the same order,
-    /// the same stop reason and result, bit for bit.
-    #[test]
-    fn stepped_tune_equals_the_executor_run() {
-        let opts = TuneOptions {
-            kind: ControllerKind::Predictive,
-            tune_seeds: vec![1],
-            heldout_seeds: vec![101],
-            duration_s: 6.0,
-            max_evaluations: 14,
-            ..TuneOptions::default()
-        };
-        let p = Params::paper();
-        let mut steps = 0;
-        let mut run = TuneRun::new(&p, &opts, None, None).unwrap();
-        let stepped = loop {
-            steps += 1;
-            if let Some(r) = run.step() {
-                break r.unwrap();
-            }
-        };
-        let reference = TuneRun::new(&p, &opts, None, None)
-            .unwrap()
-            .finish_with_executor()
-            .unwrap();
-        let json = |r: &TuneResult| serde_json::to_string(r).unwrap();
-        assert_eq!(json(&stepped), json(&reference));
-        assert_eq!(stepped.stop_reason, reference.stop_reason);
-        // Cut into pieces: at least the baseline, the start simplex and an iteration.
-        assert!(steps >= 4, "{steps} steps");
-    }
-
     #[test]
     fn a_cancelled_stepped_tune_stops_with_the_typed_reason() {
         let opts = TuneOptions {

@@ -367,12 +367,12 @@ impl TuneRun {
     }
 }
 
-#[cfg(test)]
 impl TuneRun {
-    /// The run with argmin's own `Executor` driving the optimiser in one call (what
-    /// [`tune_observed`] did before it was cut into steps): the reference of the stepped
-    /// search.
-    pub(super) fn finish_with_executor(mut self) -> Result<TuneResult, TuneError> {
+    /// The run to its end with argmin's own `Executor` driving the optimiser in one call
+    /// (what [`tune_observed`](super::tune_observed) did before it was cut into steps): the
+    /// reference the stepped search ([`Self::step`]) is tested against, evaluation for
+    /// evaluation.
+    pub fn finish_with_executor(mut self) -> Result<TuneResult, TuneError> {
         use argmin::core::Executor;
         while matches!(self.stage, RunStage::Baseline(_)) {
             if let Some(r) = self.step() {

@@ -275,3 +275,36 @@ fn a_cancel_during_the_search_stops_it_with_the_cancelled_error() {
     );
     assert_eq!(done.load(Ordering::Relaxed), 3);
 }
+
+/// The stepped search (one optimiser iteration per step, for the web app's frames) gives what
+/// argmin's `Executor` gives in one call: the same evaluations in the same order, the same
+/// stop reason and result, bit for bit.
+#[test]
+fn stepped_tune_equals_the_executor_run() {
+    let opts = TuneOptions {
+        kind: ControllerKind::Predictive,
+        tune_seeds: vec![1],
+        heldout_seeds: vec![101],
+        duration_s: 6.0,
+        max_evaluations: 14,
+        ..TuneOptions::default()
+    };
+    let p = Params::paper();
+    let mut steps = 0;
+    let mut run = tune::TuneRun::new(&p, &opts, None, None).unwrap();
+    let stepped = loop {
+        steps += 1;
+        if let Some(r) = run.step() {
+            break r.unwrap();
+        }
+    };
+    let reference = tune::TuneRun::new(&p, &opts, None, None)
+        .unwrap()
+        .finish_with_executor()
+        .unwrap();
+    let json = |r: &tune::TuneResult| serde_json::to_string(r).unwrap();
+    assert_eq!(json(&stepped), json(&reference));
+    assert_eq!(stepped.stop_reason, reference.stop_reason);
+    // Cut into pieces: at least the baseline, the start simplex and an iteration.
+    assert!(steps >= 4, "{steps} steps");
+}

@@ -135,7 +135,7 @@ mod tests {
     #[test]
     fn a_streamed_replay_equals_the_held_one() {
         let params = crate::identify::testdata::true_params();
-        let rec = crate::identify::testdata::twin_record(&params, 2.0, "a.csv");
+        let rec = crate::identify::testdata::twin_record(&params, 2.0, "a.csv").unwrap();
         let held = crate::identify::replay(&Params::paper(), &rec).unwrap();
         let mut rows = Vec::new();
         let e = replay_streamed(
@@ -169,7 +169,7 @@ mod tests {
     #[test]
     fn errors_up_to_an_end_stop_contact_are_those_of_the_record_cut_there() {
         let params = crate::identify::testdata::true_params();
-        let mut rec = crate::identify::testdata::twin_record(&params, 2.0, "a.csv");
+        let mut rec = crate::identify::testdata::twin_record(&params, 2.0, "a.csv").unwrap();
         let stroke = Params::paper().plant.cylinder.stroke_m;
         let contact = 1500;
         if let Some(u) = rec.u.as_mut() {

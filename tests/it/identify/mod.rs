@@ -14,7 +14,8 @@
 //! `rig` holds the true rig and the campaign helpers; `effects` checks the verdicts for every
 //! library effect and the pairs; `outside` those for effects outside the library, which are
 //! proposed beyond it; `records` checks the replay
-//! of the raw records, degenerate data and the held-out claims of `calibrated.toml`.
+//! of the raw records, degenerate data and the held-out claims of `calibrated.toml`; `twin_made`
+//! the fits and the report on records the twin made itself.
 
 mod campaigns;
 mod effects;
@@ -23,3 +24,4 @@ mod records;
 mod rig;
 mod survey;
 mod survey_cases;
+mod twin_made;
