@@ -11,26 +11,26 @@ use crate::simulation::{Drive, SimError, Trace};
 use std::fmt::Write;
 use std::time::Instant;
 
-/// RK4's step for the same accuracy as the exponential method at 0.5 ms [s].
+/// RK4's step for the same accuracy as the exponential method at 0.5 ms \[s\].
 pub const RK4_STEP_S: f64 = 1e-4;
 
 /// Largest ÿ error against the same run at a 10× finer step that the preset's step must keep
 /// [m/s²].
 pub const MAX_YDD_ERROR: f64 = 1e-4;
 
-/// Step of the independent RK4 reference run [s].
+/// Step of the independent RK4 reference run \[s\].
 pub const REFERENCE_STEP_S: f64 = 1e-5;
 
 /// Accuracy of a run against the same run at a 10× finer step.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Accuracy {
-    /// Step of the run [s].
+    /// Step of the run \[s\].
     pub step_s: f64,
     /// Largest |ÿ − ÿ_fine| over the record [m/s²].
     pub max_ydd_error: f64,
     /// RMS of ÿ − ÿ_fine [m/s²].
     pub rms_ydd_error: f64,
-    /// Largest |u − u_fine| [m].
+    /// Largest |u − u_fine| \[m\].
     pub max_u_error: f64,
 }
 
@@ -66,7 +66,7 @@ pub fn ride_run(
     )
 }
 
-/// The internal step a closed-loop run of `kind` recorded at 1 kHz uses [s]: the preset's
+/// The internal step a closed-loop run of `kind` recorded at 1 kHz uses \[s\]: the preset's
 /// step for the twin, the exact-hold step for the linear and passive models.
 pub fn bench_step_s(params: &Params, kind: ModelKind) -> f64 {
     match kind {
@@ -107,7 +107,7 @@ pub fn accuracy_of(coarse: &Trace, fine: &Trace, step_s: f64) -> Accuracy {
     }
 }
 
-/// Wall times of repeated runs [s].
+/// Wall times of repeated runs \[s\].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Timing {
     /// Fastest run: the cost without interference from the rest of the machine.
@@ -118,7 +118,7 @@ pub struct Timing {
     pub runs: usize,
 }
 
-/// Times `f` at least `min_runs` times and until `budget_s` [s] of runs have passed (at most
+/// Times `f` at least `min_runs` times and until `budget_s` \[s\] of runs have passed (at most
 /// 1000 runs); returns the timing and the last result. A shared 2-core VM's speed drifts
 /// between and within invocations, so one or five runs can land on a slow patch: many runs and
 /// their minimum and median say more.

@@ -5,13 +5,13 @@
 //! # Signals and units
 //! The controller runs once per simulation step `h` at the grid times, as a digital controller
 //! would. It measures ([`Measurement`]):
-//! * `u = y − x` [m], the relative displacement (the cylinder's position sensor);
+//! * `u = y − x` \[m\], the relative displacement (the cylinder's position sensor);
 //! * `ẍ` [m/s²], the platform accelerometer, and `∫ẍ dt` over the step just taken [m/s]
 //!   (the stepper integrates its own input: Simpson for the twin's RK stages, the trapezoid of
 //!   the exact-hold models' linear input);
 //! * `ÿ` [m/s²], a body accelerometer (read only by the kinds that need it).
 //!
-//! It returns the command `V` [V] before saturation; the simulation saturates it to ±Vmax,
+//! It returns the command `V` \[V\] before saturation; the simulation saturates it to ±Vmax,
 //! delays it by τ and applies it to the valve. With `u̇ ≈ Kg·V(t − τ)` (the valve and cylinder
 //! act as a velocity source, `Kg` ≈ 0.133 m/(s·V)), `Ki·Kg = −1` makes `u̇ = −ẋ` and so keeps the
 //! body still; `Kp < 0` pulls the seat back to mid-stroke.
@@ -52,7 +52,7 @@ use std::f64::consts::PI;
 /// What the controller measures at a grid time (SI).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Measurement {
-    /// Relative displacement `u = y − x` [m].
+    /// Relative displacement `u = y − x` \[m\].
     pub u: f64,
     /// Body acceleration `ÿ` [m/s²] (read only when [`Controller::needs_body_acceleration`]).
     pub ydd: f64,
@@ -179,7 +179,7 @@ pub struct Controller {
 }
 
 impl Controller {
-    /// A controller at rest for a control law, stepped every `h` [s].
+    /// A controller at rest for a control law, stepped every `h` \[s\].
     pub fn new(law: &ControlLaw, h: f64) -> Self {
         let c = law.params;
         let wc = 2.0 * PI * c.lead_cutoff_hz;
@@ -261,13 +261,13 @@ impl Controller {
         self.last = *m;
     }
 
-    /// The command for position `u` [m] with the states as they are [V], before saturation.
+    /// The command for position `u` \[m\] with the states as they are \[V\], before saturation.
     #[inline(always)]
     pub fn output(&self, u: f64) -> f64 {
         self.output_with(u, 0.0)
     }
 
-    /// The command for position `u` [m] with `dxd` [m/s] more of `∫ẍ` than integrated so far
+    /// The command for position `u` \[m\] with `dxd` [m/s] more of `∫ẍ` than integrated so far
     /// (a stage inside a step, for delays shorter than a step); other states as they are.
     #[inline(always)]
     pub fn output_with(&self, u: f64, dxd: f64) -> f64 {
@@ -288,7 +288,7 @@ impl Controller {
         }
     }
 
-    /// Records the command actually sent after saturation [V] (the Smith model's input).
+    /// Records the command actually sent after saturation \[V\] (the Smith model's input).
     #[inline(always)]
     pub fn sent(&mut self, v: f64) {
         self.sent = v;
@@ -397,7 +397,7 @@ pub struct ControllerState {
     pub sky_lp: f64,
     /// The previous measurement.
     pub last: Measurement,
-    /// The command last sent [V].
+    /// The command last sent \[V\].
     pub sent: f64,
     /// The Smith model's state `[ũ, w, ẇ]`, its history of ũ and the grid index of the
     /// newest sample.

@@ -44,8 +44,8 @@ pub struct Biquad {
 }
 
 impl Biquad {
-    /// Second-order Butterworth-type low-pass with quality factor `q` at the corner `fc` [Hz]
-    /// for the sample step `dt` [s] (bilinear transform, corner pre-warped). `q = 1/√2` is the
+    /// Second-order Butterworth-type low-pass with quality factor `q` at the corner `fc` \[Hz\]
+    /// for the sample step `dt` \[s\] (bilinear transform, corner pre-warped). `q = 1/√2` is the
     /// second-order Butterworth filter; the sections of a higher-order Butterworth filter use
     /// `q = 1/(2·cos θᵢ)` ([`butterworth_sections`]).
     pub fn lowpass(dt: f64, fc: f64, q: f64) -> Self {
@@ -149,7 +149,7 @@ pub struct AnalogSection {
 }
 
 impl AnalogSection {
-    /// Magnitude [-] and phase [rad] at the angular frequency `w` [rad/s].
+    /// Magnitude [-] and phase \[rad\] at the angular frequency `w` [rad/s].
     pub fn response(&self, w: f64) -> (f64, f64) {
         let eval = |c: &[f64; 3]| (c[0] - c[2] * w * w, c[1] * w);
         let (nr, ni) = eval(&self.num);
@@ -176,8 +176,8 @@ impl AnalogSection {
     }
 }
 
-/// The second-order sections of a Butterworth low-pass of even order `order` at `fc` [Hz]
-/// for the step `dt` [s]: `|H|² = 1/(1 + (f/fc)^(2·order))`.
+/// The second-order sections of a Butterworth low-pass of even order `order` at `fc` \[Hz\]
+/// for the step `dt` \[s\]: `|H|² = 1/(1 + (f/fc)^(2·order))`.
 pub fn butterworth_sections(dt: f64, fc: f64, order: usize) -> Vec<Biquad> {
     (1..=order / 2)
         .map(|i| {

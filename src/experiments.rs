@@ -12,13 +12,13 @@ use crate::simulation::{
 };
 use std::path::Path;
 
-/// Largest step of the exact (first-order-hold) runs of the linear and passive models [s].
+/// Largest step of the exact (first-order-hold) runs of the linear and passive models \[s\].
 /// Their inputs are smooth at this scale (ride ≤ 5 Hz, loop resonance 80 Hz): the hold error
 /// is below 0.2 % of the peak body acceleration (tests in [`crate::simulation::lti`]).
 pub const LTI_MAX_STEP_S: f64 = 1e-3;
 
-/// One run of a model from rest: its drive and platform motion, for `duration_s` [s] recorded
-/// at `rate_hz` [Hz] (what `seat-twin simulate` runs). The twin is stepped at the preset's
+/// One run of a model from rest: its drive and platform motion, for `duration_s` \[s\] recorded
+/// at `rate_hz` \[Hz\] (what `seat-twin simulate` runs). The twin is stepped at the preset's
 /// `numerics.max_step_s`, the linear models exactly at up to [`LTI_MAX_STEP_S`].
 #[derive(Debug, Clone)]
 pub struct RunSpec<'a> {
@@ -30,9 +30,9 @@ pub struct RunSpec<'a> {
     pub drive: Drive,
     /// The platform's motion.
     pub platform: PlatformMotion,
-    /// Duration [s].
+    /// Duration \[s\].
     pub duration_s: f64,
-    /// Output sample rate [Hz].
+    /// Output sample rate \[Hz\].
     pub rate_hz: f64,
 }
 
@@ -142,7 +142,7 @@ pub fn valve_sine(
     run(params, kind, drive, platform, duration_s, rate_hz)
 }
 
-/// Table 1 of the paper: the 69 (frequency [Hz], amplitude [V]) valve sine tests.
+/// Table 1 of the paper: the 69 (frequency \[Hz\], amplitude \[V\]) valve sine tests.
 pub fn table1() -> Vec<(f64, f64)> {
     const AMPS: [f64; 7] = [0.72, 1.10, 2.10, 3.00, 4.50, 6.40, 8.00];
     let rows: [(f64, usize); 13] = [

@@ -1,6 +1,6 @@
 //! Numbers for people: the one place that decides how a value reads in a message, a report or
 //! a widget. Values arrive already in their display unit (SI inside, display units only at
-//! the edges, see [`crate::params::table`]); this module only chooses digits.
+//! the edges, see [`crate::params::PARAMS`]); this module only chooses digits.
 //!
 //! | function | for | example |
 //! |---|---|---|

@@ -9,7 +9,7 @@
 //! parameters, excitation and seed give the same output bit for bit.
 //!
 //! * [`params`] — every physical parameter in SI, documented and validated, from one table
-//!   ([`params::table`]) that validation, sliders, calibration knobs and reports read.
+//!   ([`params::PARAMS`]) that validation, sliders, calibration knobs and reports read.
 //! * [`model`] — the three plants as pure right-hand sides `derivatives(t, state, inputs)`:
 //!   [`model::twin::Twin`] (10-state nonlinear multi-physics twin),
 //!   [`model::linear::LinearModel`] (G(s) of Eq. 15) and [`model::passive::PassiveModel`].
@@ -32,7 +32,8 @@
 //!   observer, cancel flag, stop reason).
 //! * [`tune`] — the gain search on the nonlinear twin under stability and stroke constraints.
 //! * [`seat_test`] — the laboratory seat tests of ISO 7096 / ISO 5007 / EN 13490 on any model.
-//! * [`format`] — numbers for people: the one formatter of messages, reports and widgets.
+//! * [`format`](mod@format) — numbers for people: the one formatter of messages, reports and
+//!   widgets.
 //!
 //! # The faces
 //!
@@ -42,8 +43,8 @@
 //! * [`cli`] — the headless `seat-twin` subcommands, one file each (the binary's `main.rs`
 //!   parses and dispatches).
 //! * `gui` (feature `gui`) — the egui desktop app, a client of [`engine`].
-//! * [`report`], [`bench`] — `seat-twin report` (the paper's sections 4–6 reproduced) and
-//!   `seat-twin bench` (real-time factors and accuracy on this machine).
+//! * [`report`], [`bench`](mod@bench) — `seat-twin report` (the paper's sections 4–6
+//!   reproduced) and `seat-twin bench` (real-time factors and accuracy on this machine).
 //! * [`dataset`], [`preset`] — the rig's CSV records and the TOML presets, read and written.
 //! * [`export`] — the twin as an FMI 2.0 co-simulation FMU (the C API in this crate's
 //!   shared library) and the controller as portable C99.

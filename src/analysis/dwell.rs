@@ -16,9 +16,9 @@ use std::f64::consts::PI;
 /// Options of a simulated sine dwell.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DwellOptions {
-    /// Settling time before the analysis window [s].
+    /// Settling time before the analysis window \[s\].
     pub settle_s: f64,
-    /// Minimum analysis window [s] (rounded up to whole periods, at least 2).
+    /// Minimum analysis window \[s\] (rounded up to whole periods, at least 2).
     pub min_window_s: f64,
 }
 
@@ -35,7 +35,7 @@ fn dwell_periods(freq_hz: f64, opt: &DwellOptions) -> usize {
     ((opt.min_window_s * freq_hz).ceil() as usize).max(2)
 }
 
-/// Simulated time of one [`simulated_bode`] dwell [s]: the settling time and the whole
+/// Simulated time of one [`simulated_bode`] dwell \[s\]: the settling time and the whole
 /// periods of the analysis window (for cost estimates as well as the run).
 pub fn bode_dwell_s(freq_hz: f64, opt: &DwellOptions) -> f64 {
     opt.settle_s + dwell_periods(freq_hz, opt) as f64 / freq_hz
@@ -48,7 +48,7 @@ fn transmissibility_periods(freq_hz: f64, opt: &DwellOptions) -> usize {
     dwell_periods(freq_hz, opt).max(freq_hz.ceil() as usize)
 }
 
-/// Simulated time of one [`simulated_transmissibility`] dwell [s]: the fade-in, 2 s, the
+/// Simulated time of one [`simulated_transmissibility`] dwell \[s\]: the fade-in, 2 s, the
 /// settling time and the analysis window.
 pub fn transmissibility_dwell_s(freq_hz: f64, opt: &DwellOptions) -> f64 {
     TRANSMISSIBILITY_FADE_S

@@ -19,7 +19,7 @@ use std::f64::consts::PI;
 /// One point of a frequency response.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct FrequencyPoint {
-    /// Frequency [Hz].
+    /// Frequency \[Hz\].
     pub freq_hz: f64,
     /// Complex response (SI ratio, e.g. [m/(s·V)] or [-]).
     pub value: Complex64Ser,
@@ -56,13 +56,13 @@ impl FrequencyPoint {
     pub fn mag(&self) -> f64 {
         self.complex().norm()
     }
-    /// Phase [rad] in (−π, π].
+    /// Phase \[rad\] in (−π, π].
     pub fn phase(&self) -> f64 {
         self.complex().arg()
     }
 }
 
-/// Unwraps a phase sequence [rad] so that consecutive values differ by less than π.
+/// Unwraps a phase sequence \[rad\] so that consecutive values differ by less than π.
 pub fn unwrap_phase(phases: &[f64]) -> Vec<f64> {
     let mut out = Vec::with_capacity(phases.len());
     let mut offset = 0.0;
@@ -81,7 +81,7 @@ pub fn unwrap_phase(phases: &[f64]) -> Vec<f64> {
     out
 }
 
-/// Logarithmically spaced frequencies [Hz].
+/// Logarithmically spaced frequencies \[Hz\].
 pub fn log_space(f_lo: f64, f_hi: f64, n: usize) -> Vec<f64> {
     if n < 2 {
         return vec![f_lo];
@@ -152,11 +152,11 @@ pub struct OpenLoop {
     pub omega: f64,
     /// `u/V_valve` [m/V].
     pub u_v: Complex64,
-    /// `u/ẍ` [s²].
+    /// `u/ẍ` \[s²\].
     pub u_x: Complex64,
     /// `u̇/V_valve` [m/(s·V)].
     pub du_v: Complex64,
-    /// `u̇/ẍ` [s].
+    /// `u̇/ẍ` \[s\].
     pub du_x: Complex64,
 }
 
@@ -246,7 +246,7 @@ pub fn linearise_twin(params: &Params) -> LinearisedModel {
 
 impl LinearisedModel {
     /// Prepares `ẏ = A·y + b_v·V_valve + b_x·ẍ` (state order: `u`, `u̇`, …) with the state
-    /// scales `scales` and the command delay `tau_s` [s].
+    /// scales `scales` and the command delay `tau_s` \[s\].
     pub fn new(
         a: DMatrix<f64>,
         b_v: DVector<f64>,
@@ -291,7 +291,7 @@ impl LinearisedModel {
         &self.b_x
     }
 
-    /// Pure delay of the command [s].
+    /// Pure delay of the command \[s\].
     pub fn tau_s(&self) -> f64 {
         self.tau_s
     }
@@ -301,7 +301,7 @@ impl LinearisedModel {
         &self.scales
     }
 
-    /// The open-loop responses at `freq_hz` [Hz], delay excluded: one elimination on the
+    /// The open-loop responses at `freq_hz` \[Hz\], delay excluded: one elimination on the
     /// Hessenberg form for both inputs. NaN if `jωI − A` is singular.
     pub fn open_loop(&self, freq_hz: f64) -> OpenLoop {
         let omega = 2.0 * PI * freq_hz;
@@ -416,7 +416,7 @@ pub fn first_harmonic(values: &[f64], dt: f64, t0: f64, freq_hz: f64, periods: u
 /// A frequency where |T| crosses 1.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Crossing {
-    /// Frequency [Hz] (log-linear interpolation between the bracketing points).
+    /// Frequency \[Hz\] (log-linear interpolation between the bracketing points).
     pub freq_hz: f64,
     /// True where |T| rises through 1 (the end of an isolation band).
     pub rising: bool,
@@ -460,7 +460,7 @@ pub fn isolation_lower_edge(freqs_hz: &[f64], mags: &[f64]) -> Option<f64> {
 }
 
 /// Pure delay estimated from the phase slope, as in section 4.1: least-squares fit of the
-/// unwrapped phase [rad] against ω, `τ = −dφ/dω` [s].
+/// unwrapped phase \[rad\] against ω, `τ = −dφ/dω` \[s\].
 pub fn delay_from_phase_slope(freqs_hz: &[f64], phases_rad: &[f64]) -> f64 {
     let ph = unwrap_phase(phases_rad);
     let n = freqs_hz.len().min(ph.len()) as f64;

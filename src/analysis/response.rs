@@ -47,9 +47,9 @@ impl Method {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Response {
     /// Relative velocity over valve command `u̇/V_in` [m/(s·V)], platform still, open loop,
-    /// for a command sine of `amplitude_v` [V] (the simulated method is amplitude dependent).
+    /// for a command sine of `amplitude_v` \[V\] (the simulated method is amplitude dependent).
     Bode {
-        /// Command amplitude [V].
+        /// Command amplitude \[V\].
         amplitude_v: f64,
     },
     /// Body over platform acceleration `ÿ/ẍ` [-], closed loop.
@@ -95,14 +95,14 @@ pub enum ResponseError {
     /// A point came out as NaN or infinite.
     #[error("the response at {} Hz is not a finite number ({value})", general(*.freq_hz))]
     NotFinite {
-        /// Frequency of the first such point [Hz].
+        /// Frequency of the first such point \[Hz\].
         freq_hz: f64,
         /// Its value.
         value: Complex64,
     },
 }
 
-/// The response of `kind` at every frequency of `freqs_hz` [Hz] by `method`. Simulated dwells
+/// The response of `kind` at every frequency of `freqs_hz` \[Hz\] by `method`. Simulated dwells
 /// run in parallel (rayon). Every point is finite, or the error names the first that is not.
 pub fn response(
     params: &Params,

@@ -12,7 +12,7 @@ use crate::params::Params;
 use crate::scenario::Cycloid;
 use crate::simulation::SimError;
 
-/// Length of the run [s].
+/// Length of the run \[s\].
 pub const SETTLE_RUN_S: f64 = 10.0;
 /// Largest RMS of ÿ over the last 2 s of a settled run [m/s²].
 pub const SETTLE_RMS_M_S2: f64 = 0.02;
@@ -28,7 +28,7 @@ pub struct Settle {
     pub rms_last_2s_m_s2: f64,
     /// RMS of ÿ over the last second over that of the second before [-].
     pub growth_ratio: f64,
-    /// Frequency of the strongest oscillation in the last 2 s [Hz] (zero crossings of ÿ).
+    /// Frequency of the strongest oscillation in the last 2 s \[Hz\] (zero crossings of ÿ).
     pub freq_hz: f64,
 }
 

@@ -16,11 +16,11 @@
 
 use crate::dsp::{Biquad, BiquadState};
 
-/// High-pass corner [Hz].
+/// High-pass corner \[Hz\].
 pub const HIGHPASS_HZ: f64 = 30.0;
-/// High-pass corner of the signal whose zero crossings give the frequency [Hz].
+/// High-pass corner of the signal whose zero crossings give the frequency \[Hz\].
 pub const FREQ_HIGHPASS_HZ: f64 = 8.0;
-/// Window length [s].
+/// Window length \[s\].
 pub const WINDOW_S: f64 = 0.5;
 /// Smallest high-passed ÿ RMS that counts [m/s²].
 pub const FLOOR_M_S2: f64 = 0.5;
@@ -38,31 +38,31 @@ pub const GROWTH_FLOOR_M_S2: f64 = 0.05;
 pub enum Finding {
     /// A self-excited oscillation that does not decay.
     LimitCycle {
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         freq_hz: f64,
         /// RMS of the high-passed ÿ over the last window [m/s²].
         rms_m_s2: f64,
-        /// Time [s].
+        /// Time \[s\].
         t: f64,
     },
     /// The oscillation grows window on window.
     Growth {
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         freq_hz: f64,
         /// Rise of the high-passed ÿ RMS over the windows [-].
         factor: f64,
         /// RMS of the high-passed ÿ over the last window [m/s²].
         rms_m_s2: f64,
-        /// Time [s].
+        /// Time \[s\].
         t: f64,
     },
     /// A chamber pressure below zero: outside the model (it has no cavitation).
     NegativePressure {
         /// Which chamber (1 or 2).
         chamber: u8,
-        /// The pressure [Pa].
+        /// The pressure \[Pa\].
         p_pa: f64,
-        /// Time [s].
+        /// Time \[s\].
         t: f64,
     },
 }
@@ -136,7 +136,7 @@ fn highpass(dt: f64, fc: f64) -> Biquad {
 }
 
 impl Watch {
-    /// A watch for samples `dt` [s] apart.
+    /// A watch for samples `dt` \[s\] apart.
     pub fn new(dt: f64) -> Self {
         let hp = highpass(dt, HIGHPASS_HZ);
         Self {
@@ -161,7 +161,7 @@ impl Watch {
         *self = Self::new(self.dt);
     }
 
-    /// Takes one sample (time [s], ẍ, ÿ [m/s²], p1, p2 [Pa]); returns a finding once.
+    /// Takes one sample (time \[s\], ẍ, ÿ [m/s²], p1, p2 \[Pa\]); returns a finding once.
     pub fn push(&mut self, t: f64, xdd: f64, ydd: f64, p1: f64, p2: f64) -> Option<Finding> {
         if !self.pressure_reported {
             for (chamber, p) in [(1, p1), (2, p2)] {

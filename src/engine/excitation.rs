@@ -51,14 +51,14 @@ pub enum Excitation {
     Cycloid {
         /// The bump.
         bump: Cycloid,
-        /// Repeat period [s].
+        /// Repeat period \[s\].
         period_s: f64,
     },
-    /// Platform sine: acceleration amplitude [m/s²] and frequency [Hz].
+    /// Platform sine: acceleration amplitude [m/s²] and frequency \[Hz\].
     Sine {
         /// Acceleration amplitude [m/s²].
         accel_m_s2: f64,
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         freq_hz: f64,
     },
     /// A loaded platform record (replayed from the start when it ends).
@@ -68,16 +68,16 @@ pub enum Excitation {
     Class {
         /// The class.
         class: &'static InputClass,
-        /// Record length [s], 20 ..= 3600.
+        /// Record length \[s\], 20 ..= 3600.
         duration_s: f64,
         /// Seed of the phases.
         seed: u64,
     },
     /// Platform still; open-loop valve sine `A·cos(2πft)` on the active models.
     ValveSine {
-        /// Amplitude [V].
+        /// Amplitude \[V\].
         amplitude_v: f64,
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         freq_hz: f64,
     },
 }

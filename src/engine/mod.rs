@@ -30,7 +30,7 @@ use worker::engine_loop;
 #[cfg(target_arch = "wasm32")]
 use worker::{Local, Loop};
 
-/// Rate at which samples are streamed to the UI [Hz].
+/// Rate at which samples are streamed to the UI \[Hz\].
 pub const STREAM_RATE_HZ: f64 = 500.0;
 
 /// Commands to the engine.
@@ -86,7 +86,7 @@ pub enum Event {
     Samples(Batch),
     /// Progress and pacing.
     Status {
-        /// Simulated time [s] since the last reset or new excitation. It keeps increasing
+        /// Simulated time \[s\] since the last reset or new excitation. It keeps increasing
         /// when the excitation ends and restarts by itself, like the scopes' time axis.
         t: f64,
         /// Achieved simulated/wall time over the last second while running (never negative;

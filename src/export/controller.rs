@@ -1,9 +1,9 @@
 //! The controller at a fixed rate, in Rust ([`SampledController`]) and as portable C99
-//! (`seat-twin export controller`, File → Export controller code… through [`write`]).
+//! (`seat-twin export controller`, File → Export controller code… through [`write`](fn@write)).
 //!
 //! # The discrete controller
 //! [`SampledController`] is the twin's own [`Controller`] stepped at `h = 1/rate` on sensor
-//! samples, as it would run on the rig: at each sample it takes `u` [m], `ẍ` [m/s²] and `ÿ`
+//! samples, as it would run on the rig: at each sample it takes `u` \[m\], `ẍ` [m/s²] and `ÿ`
 //! [m/s²]; `∫ẍ dt` grows by the trapezoid `h/2·(ẍₙ₋₁ + ẍₙ)` (the only rule samples allow; the
 //! twin's stepper uses Simpson with its mid-step value), the filters step exactly for an
 //! input linear between samples, the Smith model exactly for the command held over the step.
@@ -14,7 +14,7 @@
 //!
 //! # The C code
 //! `seat_controller.h` / `seat_controller.c`: one state struct, `seat_ctrl_init` and
-//! `seat_ctrl_step(s, u_m, xdd_m_s2, ydd_m_s2)` returning the saturated command [V] before the
+//! `seat_ctrl_step(s, u_m, xdd_m_s2, ydd_m_s2)` returning the saturated command \[V\] before the
 //! valve's delay; `_f` names for the float variant. No allocation, no globals, no libm: every
 //! coefficient is written as a C99 hexadecimal literal of the Rust value, and the
 //! expressions keep Rust's order of operations, so that the double variant, compiled with
@@ -28,7 +28,7 @@ use crate::preset::Preset;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// Allowed controller rates [Hz].
+/// Allowed controller rates \[Hz\].
 pub const RATE_RANGE_HZ: (f64, f64) = (50.0, 100_000.0);
 
 /// The twin's controller stepped at a fixed rate on sensor samples (see the module docs).
@@ -42,7 +42,7 @@ pub struct SampledController {
 }
 
 impl SampledController {
-    /// The preset's controller at `rate_hz` [Hz], at rest.
+    /// The preset's controller at `rate_hz` \[Hz\], at rest.
     pub fn new(params: &Params, rate_hz: f64) -> Self {
         let h = 1.0 / rate_hz;
         Self {
@@ -54,7 +54,7 @@ impl SampledController {
         }
     }
 
-    /// The command [V], saturated to ±Vmax, for the samples `u` [m], `ẍ` [m/s²], `ÿ` [m/s²].
+    /// The command \[V\], saturated to ±Vmax, for the samples `u` \[m\], `ẍ` [m/s²], `ÿ` [m/s²].
     pub fn step(&mut self, u: f64, xdd: f64, ydd: f64) -> f64 {
         let c = &mut self.controller;
         if self.started {
@@ -135,7 +135,7 @@ fn smith_tap(tau_s: f64, h: f64) -> (i64, f64, [f64; 4], usize) {
 pub struct Provenance {
     /// Preset name or file.
     pub preset: String,
-    /// Gain margin [dB], phase margin [deg] and delay margin [s] of the twin linearised at
+    /// Gain margin \[dB\], phase margin \[deg\] and delay margin \[s\] of the twin linearised at
     /// rest with this law (continuous time), if the loop is stable.
     pub margins: Option<(f64, f64, f64)>,
 }
@@ -584,7 +584,7 @@ pub enum ControllerExportError {
     },
 }
 
-/// The files [`write`] makes in its directory.
+/// The files [`write`](fn@write) makes in its directory.
 pub const FILES: [&str; 3] = [
     "seat_controller.h",
     "seat_controller.c",

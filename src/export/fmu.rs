@@ -1,5 +1,5 @@
 //! The FMU of the twin: its variables, `modelDescription.xml`, and the archive
-//! (`seat-twin export fmu`, and File → Export FMU… in the app through [`write`]).
+//! (`seat-twin export fmu`, and File → Export FMU… in the app through [`write`](fn@write)).
 //!
 //! An FMI 2.0 co-simulation FMU, `modelIdentifier` `seat_twin`:
 //!
@@ -83,9 +83,9 @@ pub struct Variable {
     pub unit: &'static str,
     /// What it is.
     pub description: String,
-    /// Start value [SI] (inputs and parameters).
+    /// Start value \[SI\] (inputs and parameters).
     pub start: Option<f64>,
-    /// Valid range [SI], checked when set.
+    /// Valid range \[SI\], checked when set.
     pub range: Option<(f64, f64)>,
 }
 
@@ -102,9 +102,9 @@ pub const VR_PARAMS: u32 = 1000;
 
 /// Range of the platform-acceleration input [m/s²] (±100 g).
 pub const XDD_RANGE: (f64, f64) = (-1000.0, 1000.0);
-/// Range of the platform-position input [m].
+/// Range of the platform-position input \[m\].
 pub const X_RANGE: (f64, f64) = (-100.0, 100.0);
-/// Range of the external command [V] (the valve saturates it at ±Vmax).
+/// Range of the external command \[V\] (the valve saturates it at ±Vmax).
 pub const V_IN_EXT_RANGE: (f64, f64) = (-1000.0, 1000.0);
 
 /// The outputs: name, SI unit, description.
@@ -463,7 +463,7 @@ pub fn library_beside_executable() -> PathBuf {
     here
 }
 
-/// What [`write`] made.
+/// What [`write`](fn@write) made.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FmuSummary {
     /// Bytes of the archive.

@@ -71,9 +71,9 @@ pub struct CentreView {
     scopes_frozen: bool,
     scope_frames: Vec<egui::Rect>,
     last_stable: Option<ControllerParams>,
-    /// Time of the scopes in the last frame [ms].
+    /// Time of the scopes in the last frame \[ms\].
     pub scopes_ms: f64,
-    /// Time of the frequency plots in the last frame [ms].
+    /// Time of the frequency plots in the last frame \[ms\].
     pub freq_ms: f64,
 }
 

@@ -454,19 +454,19 @@ pub struct ExcitationEditor {
     pub random: RandomRide,
     /// Cycloid bump.
     pub cycloid: Cycloid,
-    /// Cycloid repeat period [s].
+    /// Cycloid repeat period \[s\].
     pub cycloid_period_s: f64,
     /// Platform sine acceleration amplitude [m/s²].
     pub sine_accel_m_s2: f64,
-    /// Platform sine frequency [Hz].
+    /// Platform sine frequency \[Hz\].
     pub sine_freq_hz: f64,
-    /// Valve sine amplitude [V].
+    /// Valve sine amplitude \[V\].
     pub valve_amplitude_v: f64,
-    /// Valve sine frequency [Hz].
+    /// Valve sine frequency \[Hz\].
     pub valve_freq_hz: f64,
     /// Seat-test class name (e.g. `"EM6"`).
     pub class_name: String,
-    /// Seat-test class record length [s] (a new seed follows when it ends).
+    /// Seat-test class record length \[s\] (a new seed follows when it ends).
     pub class_duration_s: f64,
     /// The loaded record (not persisted).
     #[serde(skip)]

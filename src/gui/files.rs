@@ -39,7 +39,7 @@ pub enum Purpose {
     ExportController,
 }
 
-/// The rate of the controller code the app exports [Hz] (the CLI's `--rate` takes others).
+/// The rate of the controller code the app exports \[Hz\] (the CLI's `--rate` takes others).
 pub const CONTROLLER_EXPORT_RATE_HZ: f64 = 1000.0;
 
 impl Purpose {
@@ -321,7 +321,7 @@ pub fn absolute(path: &Path) -> PathBuf {
     std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
-/// "or path: [____] Load": a typed path, for desktops without a file dialog. Returns the
+/// "or path: \[____\] Load": a typed path, for desktops without a file dialog. Returns the
 /// text when Load is clicked or Enter pressed in a non-empty field.
 pub fn typed_path_ui(
     ui: &mut egui::Ui,

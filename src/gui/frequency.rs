@@ -31,11 +31,11 @@ use std::f64::consts::PI;
 use std::time::Duration;
 use web_time::Instant;
 
-/// Frequency range of the plots [Hz].
+/// Frequency range of the plots \[Hz\].
 pub const F_RANGE_HZ: (f64, f64) = (0.1, 100.0);
 /// Points of the analytic curves.
 pub const N_POINTS: usize = 240;
-/// Frequencies of the simulated dwell [Hz].
+/// Frequencies of the simulated dwell \[Hz\].
 pub const DWELL_RANGE_HZ: (f64, f64) = (0.3, 30.0);
 /// Number of dwell points.
 pub const N_DWELL: usize = 14;
@@ -47,10 +47,10 @@ pub const BODE_DWELL_NAME: &str = "twin simulated (sine dwell, ≤ 1.1 V)";
 pub const T_NAMES: [&str; 3] = ["linear active", "twin active (linearised)", "passive"];
 /// Legends of the u̇/V_in curves: linearised twin, G(s).
 pub const BODE_NAMES: [&str; 2] = ["twin (linearised)", "G(s)"];
-/// Highest frequency of the simulated u̇/V_in points [Hz] (Table 1's range: above it the
+/// Highest frequency of the simulated u̇/V_in points \[Hz\] (Table 1's range: above it the
 /// phase between neighbouring dwell points could not be unwrapped reliably).
 pub const BODE_DWELL_MAX_HZ: f64 = 20.0;
-/// Command amplitude of the simulated u̇/V_in point at `freq_hz` [V]: Table 1's 1.1 V where
+/// Command amplitude of the simulated u̇/V_in point at `freq_hz` \[V\]: Table 1's 1.1 V where
 /// the stroke allows, less at low frequency so that the piston stays within ±15 mm of
 /// mid-stroke (at the paper's gain of 133 mm/(s·V), 1.1 V at 0.3 Hz would swing ±78 mm,
 /// into the end stops at ±35 mm).

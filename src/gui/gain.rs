@@ -12,7 +12,7 @@
 use egui::{DragValue, Response, Sense, Ui, Widget, WidgetInfo};
 use std::ops::RangeInclusive;
 
-/// Drag distance per decade of |gain| [px].
+/// Drag distance per decade of |gain| \[px\].
 pub const PX_PER_DECADE: f32 = 100.0;
 /// How much finer a Shift-drag or Shift-arrow steps.
 pub const FINE: f32 = 10.0;
@@ -27,12 +27,12 @@ pub struct SymLog {
 }
 
 impl SymLog {
-    /// Position on the scale of value `v` [decades].
+    /// Position on the scale of value `v` \[decades\].
     pub fn position(self, v: f64) -> f64 {
         v.signum() * (1.0 + v.abs() / self.resolution).log10()
     }
 
-    /// Value at position `s` [decades] (inverse of [`Self::position`]).
+    /// Value at position `s` \[decades\] (inverse of [`Self::position`]).
     pub fn value(self, s: f64) -> f64 {
         s.signum() * self.resolution * (10f64.powf(s.abs()) - 1.0)
     }

@@ -19,7 +19,7 @@ pub struct LessonView<'a> {
     /// The loop is unstable (linear verdict, or the running twin's own watch, or an engine
     /// divergence).
     pub unstable: bool,
-    /// Seconds of data in the running metrics (since the last change) [s].
+    /// Seconds of data in the running metrics (since the last change) \[s\].
     pub counted_s: f64,
     /// SEAT of the twin and of the passive seat [%] over the counted data.
     pub seat_twin_percent: f64,
@@ -45,7 +45,7 @@ pub struct Lesson {
     done: fn(&LessonView<'_>, &Params) -> bool,
 }
 
-/// The passive seat's natural frequency `fn = √(k/m)/2π` [Hz].
+/// The passive seat's natural frequency `fn = √(k/m)/2π` \[Hz\].
 pub fn passive_natural_hz(p: &Params) -> f64 {
     (p.plant.body.stiffness_n_per_m / p.plant.body.mass_kg).sqrt() / (2.0 * std::f64::consts::PI)
 }

@@ -19,7 +19,7 @@
 //! * [`settings`] — what persists between runs; [`session`] — the session file.
 //! * [`scopes`], [`schematic`], [`controls`] — widgets; [`files`] — dialogs and exports
 //!   off the UI thread; [`files_view`] — the path prompt and the discard question;
-//!   [`units`] — display units; [`format`] — numbers for people;
+//!   [`units`] — display units; [`format`](mod@format) — numbers for people;
 //!   [`plotkit`] — y axes, clickable legends, wrapped phase.
 
 pub mod ab;

@@ -41,7 +41,7 @@ pub fn nice_step(min_step: f64) -> f64 {
 }
 
 /// Y grid marks: one step for the whole axis, chosen so that the marks are at least
-/// [`MIN_TICK_PX`] apart on a plot `height_px` high, and at most about six in view. Every
+/// `MIN_TICK_PX` apart on a plot `height_px` high, and at most about six in view. Every
 /// mark gets the same step size, so all of them are labelled, however small the amplitude
 /// (a ±0.004 m/s² trace reads −0.004, −0.002, 0, 0.002, 0.004).
 pub fn y_marks(input: GridInput, height_px: f32) -> Vec<GridMark> {
@@ -285,7 +285,7 @@ pub fn set_presentation(ctx: &egui::Context, on: bool) {
 /// How much thicker plot lines are in presentation mode.
 pub const PRESENTATION_LINE: f32 = 2.0;
 
-/// A plot line's width [points] in the current mode: `width`, or thicker in presentation
+/// A plot line's width \[points\] in the current mode: `width`, or thicker in presentation
 /// mode.
 pub fn line_width(ctx: &egui::Context, width: f32) -> f32 {
     let on = ctx

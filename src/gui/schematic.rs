@@ -8,11 +8,11 @@ use crate::params::Params;
 use crate::simulation::Sample;
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
 
-/// Smallest half-width of the colour scale [Pa]: a still rig does not flicker through the
+/// Smallest half-width of the colour scale \[Pa\]: a still rig does not flicker through the
 /// whole scale on a few mbar of noise.
 pub const MIN_HALF_SPAN_PA: f64 = 0.25e5;
 
-/// The pressure range the colours span [Pa]: the range seen in the scopes' window (both
+/// The pressure range the colours span \[Pa\]: the range seen in the scopes' window (both
 /// chambers), widened to at least ±[`MIN_HALF_SPAN_PA`] around its middle; the return and
 /// supply pressures before anything was seen.
 pub fn color_range(seen_pa: Option<(f64, f64)>, params: &Params) -> (f64, f64) {
@@ -29,7 +29,7 @@ pub fn color_range(seen_pa: Option<(f64, f64)>, params: &Params) -> (f64, f64) {
     }
 }
 
-/// Colour of a pressure on the scale `range` [Pa]: blue at its low end, white in the
+/// Colour of a pressure on the scale `range` \[Pa\]: blue at its low end, white in the
 /// middle, red at its high end.
 pub fn pressure_color(p_pa: f64, range: (f64, f64)) -> Color32 {
     let (lo, hi) = range;

@@ -118,13 +118,13 @@ fn envelope(pts: &[PlotPoint], max: usize) -> PlotPoints<'_> {
 /// How the scopes show time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScopeView {
-    /// Window length [s], 1 … [`MAX_WINDOW_S`].
+    /// Window length \[s\], 1 … [`MAX_WINDOW_S`].
     pub window_s: f64,
     /// Scrolling with the simulation (not frozen, not paused).
     pub live: bool,
 }
 
-/// The window lengths offered [s].
+/// The window lengths offered \[s\].
 pub const WINDOWS_S: [f64; 7] = [1.0, 2.0, 5.0, 10.0, 20.0, 30.0, MAX_WINDOW_S];
 
 /// Data areas of the six scopes drawn last frame (screen rects), top to bottom.

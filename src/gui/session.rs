@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 /// The session format this build writes and reads.
 pub const FORMAT_VERSION: u32 = 1;
 
-/// Largest session file read [bytes] (a tune result with a long Pareto front is a few tens of
+/// Largest session file read \[bytes\] (a tune result with a long Pareto front is a few tens of
 /// kB).
 pub const MAX_SESSION_BYTES: u64 = 8 << 20;
 
@@ -39,7 +39,7 @@ pub struct SessionView {
     pub hidden_curves: BTreeSet<String>,
     /// Unwrapped phase.
     pub phase_unwrapped: bool,
-    /// Scope window length [s], 1 … 60.
+    /// Scope window length \[s\], 1 … 60.
     pub scope_window_s: f64,
     /// Schematic panel shown.
     pub show_schematic: bool,
@@ -151,7 +151,7 @@ pub enum SessionError {
     TooLarge {
         /// The file.
         file: PathBuf,
-        /// Its size [bytes].
+        /// Its size \[bytes\].
         size: u64,
     },
     /// Not a session file of this format.

@@ -52,7 +52,7 @@ pub struct Settings {
     pub phase_unwrapped: bool,
     /// UI scale (egui's zoom factor: 1 = 100 %), also changed with Ctrl + / Ctrl −.
     pub ui_scale: f32,
-    /// Length of the scopes' time window [s], 1 … 60.
+    /// Length of the scopes' time window \[s\], 1 … 60.
     pub scope_window_s: f64,
     /// The folder of the last file opened or saved (dialogs and typed paths start there).
     pub last_dir: Option<PathBuf>,

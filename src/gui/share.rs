@@ -10,7 +10,7 @@
 //!
 //! * `preset` — a preset compiled into the app ([`SHIPPED`]); the parameters start from it.
 //! * `kind` — the controller structure; any key of the parameter table
-//!   ([`crate::params::PARAMS`]) — a value [SI] that differs from the preset.
+//!   ([`crate::params::PARAMS`]) — a value \[SI\] that differs from the preset.
 //! * `exc` — the excitation: `random,seed,dur,s0,flo,fhi`, `sine,a,f` (platform, m/s² and
 //!   Hz), `valve,a,f` (V, Hz), `cycloid,h,rise,period` (m, s, s), `class,name,dur`.
 //! * `speed` (`slow`, `1x`, `fast`, `max`), `present` (0/1), `lesson` (step number, 1-based).

@@ -9,13 +9,13 @@ use crate::simulation::Sample;
 use egui_plot::PlotPoint;
 
 /// Default length of the scrolling window of the scopes, and the span of the rows kept for
-/// the CSV export [s].
+/// the CSV export \[s\].
 pub const WINDOW_S: f64 = 10.0;
 
-/// Longest scope window offered, and the span of the scope channels kept [s].
+/// Longest scope window offered, and the span of the scope channels kept \[s\].
 pub const MAX_WINDOW_S: f64 = 60.0;
 
-/// Samples left out of the running metrics after a reset or a parameter change [s].
+/// Samples left out of the running metrics after a reset or a parameter change \[s\].
 pub const METRICS_SETTLE_S: f64 = 1.0;
 
 /// One scope channel: a sliding window of points `(t [s], value [display unit])`.
@@ -76,31 +76,31 @@ pub enum Ch {
     LinearAcc,
     /// Passive body acceleration [m/s²].
     PassiveAcc,
-    /// Twin stroke u [mm].
+    /// Twin stroke u \[mm\].
     TwinU,
-    /// Linear-model stroke [mm].
+    /// Linear-model stroke \[mm\].
     LinearU,
-    /// Passive stroke [mm].
+    /// Passive stroke \[mm\].
     PassiveU,
-    /// Twin upper chamber pressure p1 [bar].
+    /// Twin upper chamber pressure p1 \[bar\].
     P1,
-    /// Twin lower chamber pressure p2 [bar].
+    /// Twin lower chamber pressure p2 \[bar\].
     P2,
     /// Twin hose-1 flow Q1 [L/min].
     Q1,
     /// Twin hose-2 flow Q2 [L/min].
     Q2,
-    /// Twin command V_in [V].
+    /// Twin command V_in \[V\].
     TwinVin,
-    /// Linear-model command [V].
+    /// Linear-model command \[V\].
     LinearVin,
-    /// Twin spool position x_v [mm].
+    /// Twin spool position x_v \[mm\].
     TwinXv,
     /// A/B reference twin body acceleration [m/s²].
     RefAcc,
-    /// A/B reference twin stroke [mm].
+    /// A/B reference twin stroke \[mm\].
     RefU,
-    /// A/B reference twin command [V].
+    /// A/B reference twin command \[V\].
     RefVin,
 }
 
@@ -119,9 +119,9 @@ pub struct LiveMetrics {
     pub passive: RunningMetrics,
     /// A/B reference twin body acceleration.
     pub reference: RunningMetrics,
-    /// Largest |u| of the live twin since the last metrics reset [m].
+    /// Largest |u| of the live twin since the last metrics reset \[m\].
     pub max_u_twin: f64,
-    /// Largest |u| of the reference twin since the last metrics reset [m].
+    /// Largest |u| of the reference twin since the last metrics reset \[m\].
     pub max_u_reference: f64,
 }
 
@@ -197,9 +197,9 @@ pub struct AbMetrics {
     pub a: VibrationMetrics,
     /// Reference twin body acceleration.
     pub b: VibrationMetrics,
-    /// Largest |u| of A [m].
+    /// Largest |u| of A \[m\].
     pub max_u_a: f64,
-    /// Largest |u| of B [m].
+    /// Largest |u| of B \[m\].
     pub max_u_b: f64,
 }
 
@@ -215,7 +215,7 @@ pub fn difference_percent(a: f64, b: f64) -> f64 {
 /// Time-aligned samples of the three models (for CSV export and the schematic).
 #[derive(Debug, Clone, Copy)]
 pub struct Row {
-    /// Display time [s] (continues across excitation restarts).
+    /// Display time \[s\] (continues across excitation restarts).
     pub t: f64,
     /// Twin sample.
     pub twin: Sample,
@@ -314,7 +314,7 @@ impl Traces {
         }
     }
 
-    /// Display times of the last parameter changes [s].
+    /// Display times of the last parameter changes \[s\].
     pub fn changes(&self) -> &[f64] {
         &self.changes
     }
@@ -324,12 +324,12 @@ impl Traces {
         &self.channels[ch as usize]
     }
 
-    /// Twin contact intervals in the window [s].
+    /// Twin contact intervals in the window \[s\].
     pub fn contacts(&self) -> &[(f64, f64)] {
         &self.contacts
     }
 
-    /// The lowest and highest chamber pressure (both chambers) in the window [Pa].
+    /// The lowest and highest chamber pressure (both chambers) in the window \[Pa\].
     pub fn pressure_range_pa(&self) -> Option<(f64, f64)> {
         let pts = self.channel(Ch::P1).points().iter();
         let all = pts.chain(self.channel(Ch::P2).points());
@@ -339,7 +339,7 @@ impl Traces {
         (lo <= hi).then_some((lo / BAR_PER_PA, hi / BAR_PER_PA))
     }
 
-    /// Latest display time [s].
+    /// Latest display time \[s\].
     pub fn t_now(&self) -> f64 {
         self.t_now
     }

@@ -102,11 +102,11 @@ pub(super) fn missing_data(records: &[Record], recs: &[PreparedRecord]) -> Vec<S
     missing
 }
 
-/// Least total duration of the records [s].
+/// Least total duration of the records \[s\].
 pub const MIN_TOTAL_DURATION_S: f64 = 2.0;
-/// Least sample rate [Hz].
+/// Least sample rate \[Hz\].
 pub const MIN_SAMPLE_RATE_HZ: f64 = 100.0;
-/// Least RMS variation of `v_in` in at least one record [V].
+/// Least RMS variation of `v_in` in at least one record \[V\].
 pub const MIN_COMMAND_RMS_V: f64 = 0.02;
 
 /// The records that can be replayed, prepared, and what keeps a calibration from them.

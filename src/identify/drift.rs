@@ -1,7 +1,7 @@
 //! Parameters that change from record to record (issue 20, item 5): oil warming up during a
 //! campaign changes its viscosity (the valve's discharge coefficient) and its bulk modulus.
 //!
-//! After the final fit, each drift candidate ([`DRIFT_KNOBS`]: Cd always, the effective bulk
+//! After the final fit, each drift candidate ([`drift_knobs`]: Cd always, the effective bulk
 //! modulus when the compliance effect was added) is fitted again on every record alone, all
 //! other parameters held at their final values, with its 1-σ uncertainty. A **drift** is
 //! reported when the per-record values

@@ -31,8 +31,8 @@ fn confounding_hint(a: EffectId, b: EffectId, recs: &[PreparedRecord]) -> &'stat
 
 /// Coarse starts for a candidate effect's fit: its first parameter on a log grid (both signs
 /// for a signed one), the others at 0, gives the best of the grid and "off". For compliance
-/// a finer grid and its best valleys ([`compliance_starts`]); for friction a finer grid of
-/// the Coulomb force, its best valleys and a Stribeck peak from each ([`friction_starts`]).
+/// a finer grid and its best valleys (`compliance_starts`); for friction a finer grid of
+/// the Coulomb force, its best valleys and a Stribeck peak from each (`friction_starts`).
 pub fn multi_start(
     ev: &Evaluator<'_>,
     current: &Params,

@@ -24,19 +24,19 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 pub enum Knob {
     /// `valve.cd` [-] = 0.1·θ.
     Cd,
-    /// `valve.tau_s` [s] = 0.01·θ.
+    /// `valve.tau_s` \[s\] = 0.01·θ.
     Tau,
-    /// `body.mass_kg` [kg] = 10·θ.
+    /// `body.mass_kg` \[kg\] = 10·θ.
     Mass,
-    /// `effects.friction.coulomb_n` [N] = 10·|θ|.
+    /// `effects.friction.coulomb_n` \[N\] = 10·|θ|.
     FrictionCoulomb,
     /// `effects.friction.viscous_n_s_per_m` [N·s/m] = 100·|θ|.
     FrictionViscous,
-    /// `effects.valve_overlap.overlap_m` [m] = 2e-5·|θ|.
+    /// `effects.valve_overlap.overlap_m` \[m\] = 2e-5·|θ|.
     Overlap,
-    /// `effects.valve_overlap.edge_width_m` [m] = 2e-5·|θ|.
+    /// `effects.valve_overlap.edge_width_m` \[m\] = 2e-5·|θ|.
     OverlapEdge,
-    /// `effects.friction.stribeck_n` [N] = 10·|θ|.
+    /// `effects.friction.stribeck_n` \[N\] = 10·|θ|.
     FrictionStribeck,
     /// `effects.friction.stribeck_velocity_m_s` [m/s] = 0.01·|θ|, at least 0.5 mm/s: how fast
     /// the static excess dies away with the velocity (a shape knob, [`Knob::is_shape`]).
@@ -45,22 +45,22 @@ pub enum Knob {
     /// velocity over which the friction force changes sign (pre-sliding; a shape knob).
     FrictionSmoothing,
 
-    /// `effects.valve_offset.bias_v` [V] = 0.02·θ.
+    /// `effects.valve_offset.bias_v` \[V\] = 0.02·θ.
     Offset,
     /// `sensors.ydd_scale` [-] = 1 + 0.01·θ.
     SensorYddScale,
     /// `sensors.ydd_offset_m_s2` [m/s²] = 0.01·θ.
     SensorYddOffset,
-    /// `sensors.u_lag_s` [s] = 1e-3·θ (clamped at 0).
+    /// `sensors.u_lag_s` \[s\] = 1e-3·θ (clamped at 0).
     SensorULag,
     /// `effects.leakage.coefficient_m3_per_s_pa` [m³/(s·Pa)] = 1e-12·|θ|.
     Leakage,
     /// `effects.leakage.growth_per_pa` [1/Pa] = 1e-8·|θ|: the leakage coefficient's growth
     /// with the pressure across the piston.
     LeakageGrowth,
-    /// `effects.compliance.effective_bulk_modulus_pa` [Pa] = β_fluid/(1 + |θ|).
+    /// `effects.compliance.effective_bulk_modulus_pa` \[Pa\] = β_fluid/(1 + |θ|).
     Compliance,
-    /// `effects.compliance.hose_bulk_modulus_pa` [Pa] = β_chambers/(1 + |θ|): hoses softer
+    /// `effects.compliance.hose_bulk_modulus_pa` \[Pa\] = β_chambers/(1 + |θ|): hoses softer
     /// than the chambers (set after [`Knob::Compliance`], whose value it divides).
     HoseCompliance,
     /// `effects.supply_sag.droop_pa_per_m3_s` [Pa/(m³/s)] = 1e10·|θ|.
@@ -69,7 +69,7 @@ pub enum Knob {
     CdSlope,
     /// `corrections.flow_gain_direction` [-] = 0.05·θ.
     FlowDirection,
-    /// `corrections.flow_gain_direction_width_m` [m] = 1e-4·|θ|.
+    /// `corrections.flow_gain_direction_width_m` \[m\] = 1e-4·|θ|.
     FlowDirectionWidth,
     /// `corrections.flow_gain_return_edge` [-] = 0.05·θ.
     ReturnEdge,
@@ -80,7 +80,7 @@ pub enum Knob {
     QuadraticDamping,
     /// `corrections.turbulent_leakage_m3_per_s_sqrt_pa` [m³/(s·√Pa)] = 1e-9·|θ|.
     TurbulentLeakage,
-    /// `corrections.command_lag_s` [s] = 1e-3·|θ|.
+    /// `corrections.command_lag_s` \[s\] = 1e-3·|θ|.
     CommandLag,
     /// `corrections.command_drift_v_per_s` [V/s] = 1e-3·θ.
     CommandDrift,
@@ -295,9 +295,9 @@ pub struct FittedValue {
     pub knob: Knob,
     /// Name with unit.
     pub name: String,
-    /// Value [SI].
+    /// Value \[SI\].
     pub value: f64,
-    /// Standard uncertainty [SI] (NaN when the fit cannot tell).
+    /// Standard uncertainty \[SI\] (NaN when the fit cannot tell).
     pub std: f64,
 }
 

@@ -3,12 +3,13 @@
 //! The loop of issue 4, as a pure library (no files, threads of its own or clock; rayon
 //! parallelises the replays):
 //!
-//! 1. [`replay`]: a [`crate::dataset::Record`] drives the twin in open loop with its `v_in` and
-//!    platform motion (the measured platform acceleration conditioned by a zero-phase 20 Hz
-//!    low-pass, [`replay::EXCITATION_CONDITIONING`]); the twin's channels come back aligned
-//!    with the record, with residuals. The error metric ([`replay`] module docs) compares the
-//!    relative velocity and the body acceleration through the same zero-phase filter, weighted
-//!    by the sensor noise, because the position of an integrating plant drifts.
+//! 1. [`replay`](fn@replay): a [`crate::dataset::Record`] drives the twin in open loop with
+//!    its `v_in` and platform motion (the measured platform acceleration conditioned by a
+//!    zero-phase 20 Hz low-pass, [`replay::EXCITATION_CONDITIONING`]); the twin's channels
+//!    come back aligned with the record, with residuals. The error metric ([`replay`](mod@replay)
+//!    module docs) compares the relative velocity and the body acceleration through the same
+//!    zero-phase filter, weighted by the sensor noise, because the position of an integrating
+//!    plant drifts.
 //! 2. The data are checked first: too short, no excitation, no `v_in`/`u` → verdict
 //!    `insufficient_data`, naming what is missing, and nothing is fitted. Then the records are
 //!    split ([`Split`]): with six or more, every third is held out; with fewer, the last
@@ -287,7 +288,7 @@ pub struct CalibrationOptions {
     /// Smallest relative drop of the validation error an added effect must give [-]: an
     /// effect that does not improve the error on the held-out records is rejected.
     pub min_validation_gain: f64,
-    /// Largest RK4 step used while fitting [s] (the preset's own step, if smaller, wins);
+    /// Largest RK4 step used while fitting \[s\] (the preset's own step, if smaller, wins);
     /// the reported errors always use the preset's step.
     pub fit_step_s: f64,
     /// Most corrections beyond the library proposed ([`proposed`]); 0 = do not search them.

@@ -30,9 +30,9 @@ const WIDENED: f64 = 1.5;
 /// One side of the profile: the chambers' and hoses' moduli refitted with the chambers fixed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ProfilePoint {
-    /// Chambers' modulus, held [Pa].
+    /// Chambers' modulus, held \[Pa\].
     pub chambers_pa: f64,
-    /// Hoses' modulus, refitted [Pa].
+    /// Hoses' modulus, refitted \[Pa\].
     pub hoses_pa: f64,
     /// Rise of the residual over the fit's, in units of its noise (`ΔRSS/s²`) [-].
     pub delta_chi2: f64,
@@ -44,9 +44,9 @@ pub struct ProfilePoint {
 pub struct SplitProfile {
     /// The two sides (those whose start was physical).
     pub points: Vec<ProfilePoint>,
-    /// Local 1-σ of the chambers' and the hoses' moduli [Pa].
+    /// Local 1-σ of the chambers' and the hoses' moduli \[Pa\].
     pub local: [f64; 2],
-    /// 1-σ after the profile [Pa].
+    /// 1-σ after the profile \[Pa\].
     pub widened: [f64; 2],
     /// The fit done again in full from a side that fitted better than the fit itself
     /// (another valley); the points are then relative to it.

@@ -28,7 +28,7 @@ use super::replay::{PreparedRecord, RESOLUTION, SimChannels, part_name, rms};
 use crate::dsp::{NoiseFloor, band_parts};
 use serde::Serialize;
 
-/// The bands of the measure [Hz]: drift and DC, the rig's motion, its upper harmonics, and
+/// The bands of the measure \[Hz\]: drift and DC, the rig's motion, its upper harmonics, and
 /// the rest up to the Nyquist frequency.
 pub const BANDS_HZ: [[f64; 2]; 4] = [[0.0, 0.5], [0.5, 5.0], [5.0, 25.0], [25.0, f64::INFINITY]];
 
@@ -37,7 +37,7 @@ pub const BANDS_HZ: [[f64; 2]; 4] = [[0.0, 0.5], [0.5, 5.0], [5.0, 25.0], [25.0,
 /// any record, channel and band; an effect outside the library leaves tens to hundreds.
 pub const DEFAULT_LIMIT: f64 = 3.0;
 
-/// Lower edge of the band above the rig's motion [Hz], where the measured channels hold the
+/// Lower edge of the band above the rig's motion \[Hz\], where the measured channels hold the
 /// sensor noise and the oil-column mode's ringing (about 77 Hz, almost undamped) after each
 /// command step. The replay does not carry the platform's content there (its excitation is
 /// low-passed at 20 Hz, [`super::replay::EXCITATION_CONDITIONING`]). In this band the verdict's
@@ -77,7 +77,7 @@ least q/√12 when the samples lie on a quantisation grid of step q; 1 = the sen
 /// One band of one channel.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BandError {
-    /// Band `[lo, hi)` [Hz] (`hi` the Nyquist frequency for the last band).
+    /// Band `[lo, hi)` \[Hz\] (`hi` the Nyquist frequency for the last band).
     pub band_hz: [f64; 2],
     /// RMS of the residual in the band [SI unit of the channel]; in the band above
     /// [`OIL_COLUMN_BAND_HZ`], the twin's own RMS there.
@@ -87,7 +87,7 @@ pub struct BandError {
     pub floor: f64,
     /// `rms / floor` [-].
     pub ratio: f64,
-    /// The time window `[start, end]` [s] where the band's residual is largest.
+    /// The time window `[start, end]` \[s\] where the band's residual is largest.
     pub window_s: [f64; 2],
     /// In the band above [`OIL_COLUMN_BAND_HZ`] only: the residual's own RMS there (twin −
     /// measured, sample by sample) [SI unit of the channel], which the verdict does not use
@@ -110,7 +110,7 @@ pub struct ChannelRawError {
     pub unit: String,
     /// The measured channel's noise estimate.
     pub noise: NoiseFloor,
-    /// RMS of the whole residual [SI].
+    /// RMS of the whole residual \[SI\].
     pub rms: f64,
     /// Per band.
     pub bands: Vec<BandError>,
@@ -139,9 +139,9 @@ pub struct Exceedance {
     pub file: String,
     /// Channel.
     pub channel: String,
-    /// Band [Hz].
+    /// Band \[Hz\].
     pub band_hz: [f64; 2],
-    /// Time window [s].
+    /// Time window \[s\].
     pub window_s: [f64; 2],
     /// Ratio [-].
     pub ratio: f64,
@@ -243,7 +243,7 @@ impl RawErrorReport {
     }
 }
 
-/// Length of the time windows a band's residual is located in [s]: a tenth of the record,
+/// Length of the time windows a band's residual is located in \[s\]: a tenth of the record,
 /// at least 1 s (at most the record).
 pub fn window_s(duration_s: f64) -> f64 {
     (duration_s / 10.0).max(1.0).min(duration_s.max(0.0))
@@ -281,7 +281,7 @@ pub fn record_raw_error(rec: &PreparedRecord, sim: &SimChannels) -> RecordRawErr
 /// record) against the noise floor `noise`, band by band; `measured` is the measured channel
 /// on the same samples (its content in a band sets the resolution part of the floor,
 /// [`RESOLUTION`]). Above [`OIL_COLUMN_BAND_HZ`] the residual sample by sample is held
-/// against the white noise `sample_noise` [SI] (the campaign's estimate for the channel).
+/// against the white noise `sample_noise` \[SI\] (the campaign's estimate for the channel).
 #[allow(clippy::too_many_arguments)]
 pub fn channel_raw_error(
     name: &str,

@@ -19,7 +19,7 @@ pub struct ErrorSummary {
     pub metric: String,
     /// RMS of the weighted residual (1 = sensor-noise level).
     pub value: f64,
-    /// Pooled RMS errors per channel, SI: `du` [m/s], `ydd` [m/s²], `u` [m], `p1`, `p2` [Pa]
+    /// Pooled RMS errors per channel, SI: `du` [m/s], `ydd` [m/s²], `u` \[m\], `p1`, `p2` \[Pa\]
     /// (records with pressures only), and the normalised ones `du_nrmse`, `ydd_nrmse` [-].
     pub channels: BTreeMap<String, f64>,
     /// Per file.
@@ -66,7 +66,7 @@ pub struct AddedEffect {
 pub struct SensorEstimate {
     /// The channel: `u` or `ydd`.
     pub channel: String,
-    /// `offset` (SI unit of the channel), `scale` (a ratio, 1 = exact) or `lag` [s].
+    /// `offset` (SI unit of the channel), `scale` (a ratio, 1 = exact) or `lag` \[s\].
     pub kind: String,
     /// The estimate.
     pub value: f64,
@@ -108,7 +108,7 @@ pub struct PaperBaseline {
     pub files: Vec<String>,
     /// Cd from the gain ratio [-].
     pub cd: f64,
-    /// τ from the phase slope [s].
+    /// τ from the phase slope \[s\].
     pub tau_s: f64,
 }
 
@@ -158,11 +158,11 @@ pub struct ProposedScore {
 pub struct Drift {
     /// The parameter, by preset-key name (`cd`, `effective_bulk_modulus_pa`).
     pub parameter: String,
-    /// Its value fitted on each record alone [SI], by file name.
+    /// Its value fitted on each record alone \[SI\], by file name.
     pub per_record: BTreeMap<String, f64>,
-    /// The 1-σ uncertainty of each per-record value [SI], by file name.
+    /// The 1-σ uncertainty of each per-record value \[SI\], by file name.
     pub per_record_uncertainty: BTreeMap<String, f64>,
-    /// Typical (RMS) 1-σ uncertainty of a per-record value [SI].
+    /// Typical (RMS) 1-σ uncertainty of a per-record value \[SI\].
     pub uncertainty: f64,
     /// χ² of the scatter over its degrees of freedom [-].
     pub chi2_per_dof: f64,

@@ -62,11 +62,11 @@ type Evaluated = (f64, Option<(Vec<Replay>, RawErrorReport)>);
 pub struct RingingRefined {
     /// The parameter searched again ([`MODE_KNOBS`]).
     pub knob: Knob,
-    /// The fit's value [SI].
+    /// The fit's value \[SI\].
     pub from: f64,
-    /// The value kept [SI].
+    /// The value kept \[SI\].
     pub to: f64,
-    /// The fit's 1-σ [SI].
+    /// The fit's 1-σ \[SI\].
     pub std: f64,
     /// The ringing residual's energy at the fit's value and at the kept one, relative to the
     /// first (1 and below).
@@ -128,7 +128,7 @@ type Kept = (RingingRefined, Vec<Replay>, RawErrorReport);
 /// When `first` (the raw error measure of `recs` replayed with `fit.params`) flags a
 /// ringing, searches each fitted parameter of [`MODE_KNOBS`] again, alone, within 2σ of
 /// its fit (and ±10 %) for that ringing; keeps the one whose search lowers the ringing
-/// residual most, if by at least [`LEAST_GAIN`], sets it in `fit` and returns the new replays
+/// residual most, if by at least `LEAST_GAIN`, sets it in `fit` and returns the new replays
 /// and measure. The others stay as fitted: the ringing's frequency fixes the oil's stiffness
 /// over the mass, so one of them at a time is all it can tell. `limit` is the measure's limit.
 pub fn refine_for_ringing(

@@ -109,7 +109,7 @@ pub struct Declared {
 
 /// Largest 1-σ of Cd, relative to its value, for Cd to count as determined [-].
 pub const CD_MAX_REL_STD: f64 = 0.2;
-/// Largest 1-σ of τ for τ to count as determined [s].
+/// Largest 1-σ of τ for τ to count as determined \[s\].
 pub const TAU_MAX_STD_S: f64 = 5e-3;
 
 /// Whether a fitted Cd or τ is left undetermined by its 1-σ ([`CD_MAX_REL_STD`],

@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 /// Inputs a model sees at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Inputs {
-    /// Command arriving at the valve, i.e. already delayed by τ and saturated [V].
+    /// Command arriving at the valve, i.e. already delayed by τ and saturated \[V\].
     pub v_valve: f64,
     /// Platform (seat-base) acceleration `ẍ` [m/s²].
     pub xdd: f64,
@@ -25,23 +25,23 @@ pub struct Inputs {
 /// Quantities a model reports at one instant (NaN where a model lacks the quantity).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Outputs {
-    /// Relative displacement `u = y − x` [m], positive up, 0 at mid-stroke.
+    /// Relative displacement `u = y − x` \[m\], positive up, 0 at mid-stroke.
     pub u: f64,
     /// Relative velocity `u̇` [m/s].
     pub du: f64,
     /// Body acceleration `ÿ` [m/s²].
     pub ydd: f64,
-    /// Spool position `xv` [m].
+    /// Spool position `xv` \[m\].
     pub xv: f64,
-    /// Upper chamber pressure `p1` [Pa].
+    /// Upper chamber pressure `p1` \[Pa\].
     pub p1: f64,
-    /// Lower chamber pressure `p2` [Pa].
+    /// Lower chamber pressure `p2` \[Pa\].
     pub p2: f64,
     /// Flow out of the upper chamber towards the valve `Q1` [m³/s].
     pub q1: f64,
     /// Flow from the valve into the lower chamber `Q2` [m³/s].
     pub q2: f64,
-    /// Force of the end stops on the body [N] (0 when not in contact).
+    /// Force of the end stops on the body \[N\] (0 when not in contact).
     pub end_stop_force: f64,
 }
 
@@ -125,13 +125,13 @@ pub trait Model<const N: usize>: Clone + Send + Sync {
     /// Outputs at a state.
     fn outputs(&self, y: &[f64; N], inputs: &Inputs) -> Outputs;
 
-    /// Relative displacement `u` [m] at a state (what the controller measures).
+    /// Relative displacement `u` \[m\] at a state (what the controller measures).
     fn relative_position(&self, y: &[f64; N]) -> f64;
 
     /// Projection after each step (e.g. the spool's travel limit). Default: none.
     fn project(&self, _y: &mut [f64; N]) {}
 
-    /// Half the stroke [m]: |u| beyond it is end-stop contact (or, for models without end
+    /// Half the stroke \[m\]: |u| beyond it is end-stop contact (or, for models without end
     /// stops, a stroke overrun that is flagged).
     fn half_stroke(&self) -> f64;
 
@@ -147,9 +147,9 @@ pub trait Model<const N: usize>: Clone + Send + Sync {
 /// Command delay and saturation a model sees: `(τ [s], Vmax [V])`. The simulation reads the
 /// controller's command back `τ` late and clamps it to `±Vmax` before the model gets it.
 pub trait CommandPath {
-    /// Pure delay of the command [s].
+    /// Pure delay of the command \[s\].
     fn command_delay(&self) -> f64;
-    /// Saturation of the command [V] (0 for a model without a valve).
+    /// Saturation of the command \[V\] (0 for a model without a valve).
     fn command_limit(&self) -> f64;
 }
 

@@ -30,23 +30,23 @@ use crate::params::{Derived, Params, derived};
 /// The ten states of the twin, by name.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct TwinState {
-    /// Relative position `u = y − x` [m].
+    /// Relative position `u = y − x` \[m\].
     pub u: f64,
     /// Relative velocity `u̇` [m/s].
     pub du: f64,
-    /// Upper chamber pressure `p1` [Pa].
+    /// Upper chamber pressure `p1` \[Pa\].
     pub p1: f64,
-    /// Lower chamber pressure `p2` [Pa].
+    /// Lower chamber pressure `p2` \[Pa\].
     pub p2: f64,
     /// Hose-1 flow `Q1`, chamber 1 → valve [m³/s].
     pub q1: f64,
     /// Hose-2 flow `Q2`, valve → chamber 2 [m³/s].
     pub q2: f64,
-    /// Pressure at valve port 1 `p1v` [Pa].
+    /// Pressure at valve port 1 `p1v` \[Pa\].
     pub p1v: f64,
-    /// Pressure at valve port 2 `p2v` [Pa].
+    /// Pressure at valve port 2 `p2v` \[Pa\].
     pub p2v: f64,
-    /// Spool position `xv` [m].
+    /// Spool position `xv` \[m\].
     pub xv: f64,
     /// Spool velocity `ẋv` [m/s].
     pub dxv: f64,
@@ -253,7 +253,7 @@ impl Twin {
         }
     }
 
-    /// Friction force on the body, opposing `du` [N] (0 unless the effect is enabled).
+    /// Friction force on the body, opposing `du` \[N\] (0 unless the effect is enabled).
     #[inline(always)]
     pub fn friction_force(&self, du: f64) -> f64 {
         let f = &self.params.plant.effects.friction;
@@ -265,7 +265,7 @@ impl Twin {
             + f.viscous_n_s_per_m * du
     }
 
-    /// End-stop force on the body [N]: push-only spring–damper beyond ±Lc/2.
+    /// End-stop force on the body \[N\]: push-only spring–damper beyond ±Lc/2.
     #[inline(always)]
     pub fn end_stop_force(&self, u: f64, du: f64) -> f64 {
         let c = &self.params.plant.cylinder;

@@ -92,18 +92,18 @@ pub struct ControllerParams {
     /// Gain on the integral of the platform acceleration `Ki` [V·s/m], -1e3 ..= 1e3. Paper: -7.5.
     /// All kinds.
     pub ki_v_s_per_m: f64,
-    /// Prediction horizon of the platform velocity [s], 0 ..= 0.1. Default 0.0207 (the valve's
+    /// Prediction horizon of the platform velocity \[s\], 0 ..= 0.1. Default 0.0207 (the valve's
     /// 17.5 ms delay plus the spool's ≈ 3.2 ms lag). `predictive` only.
     pub lead_s: f64,
-    /// Corner of the first-order low-pass on the predicted term [Hz], 0.5 ..= 200. Default 12.
+    /// Corner of the first-order low-pass on the predicted term \[Hz\], 0.5 ..= 200. Default 12.
     /// `predictive` only.
     pub lead_cutoff_hz: f64,
     /// Gain on the estimated absolute body velocity `Ksky` [V·s/m], -1e3 ..= 1e3. Default -3.
     /// `skyhook` only.
     pub sky_v_s_per_m: f64,
-    /// Corner of the leaky integrator `ωl/2π` [Hz], 0.01 ..= 10. Default 0.3. `skyhook` only.
+    /// Corner of the leaky integrator `ωl/2π` \[Hz\], 0.01 ..= 10. Default 0.3. `skyhook` only.
     pub leak_hz: f64,
-    /// Corner of the first-order low-pass on the body-velocity estimate `ωs/2π` [Hz],
+    /// Corner of the first-order low-pass on the body-velocity estimate `ωs/2π` \[Hz\],
     /// 0.5 ..= 200. Default 6: keeps the feedback off the valve's lightly damped resonance
     /// (≈ 80 Hz), where the delay turns it positive. `skyhook` only.
     pub sky_cutoff_hz: f64,

@@ -31,7 +31,7 @@ pub struct CorrectionParams {
     pub cd_opening_slope: f64,
     /// Flow-gain difference `a` between the spool directions [-], -0.5 ..= 0.5; gain `1 + a` for `xv > 0`, `1 − a` for `xv < 0`.
     pub flow_gain_direction: f64,
-    /// Spool travel `w` over which the direction difference builds up [m], 0 ..= 0.01; the gain is `1 + a·x/√(x² + w²)` (0: a sharp step at null).
+    /// Spool travel `w` over which the direction difference builds up \[m\], 0 ..= 0.01; the gain is `1 + a·x/√(x² + w²)` (0: a sharp step at null).
     pub flow_gain_direction_width_m: f64,
     /// Flow-gain difference `e` between the metering edges [-], -0.5 ..= 0.5; gain `1 + e` on the edges to tank, `1 − e` on the edges from supply.
     pub flow_gain_return_edge: f64,
@@ -41,7 +41,7 @@ pub struct CorrectionParams {
     pub quadratic_damping_n_s2_per_m2: f64,
     /// Turbulent leakage `c_t` across the piston [m³/(s·√Pa)], 0 ..= 1e-7.
     pub turbulent_leakage_m3_per_s_sqrt_pa: f64,
-    /// First-order lag `T_cmd` of the valve command [s], 0 ..= 0.05 (0: none).
+    /// First-order lag `T_cmd` of the valve command \[s\], 0 ..= 0.05 (0: none).
     pub command_lag_s: f64,
     /// Drift rate `r` of the valve's null during each record [V/s], -0.1 ..= 0.1 (0: none);
     /// the valve acts on its command plus `r·t`, `t` from the record's start.
@@ -62,7 +62,7 @@ impl CorrectionParams {
     }
 
     /// Gains of the supply and the return edge for an opening `x` of a valve of travel
-    /// `xv_max` [m], relative to the uncorrected gain: `(supply, return)`.
+    /// `xv_max` \[m\], relative to the uncorrected gain: `(supply, return)`.
     #[inline(always)]
     pub fn edge_gains(&self, x: f64, xv_max: f64) -> (f64, f64) {
         let w = self.flow_gain_direction_width_m;
@@ -79,7 +79,7 @@ impl CorrectionParams {
         )
     }
 
-    /// The command [V] the valve acts on, sampled every `dt` [s], for the command as sent
+    /// The command \[V\] the valve acts on, sampled every `dt` \[s\], for the command as sent
     /// `v_in` sampled at the same instants: [`Self::lagged_command`], plus the null's drift
     /// `r·t` from the first sample. `None` when neither term is on (the valve acts on `v_in`).
     pub fn acted_command(&self, v_in: &[f64], dt: f64) -> Option<Vec<f64>> {
@@ -96,7 +96,7 @@ impl CorrectionParams {
         Some(v)
     }
 
-    /// The command `v` [V] the valve acts on, sampled every `dt` [s], for the command as sent
+    /// The command `v` \[V\] the valve acts on, sampled every `dt` \[s\], for the command as sent
     /// `v_in` sampled at the same instants and linearly interpolated between them (as a replay
     /// reads a record): the exact solution of `T_cmd·v̇ = v_in − v` from `v = 0` before the
     /// first sample (the valve at rest). Returns `v_in` itself without a lag.
@@ -118,7 +118,7 @@ impl CorrectionParams {
         out
     }
 
-    /// Force of the body terms [N] at relative position `u` [m] and velocity `du` [m/s],
+    /// Force of the body terms \[N\] at relative position `u` \[m\] and velocity `du` [m/s],
     /// acting on the body (negative = downward).
     #[inline(always)]
     pub fn body_force(&self, u: f64, du: f64) -> f64 {

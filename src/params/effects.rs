@@ -28,11 +28,11 @@ pub struct EffectsParams {
 pub struct FrictionEffect {
     /// Effect active.
     pub enabled: bool,
-    /// Coulomb force `Fc` [N], 0 ..= 5000.
+    /// Coulomb force `Fc` \[N\], 0 ..= 5000.
     pub coulomb_n: f64,
     /// Viscous coefficient `b` [N·s/m], 0 ..= 1e5.
     pub viscous_n_s_per_m: f64,
-    /// Extra static (Stribeck) force `Fs` above Coulomb [N], 0 ..= 5000.
+    /// Extra static (Stribeck) force `Fs` above Coulomb \[N\], 0 ..= 5000.
     pub stribeck_n: f64,
     /// Stribeck velocity `vs` [m/s], 1e-5 ..= 1.
     pub stribeck_velocity_m_s: f64,
@@ -62,9 +62,9 @@ impl Default for FrictionEffect {
 pub struct OverlapEffect {
     /// Effect active.
     pub enabled: bool,
-    /// Overlap on each side of null [m], 0 ..= 0.01.
+    /// Overlap on each side of null \[m\], 0 ..= 0.01.
     pub overlap_m: f64,
-    /// Width over which the rounded edges open [m], 0 ..= 0.01 (0: sharp edges).
+    /// Width over which the rounded edges open \[m\], 0 ..= 0.01 (0: sharp edges).
     pub edge_width_m: f64,
 }
 
@@ -79,7 +79,7 @@ impl Default for OverlapEffect {
 }
 
 impl OverlapEffect {
-    /// The opening [m] the orifices see at a (clamped) spool position `x` [m].
+    /// The opening \[m\] the orifices see at a (clamped) spool position `x` \[m\].
     #[inline(always)]
     pub fn opening(&self, x: f64) -> f64 {
         let d = x.abs() - self.overlap_m;
@@ -100,7 +100,7 @@ impl OverlapEffect {
 pub struct OffsetEffect {
     /// Effect active.
     pub enabled: bool,
-    /// Command bias [V], -5 ..= 5.
+    /// Command bias \[V\], -5 ..= 5.
     pub bias_v: f64,
 }
 
@@ -141,7 +141,7 @@ impl Default for LeakageEffect {
 }
 
 impl LeakageEffect {
-    /// The leakage flow [m³/s] from chamber 1 to chamber 2 at `dp = p1 − p2` [Pa] (0 when
+    /// The leakage flow [m³/s] from chamber 1 to chamber 2 at `dp = p1 − p2` \[Pa\] (0 when
     /// the effect is off).
     #[inline(always)]
     pub fn flow(&self, dp: f64) -> f64 {
@@ -163,10 +163,10 @@ impl LeakageEffect {
 pub struct ComplianceEffect {
     /// Effect active.
     pub enabled: bool,
-    /// Effective bulk modulus [Pa] of the chambers (and of the hoses when
+    /// Effective bulk modulus \[Pa\] of the chambers (and of the hoses when
     /// `hose_bulk_modulus_pa` is 0), 1e6 ..= 1e10 (replaces `fluid.bulk_modulus_pa`).
     pub effective_bulk_modulus_pa: f64,
-    /// Effective bulk modulus of the hoses [Pa], 0 ..= 1e10 (0 means as the chambers; any
+    /// Effective bulk modulus of the hoses \[Pa\], 0 ..= 1e10 (0 means as the chambers; any
     /// other value must be at least 1e6, as `effective_bulk_modulus_pa`).
     pub hose_bulk_modulus_pa: f64,
 }

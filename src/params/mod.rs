@@ -188,7 +188,7 @@ impl Params {
         Ok(())
     }
 
-    /// Bulk modulus in use [Pa]: the compliance effect's, if enabled, else the fluid's.
+    /// Bulk modulus in use \[Pa\]: the compliance effect's, if enabled, else the fluid's.
     pub fn effective_bulk_modulus_pa(&self) -> f64 {
         if self.plant.effects.compliance.enabled {
             self.plant.effects.compliance.effective_bulk_modulus_pa
@@ -197,7 +197,7 @@ impl Params {
         }
     }
 
-    /// Bulk modulus in use in the hoses [Pa]: the compliance effect's hose modulus if
+    /// Bulk modulus in use in the hoses \[Pa\]: the compliance effect's hose modulus if
     /// enabled and set, else [`Self::effective_bulk_modulus_pa`].
     pub fn hose_bulk_modulus_pa(&self) -> f64 {
         let c = &self.plant.effects.compliance;
@@ -208,7 +208,7 @@ impl Params {
         }
     }
 
-    /// Largest stable step of the configured integrator [s].
+    /// Largest stable step of the configured integrator \[s\].
     pub fn step_limit_s(&self) -> f64 {
         match self.numerics.integrator {
             Integrator::Rk4 => self.rk4_step_limit_s(),
@@ -228,9 +228,9 @@ impl Params {
         }
     }
 
-    /// Largest step [s] at which the exponential integrator resolves the smoothed friction it
+    /// Largest step \[s\] at which the exponential integrator resolves the smoothed friction it
     /// treats explicitly: one friction time constant, `1/rate` of
-    /// [`Self::friction_rate_rad_s`] (∞ with friction off). Below its stability limit
+    /// `friction_rate_rad_s` (∞ with friction off). Below its stability limit
     /// ([`Self::exponential_step_limit_s`], 2.4/rate) a step is stable but smears the force's
     /// sign change at a reversal over too few steps: replayed against a 1 kHz record of a rig
     /// with a 2 mm/s smoothing (rate 2600 /s), the step of 0.5 ms left a start transient at
@@ -244,7 +244,7 @@ impl Params {
         }
     }
 
-    /// Largest stable step of the exponential integrator [s], capped at 1 ms. Its linear part
+    /// Largest stable step of the exponential integrator \[s\], capped at 1 ms. Its linear part
     /// (hoses, oil column, spool) is exact; what it treats explicitly and could destabilise is
     /// the end-stop contact (spring on the body while in contact) and smoothed friction.
     pub fn exponential_step_limit_s(&self) -> f64 {
@@ -254,7 +254,7 @@ impl Params {
         (0.85 * 2.83 / w_contact.max(w_friction)).min(1e-3)
     }
 
-    /// Largest stable RK4 step [s], from the fastest oscillatory modes: the hose L–C mode
+    /// Largest stable RK4 step \[s\], from the fastest oscillatory modes: the hose L–C mode
     /// (`1/√(I·C_eq)`) and the body on the oil column; RK4's stability boundary on the imaginary
     /// axis is `|hλ| ≈ 2.83`, and we keep a 15 % margin.
     pub fn rk4_step_limit_s(&self) -> f64 {
@@ -275,13 +275,13 @@ impl Params {
     }
 }
 
-/// Largest pure delay accepted anywhere [s].
+/// Largest pure delay accepted anywhere \[s\].
 pub const MAX_DELAY_S: f64 = 0.1;
 
 /// Lumped hydraulic quantities derived from the parameters, Eqs. (8)–(11).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Derived {
-    /// Piston area A1 = A2 [m²].
+    /// Piston area A1 = A2 \[m²\].
     pub area: f64,
     /// Hose resistance R, Eq. (8) [Pa·s/m³].
     pub resistance: f64,

@@ -26,7 +26,7 @@ pub struct LinearParams {
     pub kg_m_per_s_v: f64,
     /// Damping factor `ζp` [-], 0 ..= 10. Paper: 0.05.
     pub zeta: f64,
-    /// Pure delay of G(s) `τ` [s], 0 ..= 0.1. Paper: 17.5 ms.
+    /// Pure delay of G(s) `τ` \[s\], 0 ..= 0.1. Paper: 17.5 ms.
     pub tau_s: f64,
 }
 

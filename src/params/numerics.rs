@@ -31,9 +31,10 @@ impl Integrator {
 pub struct NumericsParams {
     /// Integration method of the twin, `"exponential"` (default) or `"rk4"`.
     pub integrator: Integrator,
-    /// Largest internal step [s], 1e-6 ..= 1e-3; must also respect the method's stability limit
-    /// ([`Params::step_limit_s`]: RK4's from the hose modes, the exponential method's from the
-    /// end-stop contact and friction, which it treats explicitly).
+    /// Largest internal step \[s\], 1e-6 ..= 1e-3; must also respect the method's stability limit
+    /// ([`Params::step_limit_s`](super::Params::step_limit_s): RK4's from the hose modes, the
+    /// exponential method's from the end-stop contact and friction, which it treats
+    /// explicitly).
     pub max_step_s: f64,
 }
 

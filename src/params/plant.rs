@@ -31,7 +31,7 @@ pub struct PlantParams {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BodyParams {
-    /// Suspended mass incl. seat and operator [kg], 1 ..= 500. Paper: 11.7.
+    /// Suspended mass incl. seat and operator \[kg\], 1 ..= 500. Paper: 11.7.
     pub mass_kg: f64,
     /// Equivalent stiffness of all springs together [N/m], 1 ..= 1e6. Paper: 3680 (docs/model.md, correction 3).
     pub stiffness_n_per_m: f64,
@@ -50,11 +50,11 @@ impl Default for BodyParams {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CylinderParams {
-    /// Full stroke `Lc` [m], 0.005 ..= 1. Paper: 0.070. End stops sit at ±Lc/2.
+    /// Full stroke `Lc` \[m\], 0.005 ..= 1. Paper: 0.070. End stops sit at ±Lc/2.
     pub stroke_m: f64,
-    /// Bore `D` [m], 0.005 ..= 0.3, > rod. Paper: 0.025.
+    /// Bore `D` \[m\], 0.005 ..= 0.3, > rod. Paper: 0.025.
     pub bore_m: f64,
-    /// Rod diameter `d` [m], 0 ..= 0.3, < bore. Paper: 0.018.
+    /// Rod diameter `d` \[m\], 0 ..= 0.3, < bore. Paper: 0.018.
     pub rod_m: f64,
     /// Contact stiffness of the end stops [N/m], 1e3 ..= 1e8.
     pub end_stop_stiffness_n_per_m: f64,
@@ -75,7 +75,7 @@ impl Default for CylinderParams {
 }
 
 impl CylinderParams {
-    /// Annular piston area `A1 = A2 = π(D² − d²)/4` [m²].
+    /// Annular piston area `A1 = A2 = π(D² − d²)/4` \[m²\].
     pub fn piston_area_m2(&self) -> f64 {
         PI * (self.bore_m.powi(2) - self.rod_m.powi(2)) / 4.0
     }
@@ -85,9 +85,9 @@ impl CylinderParams {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct HoseParams {
-    /// Length of each hose `Li` [m], 0.01 ..= 20. Paper: 0.5.
+    /// Length of each hose `Li` \[m\], 0.01 ..= 20. Paper: 0.5.
     pub length_m: f64,
-    /// Inner diameter of each hose `di` [m], 0.001 ..= 0.05. Paper: 0.010.
+    /// Inner diameter of each hose `di` \[m\], 0.001 ..= 0.05. Paper: 0.010.
     pub diameter_m: f64,
 }
 
@@ -104,9 +104,9 @@ impl Default for HoseParams {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SupplyParams {
-    /// Feed pressure `pA` [Pa], 1e5 ..= 5e7, > return pressure. Paper: 100 bar.
+    /// Feed pressure `pA` \[Pa\], 1e5 ..= 5e7, > return pressure. Paper: 100 bar.
     pub supply_pressure_pa: f64,
-    /// Discharge (return) pressure `p0` [Pa], 0 ..= 5e7. Paper: 10 bar.
+    /// Discharge (return) pressure `p0` \[Pa\], 0 ..= 5e7. Paper: 10 bar.
     pub return_pressure_pa: f64,
 }
 
@@ -125,7 +125,7 @@ impl Default for SupplyParams {
 pub struct ValveParams {
     /// Flow coefficient `Cd` [-], 1e-3 ..= 1. Paper: 0.1074 initial, 0.1506 adjusted.
     pub cd: f64,
-    /// Area gradient `ka` (opening area = ka·xv) [m], 1e-4 ..= 0.5. Paper: 0.0251.
+    /// Area gradient `ka` (opening area = ka·xv) \[m\], 1e-4 ..= 0.5. Paper: 0.0251.
     pub ka_m: f64,
     /// Static spool gain `kv` [m/V], 1e-7 ..= 1e-2. Paper: 8e-5.
     pub kv_m_per_v: f64,
@@ -133,13 +133,13 @@ pub struct ValveParams {
     pub omega_n_rad_s: f64,
     /// Spool damping ratio `ζs` [-], 0.01 ..= 10. Paper: 1.1.
     pub zeta: f64,
-    /// Spool travel limit `xv,max` [m], 1e-6 ..= 0.05. Paper: 0.8 mm.
+    /// Spool travel limit `xv,max` \[m\], 1e-6 ..= 0.05. Paper: 0.8 mm.
     pub xv_max_m: f64,
-    /// Pure input delay `τ` of the command [s], 0 ..= 0.1. Paper: 17.5 ms.
+    /// Pure input delay `τ` of the command \[s\], 0 ..= 0.1. Paper: 17.5 ms.
     pub tau_s: f64,
-    /// Command saturation `±Vmax` [V], 0.1 ..= 100. Paper: 10 V.
+    /// Command saturation `±Vmax` \[V\], 0.1 ..= 100. Paper: 10 V.
     pub v_max_v: f64,
-    /// Width of the laminar core of the signed square root [Pa], 1 ..= 1e6 (docs/model.md, correction 10).
+    /// Width of the laminar core of the signed square root \[Pa\], 1 ..= 1e6 (docs/model.md, correction 10).
     pub laminar_core_pa: f64,
 }
 
@@ -167,7 +167,7 @@ pub struct FluidParams {
     pub density_kg_m3: f64,
     /// Dynamic viscosity `μ` [Pa·s], 1e-4 ..= 10. Paper: 0.02 (docs/model.md, correction 2).
     pub viscosity_pa_s: f64,
-    /// Bulk modulus `β` [Pa], 1e6 ..= 1e10. Paper: 1200 MPa (docs/model.md, correction 2).
+    /// Bulk modulus `β` \[Pa\], 1e6 ..= 1e10. Paper: 1200 MPa (docs/model.md, correction 2).
     pub bulk_modulus_pa: f64,
 }
 

@@ -16,7 +16,7 @@ pub struct SensorParams {
     pub ydd_scale: f64,
     /// Offset of the body accelerometer [m/s^2], -50 ..= 50.
     pub ydd_offset_m_s2: f64,
-    /// Time constant of the stroke sensor's first-order filter on the samples [s], 0 ..= 0.05.
+    /// Time constant of the stroke sensor's first-order filter on the samples \[s\], 0 ..= 0.05.
     pub u_lag_s: f64,
 }
 
@@ -48,7 +48,7 @@ impl SensorParams {
         self.ydd_scale * ydd + self.ydd_offset_m_s2
     }
 
-    /// The stroke sensor as a running filter, for samples `dt` [s] apart that arrive one at a
+    /// The stroke sensor as a running filter, for samples `dt` \[s\] apart that arrive one at a
     /// time (a streamed replay); [`Self::read_u`] is it over a whole channel.
     pub fn u_reader(&self, dt: f64) -> StrokeReader {
         StrokeReader {
@@ -61,7 +61,7 @@ impl SensorParams {
         }
     }
 
-    /// The stroke sensor's reading of `u` sampled every `dt` [s], in place: the samples
+    /// The stroke sensor's reading of `u` sampled every `dt` \[s\], in place: the samples
     /// through a first-order low-pass of time constant `u_lag_s`, `y[n] = a·y[n−1] +
     /// (1 − a)·u[n]`, `a = e^(−dt/u_lag_s)`, started settled at the first sample. Why this
     /// form and not a continuous-time lag: a rig's stroke filter runs in its data
@@ -86,7 +86,7 @@ pub struct StrokeReader {
 }
 
 impl StrokeReader {
-    /// The reading of the next sample of `u` [m].
+    /// The reading of the next sample of `u` \[m\].
     pub fn read(&mut self, u: f64) -> f64 {
         if self.a == 0.0 {
             return u;

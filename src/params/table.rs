@@ -25,11 +25,11 @@ pub struct ParamSpec {
     pub doc: &'static str,
     /// SI unit (`"-"` for dimensionless).
     pub unit: &'static str,
-    /// Smallest valid value [SI].
+    /// Smallest valid value \[SI\].
     pub min: f64,
-    /// Largest valid value [SI].
+    /// Largest valid value \[SI\].
     pub max: f64,
-    /// The paper's value [SI], if the paper gives one (its adjusted twin where it has two).
+    /// The paper's value \[SI\], if the paper gives one (its adjusted twin where it has two).
     pub paper: Option<f64>,
     /// Display unit and scale.
     pub display: Display,
@@ -49,12 +49,12 @@ impl std::fmt::Debug for ParamSpec {
 }
 
 impl ParamSpec {
-    /// The value in `p` [SI].
+    /// The value in `p` \[SI\].
     pub fn get(&self, p: &Params) -> f64 {
         (self.get)(p)
     }
 
-    /// Writes `value` [SI] into `p`, unchecked (see [`Params::set`] for the checked form).
+    /// Writes `value` \[SI\] into `p`, unchecked (see [`Params::set`] for the checked form).
     pub fn set_unchecked(&self, p: &mut Params, value: f64) {
         (self.set)(p, value)
     }
@@ -261,12 +261,12 @@ pub fn spec(key: &str) -> Option<&'static ParamSpec> {
 }
 
 impl Params {
-    /// The value [SI] of a parameter by its dotted key, `None` for an unknown key.
+    /// The value \[SI\] of a parameter by its dotted key, `None` for an unknown key.
     pub fn get(&self, key: &str) -> Option<f64> {
         spec(key).map(|s| s.get(self))
     }
 
-    /// Sets a parameter [SI] by its dotted key, after checking its range; the whole set is
+    /// Sets a parameter \[SI\] by its dotted key, after checking its range; the whole set is
     /// not re-validated (relations between parameters are [`Params::validate`]'s job).
     pub fn set(&mut self, key: &str, value: f64) -> Result<(), ParamError> {
         let s = spec(key).ok_or_else(|| {

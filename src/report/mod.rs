@@ -41,7 +41,7 @@ impl From<plot::PlotError> for ReportError {
 
 /// Seeds of the random rides whose spread the report states.
 pub const RIDE_SEEDS: [u64; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
-/// Duration of each random ride [s] (after a 2 s fade-in that the statistics skip).
+/// Duration of each random ride \[s\] (after a 2 s fade-in that the statistics skip).
 pub const RIDE_DURATION_S: f64 = 60.0;
 
 /// Mean and sample standard deviation over the seeds.
@@ -83,9 +83,9 @@ pub struct RideMetrics {
     pub vdv_ydd: f64,
     /// SEAT [%] = a_w body / a_w platform.
     pub seat_percent: f64,
-    /// RMS of the relative displacement [m].
+    /// RMS of the relative displacement \[m\].
     pub rms_u: f64,
-    /// Largest |u| [m].
+    /// Largest |u| \[m\].
     pub max_abs_u: f64,
     /// End-stop contacts (twin) or stroke overruns.
     pub contacts: usize,
@@ -96,21 +96,21 @@ pub struct RideMetrics {
 pub struct ReportNumbers {
     /// Preset used.
     pub preset: String,
-    /// Passive |T| = 1 crossing [Hz].
+    /// Passive |T| = 1 crossing \[Hz\].
     pub passive_crossing_hz: Option<f64>,
-    /// Linear active isolation upper edge [Hz].
+    /// Linear active isolation upper edge \[Hz\].
     pub linear_crossing_hz: Option<f64>,
-    /// Twin (linearised) isolation upper edge [Hz].
+    /// Twin (linearised) isolation upper edge \[Hz\].
     pub twin_crossing_hz: Option<f64>,
-    /// Twin (simulated dwell) isolation upper edge [Hz].
+    /// Twin (simulated dwell) isolation upper edge \[Hz\].
     pub twin_crossing_simulated_hz: Option<f64>,
-    /// Delay from the phase slope of the twin's u̇/V, 1–20 Hz, at 0.72 V [s].
+    /// Delay from the phase slope of the twin's u̇/V, 1–20 Hz, at 0.72 V \[s\].
     pub twin_phase_delay_s: f64,
-    /// Delay from the phase slope of G(s), 1–20 Hz [s].
+    /// Delay from the phase slope of G(s), 1–20 Hz \[s\].
     pub linear_phase_delay_s: f64,
     /// Twin low-frequency gain u̇/V at 0.5 Hz, 0.72 V [m/(s·V)].
     pub twin_gain_m_per_s_v: f64,
-    /// Table 1: (f [Hz], A [V], |u̇/V| [m/(s·V)], phase [deg]) of the twin.
+    /// Table 1: (f \[Hz\], A \[V\], |u̇/V| [m/(s·V)], phase \[deg\]) of the twin.
     pub table1: Vec<(f64, f64, f64, f64)>,
     /// Platform RMS acceleration over the seeds [m/s²].
     pub ride_rms_xdd: Spread,
@@ -126,9 +126,9 @@ pub struct ReportNumbers {
     pub ride_seed1: [RideMetrics; 3],
     /// Rides (of the seeds) in which the twin touched an end stop.
     pub ride_twin_contact_seeds: usize,
-    /// Largest |p1 + p2 − (pA + p0)| in the seed-1 twin ride [Pa].
+    /// Largest |p1 + p2 − (pA + p0)| in the seed-1 twin ride \[Pa\].
     pub ride_pressure_symmetry_pa: f64,
-    /// Mean of (p1 + p2)/2 in the seed-1 twin ride [Pa].
+    /// Mean of (p1 + p2)/2 in the seed-1 twin ride \[Pa\].
     pub ride_pressure_mean_pa: f64,
     /// Largest |Q1| in the seed-1 twin ride [m³/s].
     pub ride_max_flow_m3_s: f64,
@@ -136,7 +136,7 @@ pub struct ReportNumbers {
     pub cycloid_peak_ydd: [f64; 3],
     /// Cycloid: peak platform acceleration [m/s²].
     pub cycloid_peak_xdd: f64,
-    /// Cycloid: largest |u| of the twin and of the passive [m].
+    /// Cycloid: largest |u| of the twin and of the passive \[m\].
     pub cycloid_max_u: [f64; 2],
     /// Cd that Eq. (12) gives for 20 L/min at full opening with Δp = 70 bar and 100 bar.
     pub cd_from_eq12: [f64; 2],

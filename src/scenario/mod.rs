@@ -20,7 +20,7 @@ use std::sync::Arc;
 /// Platform position, velocity and acceleration at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct PlatformSample {
-    /// Position `x` [m].
+    /// Position `x` \[m\].
     pub x: f64,
     /// Velocity `ẋ` [m/s].
     pub xd: f64,
@@ -32,11 +32,11 @@ pub struct PlatformSample {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Cycloid {
-    /// Rise [m], −0.2 ..= 0.2. Paper: 0.030.
+    /// Rise \[m\], −0.2 ..= 0.2. Paper: 0.030.
     pub height_m: f64,
-    /// Rise time [s], 0.01 ..= 10. Paper: 0.5.
+    /// Rise time \[s\], 0.01 ..= 10. Paper: 0.5.
     pub rise_time_s: f64,
-    /// Start of the rise [s], 0 ..= 1000.
+    /// Start of the rise \[s\], 0 ..= 1000.
     pub start_s: f64,
 }
 
@@ -79,13 +79,13 @@ impl Cycloid {
 pub struct RandomRide {
     /// One-sided PSD level `S0` [(m/s²)²/Hz], 0 ..= 10. Paper: 0.05.
     pub s0: f64,
-    /// Lower band edge [Hz], 0.05 ..= 100. Paper: 0.5.
+    /// Lower band edge \[Hz\], 0.05 ..= 100. Paper: 0.5.
     pub f_low_hz: f64,
-    /// Upper band edge [Hz], > lower, ..= 200. Paper: 5.
+    /// Upper band edge \[Hz\], > lower, ..= 200. Paper: 5.
     pub f_high_hz: f64,
-    /// Duration of the record [s], 1 ..= 3600.
+    /// Duration of the record \[s\], 1 ..= 3600.
     pub duration_s: f64,
-    /// Smooth (quintic) fade-in at the start [s], 0 ..= duration/2, so that it starts from rest.
+    /// Smooth (quintic) fade-in at the start \[s\], 0 ..= duration/2, so that it starts from rest.
     pub fade_in_s: f64,
     /// Seed of the random generator (ChaCha8): same seed, same record, bit for bit.
     pub seed: u64,
@@ -137,7 +137,7 @@ fn catmull_rom(v: &[f64], s: f64) -> f64 {
 }
 
 impl SampledMotion {
-    /// The motion sampled at step `dt` [s] from `x`, `ẋ`, `ẍ` (SI, equal lengths), each
+    /// The motion sampled at step `dt` \[s\] from `x`, `ẋ`, `ẍ` (SI, equal lengths), each
     /// instant passed through `shape(t, sample)` (a fade in, or in and out).
     pub fn shaped(
         dt: f64,
@@ -168,7 +168,7 @@ impl SampledMotion {
         SampledMotion::new(dt, fx, fxd, fxdd)
     }
 
-    /// From uniformly sampled `x`, `ẋ`, `ẍ` (equal lengths, ≥ 2 samples) with step `dt` [s].
+    /// From uniformly sampled `x`, `ẋ`, `ẍ` (equal lengths, ≥ 2 samples) with step `dt` \[s\].
     pub fn new(dt: f64, x: Vec<f64>, xd: Vec<f64>, xdd: Vec<f64>) -> Self {
         Self {
             dt,
@@ -232,12 +232,12 @@ impl SampledMotion {
         self
     }
 
-    /// Sample step [s].
+    /// Sample step \[s\].
     pub fn dt(&self) -> f64 {
         self.dt
     }
 
-    /// Duration covered [s].
+    /// Duration covered \[s\].
     pub fn duration_s(&self) -> f64 {
         (self.xdd.len().saturating_sub(1)) as f64 * self.dt
     }
@@ -288,11 +288,11 @@ impl SampledMotion {
 /// A platform sine dwell `x = X·sin(ωt)` under a quintic fade-in, for transmissibility.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlatformSine {
-    /// Position amplitude [m].
+    /// Position amplitude \[m\].
     pub amplitude_m: f64,
-    /// Frequency [Hz].
+    /// Frequency \[Hz\].
     pub freq_hz: f64,
-    /// Fade-in duration [s].
+    /// Fade-in duration \[s\].
     pub fade_in_s: f64,
 }
 
@@ -360,9 +360,9 @@ pub enum PlatformMotion {
 /// position is reported as given; the velocity is not known (NaN).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct InputSegment {
-    /// Time the values are given at [s].
+    /// Time the values are given at \[s\].
     pub t0: f64,
-    /// Platform position at `t0` [m] (reported only).
+    /// Platform position at `t0` \[m\] (reported only).
     pub x: f64,
     /// `ẍ(t0)` [m/s²] and its derivatives of order 1, 2, 3 [m/s³, m/s⁴, m/s⁵].
     pub xdd: [f64; 4],
@@ -409,7 +409,7 @@ impl PlatformMotion {
         }
     }
 
-    /// Record samples per step `h` [s] when this is a record sampled on a grid that the
+    /// Record samples per step `h` \[s\] when this is a record sampled on a grid that the
     /// step lands on exactly (`h` a whole multiple of its sample step): then grid times can be
     /// read from the samples themselves ([`Self::at_grid`]).
     pub fn grid_stride(&self, h: f64) -> Option<usize> {
@@ -423,7 +423,7 @@ impl PlatformMotion {
         }
     }
 
-    /// Motion at the grid time `n·h` [s]; with `stride` from [`Self::grid_stride`] a record's
+    /// Motion at the grid time `n·h` \[s\]; with `stride` from [`Self::grid_stride`] a record's
     /// own samples (what the interpolation gives there, without its cost).
     #[inline(always)]
     pub fn at_grid(&self, n: u64, h: f64, stride: Option<usize>) -> PlatformSample {
@@ -433,7 +433,7 @@ impl PlatformMotion {
         }
     }
 
-    /// Acceleration at the grid time `n·h` [s] (see [`Self::at_grid`]).
+    /// Acceleration at the grid time `n·h` \[s\] (see [`Self::at_grid`]).
     #[inline(always)]
     pub fn xdd_at_grid(&self, n: u64, h: f64, stride: Option<usize>) -> f64 {
         match (self, stride) {
@@ -443,7 +443,7 @@ impl PlatformMotion {
     }
 }
 
-/// Generation rate of the random ride [Hz] (the band is ≤ 200 Hz; interpolation is cubic).
+/// Generation rate of the random ride \[Hz\] (the band is ≤ 200 Hz; interpolation is cubic).
 pub const RANDOM_RIDE_RATE_HZ: f64 = 1000.0;
 
 impl RandomRide {
@@ -523,27 +523,27 @@ impl RandomRide {
     }
 }
 
-/// An open-loop valve command `V_in(t)` [V]; zero before t = 0.
+/// An open-loop valve command `V_in(t)` \[V\]; zero before t = 0.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CommandSignal {
     /// No command.
     Zero,
     /// `A·cos(2πft)` from t = 0 (the sine tests; cosine so the stroke stays centred).
     Sine {
-        /// Amplitude [V].
+        /// Amplitude \[V\].
         amplitude_v: f64,
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         freq_hz: f64,
     },
     /// Linear chirp `A·cos(2π(f0·t + (f1 − f0)·t²/(2T)))` for `0 ≤ t ≤ T`, then zero.
     Chirp {
-        /// Amplitude [V].
+        /// Amplitude \[V\].
         amplitude_v: f64,
-        /// Start frequency [Hz].
+        /// Start frequency \[Hz\].
         f0_hz: f64,
-        /// End frequency [Hz].
+        /// End frequency \[Hz\].
         f1_hz: f64,
-        /// Sweep duration [s].
+        /// Sweep duration \[s\].
         duration_s: f64,
     },
     /// A sampled command (replayed records), read between its samples by the same cubic
@@ -552,9 +552,9 @@ pub enum CommandSignal {
     /// controller's rate, a filtered drive), and at 200 Hz a linear read of a 20 Hz sine test
     /// loses 3.3 % of its amplitude (Catmull–Rom 0.2 %), which a fit then blames on the plant.
     Sampled {
-        /// Sample step [s].
+        /// Sample step \[s\].
         dt: f64,
-        /// Samples from t = 0 [V].
+        /// Samples from t = 0 \[V\].
         values: Arc<Vec<f64>>,
     },
     /// A command received sample by sample (an FMU's command input), linearly interpolated
@@ -571,8 +571,8 @@ pub struct CommandStream {
 }
 
 impl CommandStream {
-    /// Appends the sample `v` [V] at `t` [s] (after every earlier sample; one at the same
-    /// time replaces it), forgetting the samples older than `keep_s` [s] before `t` except the
+    /// Appends the sample `v` \[V\] at `t` \[s\] (after every earlier sample; one at the same
+    /// time replaces it), forgetting the samples older than `keep_s` \[s\] before `t` except the
     /// newest of them.
     pub fn push(&mut self, t: f64, v: f64, keep_s: f64) {
         while self.samples.len() >= 2 && self.samples[1].0 <= t - keep_s {
@@ -584,7 +584,7 @@ impl CommandStream {
         self.samples.push_back((t, v));
     }
 
-    /// The command at `t` [V]: zero before the first sample, held after the newest.
+    /// The command at `t` \[V\]: zero before the first sample, held after the newest.
     pub fn at(&self, t: f64) -> f64 {
         let Some(i) = self.samples.iter().rposition(|s| s.0 <= t) else {
             return 0.0;
@@ -598,7 +598,7 @@ impl CommandStream {
 }
 
 impl CommandSignal {
-    /// Command at `t` [V].
+    /// Command at `t` \[V\].
     #[inline]
     pub fn at(&self, t: f64) -> f64 {
         if t < 0.0 {

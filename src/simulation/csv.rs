@@ -72,7 +72,8 @@ pub enum CsvRunError {
 }
 
 impl Trace {
-    /// Writes the trace's samples to `path` with `comments` (see the [module](self)).
+    /// Writes the trace's samples to `path` with `comments`, in the
+    /// [dataset format](crate::dataset).
     pub fn write_csv(&self, path: &Path, comments: &[(String, String)]) -> io::Result<()> {
         write_samples(path, self.model, comments, |record| {
             for s in &self.samples {
@@ -86,9 +87,9 @@ impl Trace {
 }
 
 /// Runs `run` and writes each sample it passes to its recorder to `path` as it is made, with
-/// `comments`, in the columns of `kind` (see the [module](self)). `run` is a streamed run
-/// such as `|record| sim.run_streaming(t_end, rate_hz, record)`; the recorder returns `false`
-/// once a row could not be written, which should stop the run.
+/// `comments`, in the columns of `kind` (in the [dataset format](crate::dataset)). `run` is a
+/// streamed run such as `|record| sim.run_streaming(t_end, rate_hz, record)`; the recorder
+/// returns `false` once a row could not be written, which should stop the run.
 pub fn write_csv_streamed(
     path: &Path,
     kind: ModelKind,

@@ -37,7 +37,7 @@ pub struct DelayLine {
 }
 
 impl DelayLine {
-    /// A history with step `h` [s] long enough for delays up to `max_delay` [s].
+    /// A history with step `h` \[s\] long enough for delays up to `max_delay` \[s\].
     pub fn new(h: f64, max_delay: f64, initial: f64) -> Self {
         let needed = (max_delay / h).ceil() as usize + 8;
         let size = needed.next_power_of_two();
@@ -58,7 +58,7 @@ impl DelayLine {
         self.len += 1;
     }
 
-    /// Time of the newest sample [s] (−h before any).
+    /// Time of the newest sample \[s\] (−h before any).
     #[inline]
     pub fn last_time(&self) -> f64 {
         self.len as f64 * self.h - self.h
@@ -123,7 +123,7 @@ impl DelayLine {
         self.interpolate(n, f, &lagrange_weights(f))
     }
 
-    /// A fixed read `delay` [s] behind the grid, for [`Self::value_at_tap`].
+    /// A fixed read `delay` \[s\] behind the grid, for [`Self::value_at_tap`].
     pub fn tap(&self, delay: f64) -> Tap {
         let d = delay * self.inv_h;
         let back = d.ceil();

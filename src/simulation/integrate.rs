@@ -54,7 +54,7 @@ pub fn rk4_step<const N: usize>(
 /// stage times `t`, `t + h/2` (twice) and `t + h`, so a problem can prepare its inputs at
 /// those three times once per step.
 pub trait Stepper<const N: usize> {
-    /// The step [s].
+    /// The step \[s\].
     fn step_size(&self) -> f64;
 
     /// One step from `(t, y)`, in place; `f(t, y)` returns `dy/dt`.
@@ -64,7 +64,7 @@ pub trait Stepper<const N: usize> {
 /// Classical RK4 at a fixed step ([`rk4_step`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rk4 {
-    /// The step [s].
+    /// The step \[s\].
     pub h: f64,
 }
 
@@ -175,7 +175,7 @@ pub enum Etd4Error {
     /// A matrix exponential overflowed (a step far too long for the matrix).
     #[error("the matrix exponential of h·A is not finite (step {h} s)")]
     NotFinite {
-        /// Step [s].
+        /// Step \[s\].
         h: f64,
     },
     /// More rows of the right-hand side are nonlinear than the scheme carries.
@@ -187,7 +187,7 @@ pub enum Etd4Error {
 }
 
 impl<const N: usize> Etd4<N> {
-    /// Coefficients for step `h` [s], matrix `A` (`a[i][j] = A_ij`), reference state `y_ref`,
+    /// Coefficients for step `h` \[s\], matrix `A` (`a[i][j] = A_ij`), reference state `y_ref`,
     /// per-state scales (the exponentials are taken of `D⁻¹·A·D`, `D = diag(scales)`, whose
     /// entries are of similar size) and the right-hand side `f(y)` to probe for its nonlinear
     /// rows, which must include every row an input enters.

@@ -51,7 +51,7 @@ pub struct ExactHold<const N: usize> {
 
 impl<const N: usize> ExactHold<N> {
     /// The transition of `model` (linear: its `A` and `B` are read off its derivatives) over a
-    /// step `h` [s].
+    /// step `h` \[s\].
     ///
     /// A pure function of `A`, `B` and `h`, whose matrix exponential costs about 45 000
     /// instructions, some 2 % of a 10 s run of the linear model at 1 ms: the last few built in

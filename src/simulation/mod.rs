@@ -64,7 +64,7 @@ pub enum SimError {
     Diverged {
         /// Which model.
         model: &'static str,
-        /// Time of detection [s].
+        /// Time of detection \[s\].
         t: f64,
         /// Name of the offending state.
         state: &'static str,
@@ -111,7 +111,7 @@ pub struct Simulation<M: Model<N>, const N: usize> {
 }
 
 impl Simulation<crate::model::twin::Twin, 10> {
-    /// The twin from rest, stepped with `params.numerics.integrator` at step `h` [s].
+    /// The twin from rest, stepped with `params.numerics.integrator` at step `h` \[s\].
     ///
     /// The exponential integrator's coefficients always build for validated parameters (its
     /// step ≤ 1 ms keeps `h·A` moderate; the twin has four nonlinear rows); should they not,
@@ -131,15 +131,15 @@ impl Simulation<crate::model::twin::Twin, 10> {
 }
 
 impl<M: Model<N> + CommandPath + LinearTimeInvariant, const N: usize> Simulation<M, N> {
-    /// A linear model from rest stepped exactly at step `h` [s] ([`crate::simulation::lti`]), or
+    /// A linear model from rest stepped exactly at step `h` \[s\] ([`crate::simulation::lti`]), or
     /// `None` when the command delay is shorter than the step (then the delayed command at a
     /// step's end is not yet known at its start; use [`Self::new`], RK4).
     pub fn exact_hold(model: M, h: f64, drive: Drive, platform: PlatformMotion) -> Option<Self> {
         hold_fits(&model, h).then(|| Self::exact_or_rk4(model, h, h, drive, platform))
     }
 
-    /// The linear model stepped as `seat-twin simulate` steps it: exactly at `h_exact` [s]
-    /// ([`Self::exact_hold`]), or by RK4 at `h_rk4` [s] when the delay is shorter than
+    /// The linear model stepped as `seat-twin simulate` steps it: exactly at `h_exact` \[s\]
+    /// ([`Self::exact_hold`]), or by RK4 at `h_rk4` \[s\] when the delay is shorter than
     /// `h_exact`.
     pub fn exact_or_rk4(
         model: M,
@@ -166,7 +166,7 @@ fn hold_fits<M: CommandPath>(model: &M, h: f64) -> bool {
 }
 
 impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
-    /// A run from rest at t = 0 with internal step `h` [s].
+    /// A run from rest at t = 0 with internal step `h` \[s\].
     pub fn new(model: M, h: f64, drive: Drive, platform: PlatformMotion) -> Self {
         let y = model.rest_state();
         let tau = model.command_delay();
@@ -307,7 +307,7 @@ impl<M: Model<N> + CommandPath, const N: usize> Simulation<M, N> {
         v.clamp(-self.v_max, self.v_max)
     }
 
-    /// Command as sent at the current time (before the delay) [V].
+    /// Command as sent at the current time (before the delay) \[V\].
     #[inline(always)]
     pub fn command_now(&self) -> f64 {
         self.command_for(self.time(), &self.y, 0.0)
@@ -722,7 +722,7 @@ fn stage_taps(history: &DelayLine, tau: f64, h: f64) -> Option<[Tap; 3]> {
     (tau >= h).then(|| [tau, tau - 0.5 * h, tau - h].map(|d| history.tap(d)))
 }
 
-/// Largest step ≤ `max_step` [s] that divides the output interval `1/rate_hz` exactly.
+/// Largest step ≤ `max_step` \[s\] that divides the output interval `1/rate_hz` exactly.
 pub fn step_for_rate(max_step: f64, rate_hz: f64) -> f64 {
     let dt_out = 1.0 / rate_hz;
     let n = (dt_out / max_step - 1e-9).ceil().max(1.0);

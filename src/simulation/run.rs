@@ -31,13 +31,13 @@ impl RunState {
         }
     }
 
-    /// Current time [s]: the steps taken times the step.
+    /// Current time \[s\]: the steps taken times the step.
     #[inline(always)]
     pub fn time(&self) -> f64 {
         self.steps as f64 * self.h
     }
 
-    /// Internal step [s].
+    /// Internal step \[s\].
     pub fn step_size(&self) -> f64 {
         self.h
     }
@@ -161,12 +161,12 @@ pub trait Run {
         Ok(self.sample())
     }
 
-    /// Current time [s].
+    /// Current time \[s\].
     fn time(&self) -> f64 {
         self.run_state().time()
     }
 
-    /// Internal step [s].
+    /// Internal step \[s\].
     fn step_size(&self) -> f64 {
         self.run_state().step_size()
     }
@@ -176,7 +176,7 @@ pub trait Run {
         self.run_state().contacts()
     }
 
-    /// The stepping loop: steps until `t_end` [s], passing a sample to `record` every `every`
+    /// The stepping loop: steps until `t_end` \[s\], passing a sample to `record` every `every`
     /// steps (and at the start when no step has been taken yet), and stops early when `record`
     /// returns `false`; returns the samples passed and whether it stopped. A run may override
     /// it with a loop of its own (a [`Simulation`](super::Simulation) chooses its stepper once,
@@ -191,7 +191,7 @@ pub trait Run {
         stream(self, t_end, every, record)
     }
 
-    /// Runs until `t_end` [s], calling `record` every `every` steps (and at the start if
+    /// Runs until `t_end` \[s\], calling `record` every `every` steps (and at the start if
     /// t = 0).
     fn run_until(
         &mut self,
@@ -206,7 +206,7 @@ pub trait Run {
         .map(|_| ())
     }
 
-    /// Runs from the current state to `t_end` [s] and returns the trace recorded at
+    /// Runs from the current state to `t_end` \[s\] and returns the trace recorded at
     /// `rate_hz` (a whole number of steps per sample, [`record_every`]).
     fn run_trace(&mut self, t_end: f64, rate_hz: f64) -> Result<Trace, SimError> {
         let mut samples = trace_buffer(t_end, rate_hz, self.step_size());
@@ -217,7 +217,7 @@ pub trait Run {
         Ok(summary.into_trace(samples))
     }
 
-    /// Runs from the current state to `t_end` [s], passing each sample at `rate_hz` to
+    /// Runs from the current state to `t_end` \[s\], passing each sample at `rate_hz` to
     /// `record` as it is made (the samples of [`Self::run_trace`], without keeping them:
     /// memory does not grow with the duration). `record` returns `false` to stop the run
     /// early.

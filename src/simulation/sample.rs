@@ -6,27 +6,27 @@ use super::*;
 /// One recorded instant (SI). Fields a model lacks are NaN.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// Platform position [m].
+    /// Platform position \[m\].
     pub x: f64,
     /// Platform velocity [m/s].
     pub xd: f64,
     /// Platform acceleration [m/s²].
     pub xdd: f64,
-    /// Relative displacement [m].
+    /// Relative displacement \[m\].
     pub u: f64,
     /// Relative velocity [m/s].
     pub du: f64,
     /// Body acceleration [m/s²].
     pub ydd: f64,
-    /// Command as sent (before the delay), saturated [V]. NaN for the passive model.
+    /// Command as sent (before the delay), saturated \[V\]. NaN for the passive model.
     pub v_in: f64,
-    /// Spool position [m].
+    /// Spool position \[m\].
     pub xv: f64,
-    /// Upper chamber pressure [Pa].
+    /// Upper chamber pressure \[Pa\].
     pub p1: f64,
-    /// Lower chamber pressure [Pa].
+    /// Lower chamber pressure \[Pa\].
     pub p2: f64,
     /// Hose-1 flow [m³/s].
     pub q1: f64,
@@ -38,7 +38,7 @@ pub struct Sample {
 
 impl Sample {
     /// The sample at `t` from the platform's motion, the model's outputs and the command as
-    /// sent (NaN without a valve); `half_stroke` [m] decides `contact`.
+    /// sent (NaN without a valve); `half_stroke` \[m\] decides `contact`.
     pub fn assemble(t: f64, p: PlatformSample, o: &Outputs, v_in: f64, half_stroke: f64) -> Self {
         Sample {
             t,
@@ -62,13 +62,13 @@ impl Sample {
 /// One end-stop contact (twin) or stroke overrun (linear, passive models).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ContactEvent {
-    /// Start [s].
+    /// Start \[s\].
     pub t_start: f64,
-    /// End [s] (the run's end if still in contact).
+    /// End \[s\] (the run's end if still in contact).
     pub t_end: f64,
     /// +1 upper stop (u > 0), −1 lower stop.
     pub side: i8,
-    /// Largest penetration beyond ±Lc/2 [m].
+    /// Largest penetration beyond ±Lc/2 \[m\].
     pub max_penetration_m: f64,
 }
 
@@ -112,12 +112,12 @@ impl RunSummary {
     }
 }
 
-/// Steps between recorded samples at `rate_hz` for an internal step `h` [s] (at least 1).
+/// Steps between recorded samples at `rate_hz` for an internal step `h` \[s\] (at least 1).
 pub fn record_every(h: f64, rate_hz: f64) -> u64 {
     ((1.0 / rate_hz) / h).round().max(1.0) as u64
 }
 
-/// Samples a run to `t_end` [s] recorded at `rate_hz` with internal step `h` gives, both
+/// Samples a run to `t_end` \[s\] recorded at `rate_hz` with internal step `h` gives, both
 /// ends included (what [`Run::run_trace`] returns); saturates for absurd inputs.
 pub fn sample_count(t_end: f64, rate_hz: f64, h: f64) -> u64 {
     let every = record_every(h, rate_hz);

@@ -49,20 +49,20 @@ use rayon::prelude::*;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-/// Largest stroke use allowed on a tuning ride [m].
+/// Largest stroke use allowed on a tuning ride \[m\].
 pub const MAX_ABS_U_M: f64 = 0.030;
-/// Smallest gain margin allowed [dB].
+/// Smallest gain margin allowed \[dB\].
 pub const MIN_GAIN_MARGIN_DB: f64 = 6.0;
-/// Smallest phase margin allowed [deg] (over every gain crossover, in magnitude).
+/// Smallest phase margin allowed \[deg\] (over every gain crossover, in magnitude).
 pub const MIN_PHASE_MARGIN_DEG: f64 = 45.0;
-/// Smallest delay margin allowed [s]: the τ part of the spread.
+/// Smallest delay margin allowed \[s\]: the τ part of the spread.
 pub const MIN_DELAY_MARGIN_S: f64 = 0.003;
 /// Slowest decay allowed of any closed-loop mode at any point of the spread [1/s] (a time
 /// constant of 5 s: a mode rung by a bump is gone well within the settle test's 10 s).
 pub const MIN_DECAY_RATE_PER_S: f64 = 0.02;
 /// Feasible candidates, best first, put through the robustness check before giving up.
 const MAX_CHECKED_CANDIDATES: usize = 12;
-/// Start of the ride left out of the metrics (the rides fade in over 2 s) [s].
+/// Start of the ride left out of the metrics (the rides fade in over 2 s) \[s\].
 pub const SETTLE_S: f64 = 2.0;
 /// Recording rate of the tuning runs [Hz].
 const RATE_HZ: f64 = 500.0;
@@ -129,7 +129,7 @@ impl TuneInput {
         }
     }
 
-    /// The motion for one seed and duration [s].
+    /// The motion for one seed and duration \[s\].
     pub fn motion(&self, seed: u64, duration_s: f64) -> Result<PlatformMotion, TuneError> {
         match self {
             TuneInput::Ride => Ok(ride(seed, duration_s)),
@@ -160,7 +160,7 @@ pub struct TuneOptions {
     pub tune_seeds: Vec<u64>,
     /// Seeds of the held-out rides (confirmation only).
     pub heldout_seeds: Vec<u64>,
-    /// Duration of each ride [s], ≥ 5.
+    /// Duration of each ride \[s\], ≥ 5.
     pub duration_s: f64,
     /// Optimise the worst case over the parameter spread.
     pub robust: bool,
@@ -224,17 +224,17 @@ pub struct Evaluation {
     /// Mean objective over the rides (worst case over the spread when robust); NaN if a ride
     /// diverged.
     pub objective: f64,
-    /// Largest |u| over the rides [m].
+    /// Largest |u| over the rides \[m\].
     pub max_abs_u_m: f64,
     /// End-stop contacts over the rides.
     pub contacts: usize,
-    /// Gain margin of the linearised loop, the crossing nearest instability [dB] (worst over
+    /// Gain margin of the linearised loop, the crossing nearest instability \[dB\] (worst over
     /// the corners when robust).
     pub gain_margin_db: f64,
-    /// Phase margin of the linearised loop, the crossover nearest instability [deg] (worst over
+    /// Phase margin of the linearised loop, the crossover nearest instability \[deg\] (worst over
     /// the corners when robust).
     pub phase_margin_deg: f64,
-    /// Smallest delay margin over every crossover [s] (worst over the corners when robust).
+    /// Smallest delay margin over every crossover \[s\] (worst over the corners when robust).
     pub delay_margin_s: f64,
     /// Points of the 27-point spread where the loop linearised at rest is unstable.
     pub unstable_points: usize,
@@ -271,7 +271,7 @@ pub struct TuneResult {
     pub tune_seeds: Vec<u64>,
     /// Held-out seeds.
     pub heldout_seeds: Vec<u64>,
-    /// Ride duration [s].
+    /// Ride duration \[s\].
     pub duration_s: f64,
     /// Whether the worst case over the spread was optimised.
     pub robust: bool,
@@ -284,7 +284,7 @@ pub struct TuneResult {
 
 /// The gains a structure tunes, with the scale of one search unit. Corner frequencies stay as
 /// the preset sets them (they are design choices, not gains). `Kp` is searched on a log scale
-/// of |Kp| with its sign fixed negative ([`to_search`]): positive position feedback is unstable
+/// of |Kp| with its sign fixed negative (`to_search`): positive position feedback is unstable
 /// at any gain, and the stable range of |Kp| spans decades (a few V/m at rest, where the oil
 /// column limits it, to tens of V/m on G(s)).
 pub fn tuned_keys(kind: ControllerKind) -> &'static [(&'static str, f64)] {

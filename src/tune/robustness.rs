@@ -14,21 +14,21 @@ use crate::scenario::PlatformMotion;
 pub struct RobustnessRow {
     /// Discharge coefficient [-].
     pub cd: f64,
-    /// Valve delay [s].
+    /// Valve delay \[s\].
     pub tau_s: f64,
-    /// Body mass [kg].
+    /// Body mass \[kg\].
     pub mass_kg: f64,
     /// Mean objective over the tuning rides.
     pub objective: f64,
     /// End-stop contacts over the tuning rides.
     pub contacts: usize,
-    /// Largest |u| [m].
+    /// Largest |u| \[m\].
     pub max_abs_u_m: f64,
     /// Closed-loop eigenvalue verdict of the loop linearised at rest.
     pub stable: bool,
     /// Growth rate of the rightmost closed-loop mode [1/s].
     pub growth_rate_per_s: f64,
-    /// Smallest delay margin over every crossover [s].
+    /// Smallest delay margin over every crossover \[s\].
     pub delay_margin_s: f64,
     /// The settle test at rest after a bump on the nonlinear twin (`None`: it diverged).
     pub settle: Option<Settle>,
@@ -46,7 +46,7 @@ impl RobustnessRow {
     }
 }
 
-/// The largest delay of a robustness table [s].
+/// The largest delay of a robustness table \[s\].
 pub fn tau_max_s(table: &[RobustnessRow]) -> f64 {
     table.iter().map(|r| r.tau_s).fold(0.0, f64::max)
 }

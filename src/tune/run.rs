@@ -35,8 +35,8 @@ type SearchState = IterState<Vec<f64>, (), (), (), (), f64>;
 /// A tuning run cut into steps, so a caller without threads (the web app, inside its frames)
 /// can run it a piece at a time: the baseline evaluation, then one optimiser iteration per
 /// step (the start simplex is one step: an evaluation per corner), then one robustness check
-/// per candidate, then the held-out rides. [`tune_observed`] is this stepped to its end, so
-/// both give the same result bit for bit.
+/// per candidate, then the held-out rides. [`tune_observed`](super::tune_observed) is this
+/// stepped to its end, so both give the same result bit for bit.
 pub struct TuneRun {
     opts: TuneOptions,
     nominal: Params,

@@ -17,7 +17,7 @@ pub struct DelayBlock {
 }
 
 impl DelayBlock {
-    /// The block for a delay `delay_s` > 0 [s] with `n` ≥ 2 collocation states.
+    /// The block for a delay `delay_s` > 0 \[s\] with `n` ≥ 2 collocation states.
     pub fn new(delay_s: f64, n: usize) -> Self {
         let x: Vec<f64> = (0..=n).map(|j| (PI * j as f64 / n as f64).cos()).collect();
         let c = |j: usize| if j == 0 || j == n { 2.0 } else { 1.0 };

@@ -11,11 +11,11 @@ use std::f64::consts::PI;
 /// A gain crossover, `|L(jω)| = 1`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct GainCrossover {
-    /// Frequency [Hz].
+    /// Frequency \[Hz\].
     pub freq_hz: f64,
-    /// Phase margin `180° + ∠L` wrapped to (−180°, 180°] [deg].
+    /// Phase margin `180° + ∠L` wrapped to (−180°, 180°] \[deg\].
     pub phase_margin_deg: f64,
-    /// The extra delay that would put a closed-loop pole on the imaginary axis here [s].
+    /// The extra delay that would put a closed-loop pole on the imaginary axis here \[s\].
     pub delay_margin_s: f64,
     /// |L| falls through 1 here: added delay moves the pole on the axis into the right half
     /// plane (destabilising). Where |L| rises through 1 the pole crosses the other way
@@ -26,9 +26,9 @@ pub struct GainCrossover {
 /// A phase crossover, `L(jω)` on the negative real axis.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct PhaseCrossover {
-    /// Frequency [Hz].
+    /// Frequency \[Hz\].
     pub freq_hz: f64,
-    /// Gain margin `−20·log10 |L|` [dB] (positive: the gain may rise by that much here;
+    /// Gain margin `−20·log10 |L|` \[dB\] (positive: the gain may rise by that much here;
     /// negative: lowering the gain by that much puts a pole on the axis).
     pub gain_margin_db: f64,
 }
@@ -65,7 +65,7 @@ impl LoopMargins {
         })
     }
 
-    /// The delay margin [s]: the smallest extra delay that makes the loop unstable, over the
+    /// The delay margin \[s\]: the smallest extra delay that makes the loop unstable, over the
     /// destabilising gain crossovers ([`GainCrossover::destabilising`]); ∞ without one.
     pub fn delay_margin_s(&self) -> f64 {
         self.gain_crossovers
@@ -75,13 +75,13 @@ impl LoopMargins {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// The gain margin of [`Self::worst_gain`] [dB] (signed); ∞ without a phase crossover.
+    /// The gain margin of [`Self::worst_gain`] \[dB\] (signed); ∞ without a phase crossover.
     pub fn gain_margin_db(&self) -> f64 {
         self.worst_gain()
             .map_or(f64::INFINITY, |c| c.gain_margin_db)
     }
 
-    /// The phase margin of [`Self::worst_phase`] [deg]; ∞ without a gain crossover.
+    /// The phase margin of [`Self::worst_phase`] \[deg\]; ∞ without a gain crossover.
     pub fn phase_margin_deg(&self) -> f64 {
         self.worst_phase()
             .map_or(f64::INFINITY, |c| c.phase_margin_deg)
@@ -161,7 +161,7 @@ fn bisect(a: f64, b: f64, g: impl Fn(f64) -> f64, ga: f64) -> f64 {
     (0.5 * (lo + hi)).exp()
 }
 
-/// The margin grid [Hz]: 3000 log points from 0.01 Hz to [`MARGIN_F_MAX_HZ`], plus, around
+/// The margin grid \[Hz\]: 3000 log points from 0.01 Hz to [`MARGIN_F_MAX_HZ`], plus, around
 /// every pole with damping ratio below 0.3 in that range, points `|σ|/8` apart over `±40·|σ|`
 /// of its damped frequency (σ its real part), so that a resonance of any sharpness is sampled
 /// across its width.

@@ -40,7 +40,7 @@ use std::f64::consts::PI;
 /// Chebyshev orders of the delay blocks at which the eigenvalues are computed and compared.
 pub const ORDERS: [usize; 2] = [28, 40];
 
-/// Highest frequency of the margin grid [Hz] (above the valve's and the oil column's modes).
+/// Highest frequency of the margin grid \[Hz\] (above the valve's and the oil column's modes).
 pub const MARGIN_F_MAX_HZ: f64 = 1000.0;
 
 /// The plant as the loop sees it: `ẋ = a·x + b·V(t − τ)`, the stroke `u = u_row·x` and the
@@ -217,7 +217,7 @@ pub fn closed_loop_matrix(
 pub struct ClosedLoopModes {
     /// Growth rate of the rightmost mode, its real part [1/s] (negative: it decays).
     pub growth_rate_per_s: f64,
-    /// Its frequency `|Im λ|/2π` [Hz].
+    /// Its frequency `|Im λ|/2π` \[Hz\].
     pub freq_hz: f64,
     /// Delay order of the reported eigenvalue (the higher of [`ORDERS`]).
     pub order: usize,
@@ -284,7 +284,7 @@ pub(super) fn controller_poles(law: &ControlLaw) -> Vec<Complex64> {
 pub struct MarginGrid {
     /// The plant for the eigenvalues.
     pub loop_plant: LoopPlant,
-    /// Frequencies [Hz].
+    /// Frequencies \[Hz\].
     pub freqs_hz: Vec<f64>,
     /// The plant's responses there.
     pub points: Vec<OpenLoop>,

@@ -13,7 +13,7 @@ use std::time::Duration;
 /// What the engine last reported.
 #[derive(Debug, Clone, Default)]
 pub struct EngineView {
-    /// Simulated time [s].
+    /// Simulated time \[s\].
     pub t: f64,
     /// Real-time factor.
     pub realtime_factor: f64,

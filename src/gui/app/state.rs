@@ -36,7 +36,7 @@ pub struct Notice {
 pub struct FrameStats {
     ui_ms: VecDeque<f64>,
     frame_at: VecDeque<Instant>,
-    /// Whole-frame CPU time reported by eframe (UI + tessellation) [ms].
+    /// Whole-frame CPU time reported by eframe (UI + tessellation) \[ms\].
     pub cpu_ms: Option<f64>,
 }
 
@@ -56,12 +56,12 @@ impl FrameStats {
         self.frame_at.clear();
     }
 
-    /// Mean time of `SeatTwinApp::ui` over the last 120 frames [ms].
+    /// Mean time of `SeatTwinApp::ui` over the last 120 frames \[ms\].
     pub fn mean_ui_ms(&self) -> f64 {
         self.ui_ms.iter().sum::<f64>() / self.ui_ms.len().max(1) as f64
     }
 
-    /// 95th percentile of the time of `SeatTwinApp::ui` over the last 120 frames [ms] (the
+    /// 95th percentile of the time of `SeatTwinApp::ui` over the last 120 frames \[ms\] (the
     /// nearest-rank value: 6 of 120 frames are slower).
     pub fn p95_ui_ms(&self) -> f64 {
         let mut v: Vec<f64> = self.ui_ms.iter().copied().collect();
@@ -73,7 +73,7 @@ impl FrameStats {
         v[rank.clamp(1, v.len()) - 1]
     }
 
-    /// Largest time of `SeatTwinApp::ui` over the last 120 frames [ms].
+    /// Largest time of `SeatTwinApp::ui` over the last 120 frames \[ms\].
     pub fn max_ui_ms(&self) -> f64 {
         self.ui_ms.iter().copied().fold(0.0, f64::max)
     }
@@ -122,7 +122,7 @@ impl WindowState {
     }
 }
 
-/// The window size to set at start for a `window` [points] on `monitor`, or `None` to keep
+/// The window size to set at start for a `window` \[points\] on `monitor`, or `None` to keep
 /// it: a window that does not fit (with room for the desktop's panels and the title bar) is
 /// cut to 90 % of the monitor; one at most half the monitor both ways (remembered from a
 /// smaller screen) grows to 75 % of it.

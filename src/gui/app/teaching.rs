@@ -359,9 +359,9 @@ impl SeatTwinApp {
         }
     }
 
-    /// The page's `window.seatTwin.state()`: simulated time [s], a_w of each model [m/s²]
+    /// The page's `window.seatTwin.state()`: simulated time \[s\], a_w of each model [m/s²]
     /// over the running metrics (500 Hz, the first 1 s left out, as the scopes' table),
-    /// the twin's largest |u| [m], the stability verdict, the preset; then the lesson step,
+    /// the twin's largest |u| \[m\], the stability verdict, the preset; then the lesson step,
     /// real-time factor and frame times.
     pub fn state_json(&self) -> String {
         let (rows, platform) = self.traces.metrics.rows();

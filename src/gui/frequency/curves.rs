@@ -59,7 +59,7 @@ pub type Curve = Vec<PlotPoint>;
 pub struct Curves {
     /// Parameters they were computed for.
     pub params: Option<Params>,
-    /// |T| [dB] of linear, twin (linearised), passive.
+    /// |T| \[dB\] of linear, twin (linearised), passive.
     pub t_mag: [Curve; 3],
     /// Phase of T [deg] of linear, twin, passive (unwrapped).
     pub t_phase: [Curve; 3],
@@ -73,7 +73,7 @@ pub struct Curves {
     pub stability: [Option<Stability>; 2],
     /// What to change when a loop is unstable (empty when both are stable).
     pub remedy: String,
-    /// Time the last recomputation took [ms].
+    /// Time the last recomputation took \[ms\].
     pub compute_ms: f64,
 }
 

@@ -10,7 +10,7 @@ use crate::gui::job::{Job, JobCtx, Step, Waker};
 pub enum DwellPoint {
     /// The twin's transmissibility there.
     Point {
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         freq_hz: f64,
         /// The twin's transmissibility ÿ/ẍ [-] by a sine dwell.
         value: Complex64,
@@ -20,7 +20,7 @@ pub enum DwellPoint {
     },
     /// The run at that frequency failed.
     Failed {
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         freq_hz: f64,
         /// Why, for the user.
         reason: String,
@@ -95,7 +95,7 @@ pub struct Dwell {
     job: Option<DwellJob>,
     /// Parameters of the shown points.
     shown_for: Option<Params>,
-    /// |T| [dB] points.
+    /// |T| \[dB\] points.
     pub mag: Curve,
     /// Phase [deg] points.
     pub phase: Curve,

@@ -133,11 +133,11 @@ pub struct ChannelErrors {
     pub ydd: Option<f64>,
     /// The same divided by the RMS of the measured filtered acceleration [-].
     pub ydd_nrmse: Option<f64>,
-    /// RMS error of the filtered upper chamber pressure [Pa], if measured.
+    /// RMS error of the filtered upper chamber pressure \[Pa\], if measured.
     pub p1: Option<f64>,
-    /// RMS error of the filtered lower chamber pressure [Pa], if measured.
+    /// RMS error of the filtered lower chamber pressure \[Pa\], if measured.
     pub p2: Option<f64>,
-    /// RMS error of the relative displacement [m] (open loop: includes drift; not fitted).
+    /// RMS error of the relative displacement \[m\] (open loop: includes drift; not fitted).
     pub u: f64,
     /// Samples counted (the record's, or its window's).
     pub samples: usize,
@@ -158,9 +158,9 @@ pub struct ChannelErrors {
 /// Error of one raw channel of a replay against the record.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct RawChannel {
-    /// RMS of twin − measured [SI].
+    /// RMS of twin − measured \[SI\].
     pub rms_error: f64,
-    /// Standard deviation of the measured channel about its mean [SI].
+    /// Standard deviation of the measured channel about its mean \[SI\].
     pub measured_std: f64,
     /// `rms_error / measured_std` [-] (0 when the channel does not vary).
     pub nrmse: f64,
@@ -188,13 +188,13 @@ impl RawChannel {
 /// Raw-channel errors of a replay (`None`: the record lacks the channel).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct RawErrors {
-    /// Relative displacement [m].
+    /// Relative displacement \[m\].
     pub u: RawChannel,
     /// Body acceleration [m/s²].
     pub ydd: Option<RawChannel>,
-    /// Upper chamber pressure [Pa].
+    /// Upper chamber pressure \[Pa\].
     pub p1: Option<RawChannel>,
-    /// Lower chamber pressure [Pa].
+    /// Lower chamber pressure \[Pa\].
     pub p2: Option<RawChannel>,
 }
 

@@ -66,7 +66,7 @@ pub use errors::{ChannelErrors, RawChannel, RawErrors};
 pub use streamed::{BeforeEndStop, StreamedErrors, replay_streamed};
 
 /// Cut-off of the zero-phase low-pass applied to the recorded platform motion before it drives
-/// the twin [Hz] (see the [module docs](self)); at most 0.3 × the sample rate.
+/// the twin \[Hz\] (see the [module docs](self)); at most 0.3 × the sample rate.
 pub const EXCITATION_LOWPASS_HZ: f64 = 20.0;
 
 /// How the measured excitation is conditioned, and why (for file headers and reports).
@@ -85,7 +85,7 @@ pub fn condition_excitation(xdd: &[f64], dt: f64) -> Vec<f64> {
     butterworth_zero_phase(xdd, dt, fc, 6)
 }
 
-/// Cut-off of the stroke-drift channel of the metric [Hz]: the raw error measure's band with
+/// Cut-off of the stroke-drift channel of the metric \[Hz\]: the raw error measure's band with
 /// DC ([`super::raw_error::BANDS_HZ`]).
 pub const DRIFT_LOWPASS_HZ: f64 = 0.5;
 
@@ -101,16 +101,16 @@ pub const DRIFT_LOWPASS_HZ: f64 = 0.5;
 /// record's start transient leaves 33 µm there against 9 mm of stroke swing).
 pub const RESOLUTION: f64 = 1e-3;
 
-/// Rate at which the stroke-drift channel is kept [Hz]: ten samples per period of its
+/// Rate at which the stroke-drift channel is kept \[Hz\]: ten samples per period of its
 /// cut-off, so that its slow residual does not outweigh the other channels by its count.
 pub const DRIFT_EVAL_RATE_HZ: f64 = 5.0;
 
 /// Signal-processing settings of the error metric.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MetricOptions {
-    /// Cut-off of the zero-phase low-pass applied to measured and simulated channels [Hz].
+    /// Cut-off of the zero-phase low-pass applied to measured and simulated channels \[Hz\].
     pub lowpass_hz: f64,
-    /// Rate at which the filtered residual is kept [Hz] (decimation).
+    /// Rate at which the filtered residual is kept \[Hz\] (decimation).
     pub eval_rate_hz: f64,
     /// Floor of a channel's weight scale, as a fraction of the measured channel's RMS.
     pub floor_fraction: f64,
@@ -129,19 +129,19 @@ impl Default for MetricOptions {
 /// The twin's channels replayed on a record's time grid (SI).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SimChannels {
-    /// Time [s].
+    /// Time \[s\].
     pub t: Vec<f64>,
-    /// Relative displacement [m].
+    /// Relative displacement \[m\].
     pub u: Vec<f64>,
     /// Relative velocity [m/s].
     pub du: Vec<f64>,
     /// Body acceleration [m/s²].
     pub ydd: Vec<f64>,
-    /// Upper chamber pressure [Pa] (absolute model pressure, as the twin holds it).
+    /// Upper chamber pressure \[Pa\] (absolute model pressure, as the twin holds it).
     pub p1: Vec<f64>,
-    /// Lower chamber pressure [Pa].
+    /// Lower chamber pressure \[Pa\].
     pub p2: Vec<f64>,
-    /// Spool position [m].
+    /// Spool position \[m\].
     pub xv: Vec<f64>,
     /// Hose-1 flow [m³/s].
     pub q1: Vec<f64>,
@@ -275,15 +275,15 @@ fn replay_samples(
 pub struct PreparedRecord {
     /// File name (for reports).
     pub name: String,
-    /// Sample step [s].
+    /// Sample step \[s\].
     pub dt: f64,
     /// Number of samples.
     pub len: usize,
-    /// Time [s].
+    /// Time \[s\].
     pub t: Vec<f64>,
-    /// Command as sent [V].
+    /// Command as sent \[V\].
     pub v_in: Arc<Vec<f64>>,
-    /// Measured relative displacement [m].
+    /// Measured relative displacement \[m\].
     pub u: Vec<f64>,
     /// Measured body acceleration [m/s²], if recorded.
     pub ydd: Option<Vec<f64>>,
@@ -301,15 +301,15 @@ pub struct PreparedRecord {
     pub scale_du: f64,
     /// Weight scale of the acceleration channel [m/s²].
     pub scale_ydd: f64,
-    /// Estimated noise RMS of the raw `u` [m].
+    /// Estimated noise RMS of the raw `u` \[m\].
     pub noise_u: f64,
     /// Estimated noise RMS of the raw `ÿ` [m/s²] (0 without the channel).
     pub noise_ydd: f64,
     /// Filtered measured chamber pressures `p1`, `p2` [Pa gauge], each if recorded.
     pub p_meas_f: [Option<Vec<f64>>; 2],
-    /// Weight scales of the pressure channels [Pa] (1 without the channel).
+    /// Weight scales of the pressure channels \[Pa\] (1 without the channel).
     pub scale_p: [f64; 2],
-    /// Estimated noise RMS of the raw pressures [Pa] (0 without the channel).
+    /// Estimated noise RMS of the raw pressures \[Pa\] (0 without the channel).
     pub noise_p: [f64; 2],
     /// Noise floor of the raw `u` (the raw error measure, [`super::raw_error`]).
     pub floor_u: NoiseFloor,
@@ -317,15 +317,15 @@ pub struct PreparedRecord {
     pub floor_ydd: NoiseFloor,
     /// Noise floors of the raw `p1`, `p2` (zero without the channel).
     pub floor_p: [NoiseFloor; 2],
-    /// Measured `u` through the zero-phase drift low-pass ([`DRIFT_LOWPASS_HZ`]) [m].
+    /// Measured `u` through the zero-phase drift low-pass ([`DRIFT_LOWPASS_HZ`]) \[m\].
     pub u_drift_meas: Vec<f64>,
-    /// Weight scale of the stroke-drift channel [m]: the raw error measure's floor of `u` in
+    /// Weight scale of the stroke-drift channel \[m\]: the raw error measure's floor of `u` in
     /// its band with DC (noise `σ_u` with 0.1 % of the stroke's swing,
     /// [`RESOLUTION`]).
     pub scale_u_drift: f64,
     /// Decimation of the stroke-drift channel (to about [`DRIFT_EVAL_RATE_HZ`]).
     pub drift_decimate: usize,
-    /// Low-pass cut-off used [Hz].
+    /// Low-pass cut-off used \[Hz\].
     pub lowpass_hz: f64,
     /// Raw measured chamber pressures `p1`, `p2` [Pa gauge], each if recorded.
     pub p_raw: [Option<Vec<f64>>; 2],
@@ -501,7 +501,7 @@ impl PreparedRecord {
         self.window.clone().step_by(self.decimate.max(1))
     }
 
-    /// Duration [s].
+    /// Duration \[s\].
     pub fn duration_s(&self) -> f64 {
         (self.len.saturating_sub(1)) as f64 * self.dt
     }
@@ -570,7 +570,7 @@ pub(super) fn part_name(r: &PreparedRecord) -> String {
 pub struct Replay {
     /// The twin's channels on the record's grid.
     pub sim: SimChannels,
-    /// Residual of `u` [m] at every sample.
+    /// Residual of `u` \[m\] at every sample.
     pub residual_u: Vec<f64>,
     /// Residual of the filtered relative velocity [m/s] at every sample.
     pub residual_du: Vec<f64>,

@@ -18,7 +18,7 @@ pub struct StreamedErrors {
     pub du: f64,
     /// The same divided by the RMS of the measured filtered velocity [-].
     pub du_nrmse: f64,
-    /// RMS error of the relative displacement [m] ([`super::ChannelErrors::u`]).
+    /// RMS error of the relative displacement \[m\] ([`super::ChannelErrors::u`]).
     pub u: f64,
     /// RMS error of the filtered body acceleration [m/s²], if measured.
     pub ydd: Option<f64>,
@@ -32,11 +32,11 @@ pub struct StreamedErrors {
 /// takes a little sooner, later or not at all with the smallest change of a parameter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BeforeEndStop {
-    /// Time of the contact from the record's start [s].
+    /// Time of the contact from the record's start \[s\].
     pub at_s: f64,
     /// Samples before the contact.
     pub samples: usize,
-    /// RMS error of the relative displacement over those samples [m].
+    /// RMS error of the relative displacement over those samples \[m\].
     pub u: f64,
     /// RMS error of the filtered body acceleration over those samples [m/s²], if measured.
     pub ydd: Option<f64>,

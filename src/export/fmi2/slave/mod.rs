@@ -347,7 +347,7 @@ impl Slave {
         Ok(())
     }
 
-    /// Current time [s].
+    /// Current time \[s\].
     pub fn time(&self) -> f64 {
         self.start_time + self.sim.as_ref().map_or(0.0, |s| s.time())
     }
