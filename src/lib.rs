@@ -63,6 +63,8 @@
 
 pub mod analysis;
 pub mod bench;
+// The command line has no place in the browser build (the web app is the app's UI).
+#[cfg(not(target_arch = "wasm32"))]
 pub mod cli;
 pub mod control;
 pub mod dataset;

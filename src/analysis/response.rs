@@ -13,7 +13,8 @@ use crate::simulation::SimError;
 use num_complex::Complex64;
 
 /// How a response is computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(not(target_arch = "wasm32"), derive(clap::ValueEnum))]
 pub enum Method {
     /// Closed form (linear and passive models).
     Exact,
