@@ -40,7 +40,7 @@ pub struct ExportControllerArgs {
     /// Preset file or shipped preset name.
     #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
-    /// Controller rate \[Hz\] (50 to 100000).
+    /// Controller rate [Hz] (50 to 100000).
     #[arg(long, allow_hyphen_values = true)]
     pub rate: f64,
     /// Language.

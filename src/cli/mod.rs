@@ -13,6 +13,11 @@
 //! rather than clap's "unexpected argument"; [`validate`] checks every numeric option of a
 //! command against its documented range, without reading a file.
 
+// The doc comments of the options are also their `--help` text, which clap prints as written:
+// a unit stays `[s]` there rather than rustdoc's escaped `\[s\]`, so rustdoc's link check,
+// which would read `[s]` as a link, is off for this module.
+#![allow(rustdoc::broken_intra_doc_links)]
+
 mod bench;
 mod calibrate;
 mod export;
@@ -39,17 +44,17 @@ use crate::format::general;
 use crate::params::Params;
 use clap::Parser;
 
-/// Longest `simulate` run \[s\] (10 h).
+/// Longest `simulate` run [s] (10 h).
 pub const MAX_DURATION_S: f64 = 36_000.0;
-/// Longest random ride \[s\] (1 h).
+/// Longest random ride [s] (1 h).
 pub const MAX_RANDOM_DURATION_S: f64 = 3600.0;
-/// Largest command amplitude of a sine, chirp or dwell \[V\] (`--amp`).
+/// Largest command amplitude of a sine, chirp or dwell [V] (`--amp`).
 pub const MAX_AMP_V: f64 = 100.0;
-/// Allowed `--rate` \[Hz\].
+/// Allowed `--rate` [Hz].
 pub const RATE_RANGE_HZ: (f64, f64) = (1.0, 100_000.0);
-/// Allowed frequencies of `--freq`, `--f0`, `--f1` and `--freqs` \[Hz\].
+/// Allowed frequencies of `--freq`, `--f0`, `--f1` and `--freqs` [Hz].
 pub const FREQ_RANGE_HZ: (f64, f64) = (0.01, 1000.0);
-/// Shortest `--duration` \[s\].
+/// Shortest `--duration` [s].
 pub const MIN_DURATION_S: f64 = 1e-3;
 /// Most samples `simulate` writes to one file: 10 h at 1 kHz and a bit (about 10 GB of CSV).
 pub const MAX_SIMULATE_SAMPLES: u64 = 50_000_000;
@@ -266,7 +271,7 @@ const TWIN_REAL_TIME_FACTOR: f64 = 2000.0;
 /// The same for the linear and passive models (60 000–80 000× measured).
 const LTI_REAL_TIME_FACTOR: f64 = 50_000.0;
 
-/// Estimated wall time \[s\] of simulating `simulated_s` seconds of `kind` at step `step_s`
+/// Estimated wall time [s] of simulating `simulated_s` seconds of `kind` at step `step_s`
 /// on `cores` cores in parallel.
 pub fn estimate_wall_s(kind: crate::model::ModelKind, simulated_s: f64, step_s: f64) -> f64 {
     let default_step = crate::params::NumericsParams::default().max_step_s;
@@ -404,7 +409,7 @@ pub fn check_dwell_amp(amp: f64) -> Result<(), OptionError> {
     check_range("--amp", amp, 0.0, MAX_AMP_V, "V")
 }
 
-/// Checks that a `simulate` run of `samples` samples (`duration` \[s\] at `rate` \[Hz\]) is within
+/// Checks that a `simulate` run of `samples` samples (`duration` [s] at `rate` [Hz]) is within
 /// [`MAX_SIMULATE_SAMPLES`].
 pub fn check_sample_count(samples: u64, duration: f64, rate: f64) -> Result<(), OptionError> {
     if samples > MAX_SIMULATE_SAMPLES {
@@ -418,7 +423,7 @@ pub fn check_sample_count(samples: u64, duration: f64, rate: f64) -> Result<(), 
     Ok(())
 }
 
-/// The most memory this process may use \[bytes\] and what sets it: the smallest of the
+/// The most memory this process may use [bytes] and what sets it: the smallest of the
 /// address-space limit (`ulimit -v`), the cgroup's memory limit and the memory available on
 /// the machine (Linux); `None` when none is known.
 pub fn memory_limit() -> Option<(u64, &'static str)> {
@@ -496,7 +501,7 @@ pub(super) fn estimated_rows(path: &std::path::Path) -> Option<(u64, u64)> {
     Some(((size as f64 / per_row.max(1.0)) as u64, fields))
 }
 
-/// Memory a job holds per record row \[bytes\]: `row` plus `column` for each of the header's
+/// Memory a job holds per record row [bytes]: `row` plus `column` for each of the header's
 /// fields (measured peaks, see the README's CLI section).
 #[derive(Debug, Clone, Copy)]
 pub struct RowCost {

@@ -15,7 +15,7 @@ use std::path::PathBuf;
 /// The options `bode` and `transmissibility` end with: the frequencies, the method, the file.
 #[derive(Debug, clap::Args)]
 pub struct SweepArgs {
-    /// Comma-separated frequencies \[Hz\].
+    /// Comma-separated frequencies [Hz].
     #[arg(
         long,
         value_delimiter = ',',
@@ -40,7 +40,7 @@ pub struct BodeArgs {
     /// Preset file or shipped preset name.
     #[arg(long, default_value = "paper", value_parser = super::preset_parser())]
     pub preset: String,
-    /// Command amplitude of the sine dwell \[V\] (twin).
+    /// Command amplitude of the sine dwell [V] (twin).
     #[arg(long, default_value_t = 0.72, allow_hyphen_values = true)]
     pub amp: f64,
     /// Frequencies, method and output file.

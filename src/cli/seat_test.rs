@@ -19,10 +19,10 @@ pub struct SeatTestArgs {
     /// Which model.
     #[arg(long, value_enum, default_value = "twin")]
     pub model: ModelKind,
-    /// Suspended mass \[kg\] (default: the preset's; the paper's rig carries 11.7 kg).
+    /// Suspended mass [kg] (default: the preset's; the paper's rig carries 11.7 kg).
     #[arg(long, allow_hyphen_values = true)]
     pub mass: Option<f64>,
-    /// Record length including 2 s fades at both ends \[s\], 20.384..=3600 (the fades and one
+    /// Record length including 2 s fades at both ends [s], 20.384..=3600 (the fades and one
     /// 16.384 s Welch segment between them).
     #[arg(long, default_value_t = crate::seat_test::run::DEFAULT_DURATION_S, allow_hyphen_values = true)]
     pub duration: f64,

@@ -48,19 +48,19 @@ pub struct SimulateArgs {
     /// Seed of the random ride or the class motion, 0..=2^64−1 (default 1).
     #[arg(long, allow_hyphen_values = true, value_parser = super::parse_seed)]
     pub seed: Option<u64>,
-    /// Duration \[s\] (default: cycloid 5, random 60, sine max(3 s, 6 periods), chirp 10).
+    /// Duration [s] (default: cycloid 5, random 60, sine max(3 s, 6 periods), chirp 10).
     #[arg(long, allow_hyphen_values = true)]
     pub duration: Option<f64>,
-    /// Sine frequency \[Hz\] (default 5).
+    /// Sine frequency [Hz] (default 5).
     #[arg(long, allow_hyphen_values = true)]
     pub freq: Option<f64>,
-    /// Sine/chirp amplitude \[V\] (default 2.1).
+    /// Sine/chirp amplitude [V] (default 2.1).
     #[arg(long, allow_hyphen_values = true)]
     pub amp: Option<f64>,
-    /// Chirp start frequency \[Hz\] (default 0.5).
+    /// Chirp start frequency [Hz] (default 0.5).
     #[arg(long, allow_hyphen_values = true)]
     pub f0: Option<f64>,
-    /// Chirp end frequency \[Hz\] (default 20).
+    /// Chirp end frequency [Hz] (default 20).
     #[arg(long, allow_hyphen_values = true)]
     pub f1: Option<f64>,
     /// A platform record (CSV: `t` and `x` and/or `xdd`, SI); runs closed loop on it.
@@ -69,7 +69,7 @@ pub struct SimulateArgs {
     /// Input spectral class of `--scenario class` (EM1–EM9, IT1–IT4, AG1–AG3).
     #[arg(long)]
     pub class: Option<String>,
-    /// Output sample rate \[Hz\].
+    /// Output sample rate [Hz].
     #[arg(long, default_value_t = 1000.0, allow_hyphen_values = true)]
     pub rate: f64,
     /// Output file (CSV).

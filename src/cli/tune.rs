@@ -28,7 +28,7 @@ pub struct TuneArgs {
     /// Number of tuning rides (seeds 1..=N); as many held-out rides use seeds 101...
     #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
     pub seeds: i64,
-    /// Duration of each ride \[s\], 5..=600 (20..=600 with `--excitation class:NAME`).
+    /// Duration of each ride [s], 5..=600 (20..=600 with `--excitation class:NAME`).
     #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
     pub duration: f64,
     /// Optimise the worst case over Cd ±10 %, τ ±3 ms, mass ±20 %.

@@ -444,7 +444,10 @@ mod tests {
                 ) {
                     let key = format!("{sec}.{field}");
                     let s = spec(&key).unwrap_or_else(|| panic!("{key} has no table entry"));
-                    let unit = doc.split('[').nth(1).and_then(|u| u.split(']').next());
+                    // The unit in brackets, escaped (`\[kg\]`, which rustdoc would otherwise
+                    // read as a link) or not (`[m/s]`).
+                    let plain = doc.replace("\\[", "[").replace("\\]", "]");
+                    let unit = plain.split('[').nth(1).and_then(|u| u.split(']').next());
                     assert_eq!(unit, Some(s.unit), "{key}: unit in its doc: {doc}");
                     let words: Vec<&str> = doc.split_whitespace().collect();
                     let at = words.iter().position(|w| *w == "..=");

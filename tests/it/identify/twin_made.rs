@@ -11,23 +11,9 @@ use seat_twin::identify::report::{report_json, report_markdown};
 use seat_twin::identify::stages::{declared_fit, fit_params};
 use seat_twin::identify::testdata::{true_params, twin_record};
 use seat_twin::identify::units::format_parameter;
-use seat_twin::identify::{
-    CalibrationOptions, CalibrationReport, Progress, Stage, Verdict, calibrate_with, data,
-};
+use seat_twin::identify::{CalibrationOptions, Progress, Stage, Verdict, calibrate, data};
 use seat_twin::params::Params;
 use std::sync::atomic::AtomicBool;
-
-fn calibrated(records: &[seat_twin::dataset::Record]) -> CalibrationReport {
-    let cancel = AtomicBool::new(false);
-    calibrate_with(
-        &Params::paper(),
-        records,
-        &CalibrationOptions::default(),
-        &cancel,
-        &|_: &Progress| {},
-    )
-    .unwrap()
-}
 
 /// The declared fit, on records the twin made with Cd 10 % low and τ 2 ms long, starts from
 /// the paper's values and recovers both (the data are noise-free, so to a fraction of a per
@@ -87,10 +73,11 @@ fn declared_fit_recovers_known_cd_and_tau() {
 #[test]
 fn report_numbers_are_the_results() {
     let truth = true_params();
-    let r = calibrated(&[
+    let records = [
         twin_record(&truth, 3.0, "a.csv").unwrap(),
         twin_record(&truth, 3.0, "b.csv").unwrap(),
-    ]);
+    ];
+    let r = calibrate(&Params::paper(), &records, &Default::default(), &|_| true).unwrap();
     assert_ne!(r.verdict, Verdict::InsufficientData);
     r.params.validate().expect("the calibrated parameters load");
     assert_eq!(
