@@ -657,9 +657,9 @@ pub fn calibrate(
 mod tests {
     use super::*;
 
-    /// A report as a calibration of the paper preset ends it: verdict `no_missing_effect`,
-    /// Cd and τ determined (the final fit's own numbers are the integration tests' business;
-    /// these tests are about what happens to a report after it).
+    /// A report made by hand in the shape a calibration leaves it: the paper preset, verdict
+    /// `no_missing_effect`, Cd and τ determined. These tests are about what happens to a
+    /// report after the fits; the fits' own numbers are the integration tests' business.
     fn calibrated_report() -> CalibrationReport {
         let empty = data::DataCheck {
             records: Vec::new(),
