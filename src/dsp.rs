@@ -58,6 +58,18 @@ impl Biquad {
         }
     }
 
+    /// First-order low-pass `1/(1 + s/ωc)` at the corner `fc` \[Hz\] for the sample step `dt`
+    /// \[s\] (bilinear transform, corner pre-warped), as a section with `b2 = a2 = 0`: the real
+    /// pole of an odd-order Butterworth filter ([`butterworth_lowpass_sections`]).
+    pub fn lowpass_first_order(dt: f64, fc: f64) -> Self {
+        let k = (PI * fc * dt).tan();
+        let b0 = k / (1.0 + k);
+        Self {
+            b: [b0, b0, 0.0],
+            a: [(k - 1.0) / (k + 1.0), 0.0],
+        }
+    }
+
     /// Frequency response `H(e^{jθ})` at the normalised angular frequency `theta` =
     /// `2π·f·dt` [rad/sample].
     pub fn response(&self, theta: f64) -> Complex64 {
@@ -104,6 +116,38 @@ impl Biquad {
         } else {
             x.iter_mut().for_each(&mut step);
         }
+    }
+}
+
+/// A cascade of [`Biquad`] sections of unit DC gain running sample by sample, started in
+/// steady state at its first input (direct form I, as [`Biquad::pass`] starts): an analogue
+/// filter that has settled on its input before the record starts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SettledCascade {
+    sections: Vec<Biquad>,
+    /// Each section's last two inputs and outputs; `None` before the first input.
+    z: Option<Vec<[f64; 4]>>,
+}
+
+impl SettledCascade {
+    /// The cascade of `sections`, before its first input.
+    pub fn new(sections: Vec<Biquad>) -> Self {
+        Self { sections, z: None }
+    }
+
+    /// Filters one sample.
+    pub fn step(&mut self, x: f64) -> f64 {
+        let z = self
+            .z
+            .get_or_insert_with(|| vec![[x; 4]; self.sections.len()]);
+        let mut v = x;
+        for (c, z) in self.sections.iter().zip(z.iter_mut()) {
+            let [x1, x2, y1, y2] = *z;
+            let y = c.b[0] * v + c.b[1] * x1 + c.b[2] * x2 - c.a[0] * y1 - c.a[1] * y2;
+            *z = [v, x1, y, y1];
+            v = y;
+        }
+        v
     }
 }
 
@@ -185,6 +229,26 @@ pub fn butterworth_sections(dt: f64, fc: f64, order: usize) -> Vec<Biquad> {
             Biquad::lowpass(dt, fc, 1.0 / (2.0 * theta.cos()))
         })
         .collect()
+}
+
+/// The sections of a Butterworth low-pass of any order `order` ≥ 1 at the corner `fc` \[Hz\]
+/// for the sample step `dt` \[s\]: a second-order section of quality factor `1/(2·cos θₖ)`
+/// for each pair of poles, `θₖ = π·(n − 2k + 1)/(2n)` from the negative real axis
+/// (k = 1 … ⌊n/2⌋), and a first-order section for the real pole of an odd order.
+/// `|H(f)|² = 1/(1 + (f/fc)^(2n))`, exactly at `fc` and closely below it when `fc·dt` is
+/// small (the bilinear transform warps frequencies towards Nyquist).
+pub fn butterworth_lowpass_sections(dt: f64, fc: f64, order: usize) -> Vec<Biquad> {
+    let n = order as f64;
+    let mut sections: Vec<Biquad> = (1..=order / 2)
+        .map(|k| {
+            let theta = PI * (n - 2.0 * k as f64 + 1.0) / (2.0 * n);
+            Biquad::lowpass(dt, fc, 1.0 / (2.0 * theta.cos()))
+        })
+        .collect();
+    if order % 2 == 1 {
+        sections.push(Biquad::lowpass_first_order(dt, fc));
+    }
+    sections
 }
 
 /// Runs `sections` over `x` forward, then backward ([`Biquad::pass`]): gain `|H|²`, zero
@@ -496,6 +560,77 @@ mod tests {
         assert!((rms(&x) - a / 2f64.sqrt()).abs() < 1e-12 * a, "{}", rms(&x));
         assert_eq!(rms(&[-2.0; 7]), 2.0);
         assert_eq!(rms(&[]), 0.0);
+    }
+
+    /// A Butterworth low-pass of every order 1 … 8, from its sections: gain `1/√2` at the
+    /// corner, `1/√(1 + (f/fc)^(2n))` below and above it (analytic; the bilinear transform's
+    /// warping is negligible at `fc·dt` = 0.0008), and the low-frequency group delay of the
+    /// analogue prototype, `(1/ωc)·Σ 1/Qₖ` over its sections (a first-order section counts
+    /// 1): √2/ωc for the second order, 2.613/ωc for the fourth.
+    #[test]
+    fn butterworth_of_any_order_has_the_analytic_gain_and_delay() {
+        let (dt, fc) = (1e-5, 80.0);
+        let wc = 2.0 * PI * fc;
+        for n in 1..=8usize {
+            let sections = butterworth_lowpass_sections(dt, fc, n);
+            assert_eq!(sections.len(), n.div_ceil(2));
+            let h = |f: f64| {
+                sections
+                    .iter()
+                    .map(|c| c.response(2.0 * PI * f * dt))
+                    .product::<Complex64>()
+            };
+            for f in [0.0, 20.0, 80.0, 160.0] {
+                let want = 1.0 / (1.0 + (f / fc).powi(2 * n as i32)).sqrt();
+                let got = h(f).norm();
+                assert!(
+                    (got - want).abs() < 2e-3 * want,
+                    "order {n}, {f} Hz: {got} vs {want}"
+                );
+            }
+            let sum_inv_q: f64 = (1..=n / 2)
+                .map(|k| 2.0 * (PI * (n - 2 * k + 1) as f64 / (2 * n) as f64).cos())
+                .sum::<f64>()
+                + if n % 2 == 1 { 1.0 } else { 0.0 };
+            let f = 0.5;
+            let delay = -h(f).arg() / (2.0 * PI * f);
+            assert!(
+                (delay - sum_inv_q / wc).abs() < 1e-3 * sum_inv_q / wc,
+                "order {n}: {delay} s vs {} s",
+                sum_inv_q / wc
+            );
+            if n == 2 {
+                assert!((sum_inv_q - 2f64.sqrt()).abs() < 1e-12);
+            }
+            if n == 4 {
+                assert!((sum_inv_q - 2.6131).abs() < 1e-4, "{sum_inv_q}");
+            }
+        }
+    }
+
+    /// A settled cascade gives what the sections' whole-slice passes give one after the other
+    /// (each started settled at its first input), sample by sample; a constant passes
+    /// unchanged from the first sample on.
+    #[test]
+    fn settled_cascade_streams_the_forward_passes() {
+        let (dt, fc) = (1e-3, 40.0);
+        let sections = butterworth_lowpass_sections(dt, fc, 5);
+        let x: Vec<f64> = (0..400)
+            .map(|i| 3.0 + (0.07 * i as f64).sin() + if i > 200 { 1.5 } else { 0.0 })
+            .collect();
+        let mut whole = x.clone();
+        for c in &sections {
+            c.pass(&mut whole, false);
+        }
+        let mut stream = SettledCascade::new(sections.clone());
+        for (i, (&v, &w)) in x.iter().zip(&whole).enumerate() {
+            let y = stream.step(v);
+            assert!((y - w).abs() < 1e-12, "sample {i}: {y} vs {w}");
+        }
+        let mut still = SettledCascade::new(sections);
+        for _ in 0..50 {
+            assert!((still.step(5.5e6) - 5.5e6).abs() < 1e-6);
+        }
     }
 
     /// The designed section's response equals the analogue Butterworth prototype at the

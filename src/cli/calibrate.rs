@@ -41,15 +41,23 @@ pub struct CalibrateArgs {
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
+    /// The data acquisition's anti-alias filter, declared (kept in calibrated.toml).
+    #[command(flatten)]
+    pub acquisition: super::AcquisitionArgs,
 }
 
 impl Run for CalibrateArgs {
     fn run(&self) -> Result<Outcome> {
-        let Self { data, preset, out } = self;
+        let Self {
+            data,
+            preset,
+            out,
+            acquisition,
+        } = self;
         let files: Vec<&std::path::Path> = data.iter().map(|p| p.as_path()).collect();
         check_estimated_rows(&files, MAX_CALIBRATE_ROWS)?;
         check_record_memory("calibrate", &files, MEMORY)?;
-        let params = load_params(preset)?;
+        let params = acquisition.apply(load_params(preset)?)?;
         let records = read_within(&files, MAX_CALIBRATE_ROWS)?;
         for r in &records {
             for w in &r.warnings {

@@ -189,6 +189,49 @@ pub fn load_params(name: &str) -> anyhow::Result<Params> {
     Ok(load_preset(name)?.params)
 }
 
+/// The data acquisition's anti-alias filter, declared on the command line (it overrides the
+/// preset's `[sensors]` values).
+#[derive(Debug, Clone, Copy, Default, clap::Args)]
+pub struct AcquisitionArgs {
+    /// Corner [Hz] of the data acquisition's anti-alias filter on every measured channel (a
+    /// Butterworth low-pass; 0: none). The replay reads the twin's measured channels through
+    /// it; undeclared, its delay reads as a longer valve delay τ.
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
+    pub antialias_hz: Option<f64>,
+    /// Order of that filter, 1 to 8 [default: the preset's, 2 in the shipped presets].
+    #[arg(long, value_name = "N")]
+    pub antialias_order: Option<u8>,
+}
+
+impl AcquisitionArgs {
+    /// `params` with the declared filter, validated; the error names the option, its value
+    /// and the allowed range.
+    pub fn apply(&self, mut params: Params) -> anyhow::Result<Params> {
+        if let Some(hz) = self.antialias_hz {
+            params.sensors.antialias_hz = hz;
+        }
+        if let Some(n) = self.antialias_order {
+            params.sensors.antialias_order = f64::from(n);
+        }
+        let specs = [
+            ("--antialias-hz", "sensors.antialias_hz", self.antialias_hz),
+            (
+                "--antialias-order",
+                "sensors.antialias_order",
+                self.antialias_order.map(f64::from),
+            ),
+        ];
+        for (flag, key, given) in specs {
+            if let (Some(v), Some(spec)) = (given, crate::params::spec(key))
+                && let Err(e) = spec.check(v)
+            {
+                anyhow::bail!("{flag} {v}: {e}");
+            }
+        }
+        Ok(params)
+    }
+}
+
 /// The preset `--preset` names (a file or a shipped preset's name), whole: its parameters and
 /// its per-record values.
 pub fn load_preset(name: &str) -> anyhow::Result<crate::preset::Preset> {

@@ -31,17 +31,26 @@ pub struct ReplayArgs {
     /// Output file (CSV).
     #[arg(long)]
     pub out: PathBuf,
+    /// The data acquisition's anti-alias filter, declared (overrides the preset's).
+    #[command(flatten)]
+    pub acquisition: super::AcquisitionArgs,
 }
 
 impl Run for ReplayArgs {
     fn run(&self) -> Result<Outcome> {
-        let Self { data, preset, out } = self;
+        let Self {
+            data,
+            preset,
+            out,
+            acquisition,
+        } = self;
         let preset_file = preset_file(preset);
         let mut inputs = vec![("--data", data.as_path())];
         inputs.extend(preset_file.as_deref().map(|p| ("--preset", p)));
         check_output_is_not_an_input(out, &inputs)?;
         check_record_memory("replay", &[data], MEMORY)?;
-        let loaded = load_preset(preset)?;
+        let mut loaded = load_preset(preset)?;
+        loaded.params = acquisition.apply(loaded.params)?;
         // The pressures are not replayed: not storing them saves 16 bytes a row.
         let rec = dataset::read_record_with(
             data,

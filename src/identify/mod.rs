@@ -358,6 +358,18 @@ pub fn calibrate_with(
         return Ok(data::insufficient_data(params, checked));
     }
     let mut notes = checked.notes;
+    let sensors = &params.sensors;
+    if sensors.antialias_hz > 0.0 {
+        notes.push(format!(
+            "declared: the data acquisition's anti-alias filter, a Butterworth low-pass of order \
+             {} at {} Hz on every measured channel (a delay of {:.2} ms at low frequency): the \
+             twin's channels are read through it and the platform's measured motion is advanced \
+             by that delay, so τ stays the valve's own",
+            sensors.antialias_order,
+            crate::format::general(sensors.antialias_hz),
+            1e3 * sensors.antialias_delay_s()
+        ));
+    }
     let mut campaign = data::split(checked.records);
     let nominal = stages::nominal(params, &campaign, &monitor)?;
     let paper = stages::paper(

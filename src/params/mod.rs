@@ -165,6 +165,17 @@ impl Params {
                 unit: "Pa (or 0: as the chambers)",
             });
         }
+        // The anti-alias filter's order counts sections: a whole number.
+        let order = self.sensors.antialias_order;
+        if order.fract() != 0.0 {
+            return Err(ParamError::OutOfRange {
+                name: "sensors.antialias_order".into(),
+                value: order,
+                min: 1.0,
+                max: 8.0,
+                unit: "- (a whole number: the Butterworth filter's order)",
+            });
+        }
         for (name, value, min, max, unit, strict) in relations {
             if max < min {
                 // No value can pass: say why, not an empty range `[min, max]`.
@@ -381,6 +392,21 @@ mod tests {
         let mut p = Params::paper();
         p.plant.supply.return_pressure_pa = 120e5;
         assert!(p.validate().is_err());
+        // The anti-alias filter's order counts sections: 2.5 is refused by name, 9 by range.
+        for (order, says) in [(2.5, "whole number"), (9.0, "8")] {
+            let mut p = Params::paper();
+            p.sensors.antialias_hz = 80.0;
+            p.sensors.antialias_order = order;
+            let e = p.validate().unwrap_err().to_string();
+            assert!(
+                e.contains("sensors.antialias_order") && e.contains(says),
+                "{e}"
+            );
+        }
+        let mut p = Params::paper();
+        p.sensors.antialias_hz = -1.0;
+        let e = p.validate().unwrap_err().to_string();
+        assert!(e.contains("sensors.antialias_hz"), "{e}");
     }
 
     #[test]

@@ -9,6 +9,14 @@ use serde::{Deserialize, Serialize};
 /// low-pass of time constant `lag` run on the record's samples (a data-acquisition filter):
 /// `u_read[n] = a·u_read[n−1] + (1 − a)·u[n]` with `a = e^(−Δt/lag)`, Δt the record's
 /// sample interval. At low frequency it delays `u` by `Δt·a/(1 − a) ≈ lag − Δt/2`.
+///
+/// The data acquisition's anti-alias filter (`antialias_hz`, `antialias_order`) is declared,
+/// not fitted: it acts on every measured channel alike (u, x, ẍ, ÿ, p1, p2), and in the
+/// tests a rig's controller drives (the command, sent and recorded as sent) it delays them
+/// all against the command by its group delay, which the records cannot tell from the valve's
+/// delay τ (a second-order filter at 80 Hz delays by 2.8 ms; undeclared, τ reads that much
+/// long). Declared, the replay reads the command through the same filter (see
+/// `identify::replay`), so τ stays the valve's own.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SensorParams {
@@ -18,6 +26,12 @@ pub struct SensorParams {
     pub ydd_offset_m_s2: f64,
     /// Time constant of the stroke sensor's first-order filter on the samples \[s\], 0 ..= 0.05.
     pub u_lag_s: f64,
+    /// Corner (−3 dB) of the data acquisition's anti-alias filter on every measured channel
+    /// \[Hz\], 0 ..= 100000 (0: none, the channels sampled as they are). Declared from the
+    /// acquisition's settings, not fitted.
+    pub antialias_hz: f64,
+    /// Order of that filter, a Butterworth low-pass [-], 1 ..= 8, a whole number.
+    pub antialias_order: f64,
 }
 
 impl Default for SensorParams {
@@ -26,6 +40,8 @@ impl Default for SensorParams {
             ydd_scale: 1.0,
             ydd_offset_m_s2: 0.0,
             u_lag_s: 0.0,
+            antialias_hz: 0.0,
+            antialias_order: 2.0,
         }
     }
 }
@@ -34,6 +50,32 @@ impl SensorParams {
     /// Whether every property is exact (nothing to apply).
     pub fn is_exact(&self) -> bool {
         *self == Self::default()
+    }
+
+    /// The declared anti-alias filter's sections for the sample step `dt` \[s\]
+    /// ([`crate::dsp::butterworth_lowpass_sections`]), or `None` without one.
+    pub fn antialias_sections(&self, dt: f64) -> Option<Vec<crate::dsp::Biquad>> {
+        (self.antialias_hz > 0.0).then(|| {
+            crate::dsp::butterworth_lowpass_sections(
+                dt,
+                self.antialias_hz,
+                self.antialias_order.round().clamp(1.0, 8.0) as usize,
+            )
+        })
+    }
+
+    /// The declared anti-alias filter's delay at low frequency \[s\], `(1/ωc)·Σ 1/Qₖ` over its
+    /// sections (√2/ωc for the second order, 2.613/ωc for the fourth); 0 without one.
+    pub fn antialias_delay_s(&self) -> f64 {
+        if self.antialias_hz <= 0.0 {
+            return 0.0;
+        }
+        let n = self.antialias_order.round().clamp(1.0, 8.0) as usize;
+        let sum_inv_q: f64 = (1..=n / 2)
+            .map(|k| 2.0 * (std::f64::consts::PI * (n - 2 * k + 1) as f64 / (2 * n) as f64).cos())
+            .sum::<f64>()
+            + (n % 2) as f64;
+        sum_inv_q / (2.0 * std::f64::consts::PI * self.antialias_hz)
     }
 
     /// The accelerometer's reading of `ydd` [m/s²], in place.
@@ -104,6 +146,37 @@ impl StrokeReader {
 mod tests {
     use super::*;
 
+    /// The declared filter's delay is the slope of its sections' phase at low frequency
+    /// (1 Hz against an 80 Hz corner), for every order; none without a corner.
+    #[test]
+    fn antialias_delay_is_the_sections_low_frequency_delay() {
+        assert_eq!(SensorParams::default().antialias_delay_s(), 0.0);
+        assert!(SensorParams::default().antialias_sections(1e-4).is_none());
+        for n in 1..=8 {
+            let s = SensorParams {
+                antialias_hz: 80.0,
+                antialias_order: n as f64,
+                ..Default::default()
+            };
+            let dt = 1e-5;
+            let sections = s.antialias_sections(dt).expect("declared");
+            let theta = 2.0 * std::f64::consts::PI * 1.0 * dt;
+            let phase: f64 = sections.iter().map(|c| c.response(theta).arg()).sum();
+            let delay = -phase / (2.0 * std::f64::consts::PI);
+            let want = s.antialias_delay_s();
+            assert!(
+                (delay - want).abs() < 2e-3 * want,
+                "order {n}: {delay} vs {want}"
+            );
+        }
+        // The second order at 80 Hz: √2/(2π·80 Hz) = 2.81 ms.
+        let two = SensorParams {
+            antialias_hz: 80.0,
+            ..Default::default()
+        };
+        assert!((two.antialias_delay_s() - 2.8135e-3).abs() < 1e-6);
+    }
+
     /// A sampled first-order filter of 2.5 ms at 1 ms samples: a ramp comes out
     /// `a/(1 − a)` samples late once settled (a = e^(−0.4): 2.03 ms, about 2.5 − ½ ms), and
     /// a step rises by `1 − aⁿ` after n samples; scale and offset are affine.
@@ -113,6 +186,7 @@ mod tests {
             ydd_scale: 0.96,
             ydd_offset_m_s2: 0.1,
             u_lag_s: 2.5e-3,
+            ..Default::default()
         };
         let mut u: Vec<f64> = (0..200).map(|i| i as f64).collect();
         s.read_u(&mut u, 1e-3);

@@ -120,7 +120,7 @@ const L_PER_MIN: f64 = 1e-3 / 60.0;
 
 /// Every number of a preset, in preset order.
 #[rustfmt::skip]
-pub static PARAMS: [ParamSpec; 61] = [
+pub static PARAMS: [ParamSpec; 63] = [
     entry!("body.mass_kg", plant.body.mass_kg, "m", "kg", [1.0, 500.0], Some(11.7), (1.0, "kg"),
         "suspended mass incl. seat, operator and payload"),
     entry!("body.stiffness_n_per_m", plant.body.stiffness_n_per_m, "k", "N/m", [1.0, 1e6], Some(3680.0),
@@ -253,6 +253,12 @@ pub static PARAMS: [ParamSpec; 61] = [
         None, (1e3, "ms"), "first-order lag of the valve command"),
     entry!("corrections.command_drift_v_per_s", plant.corrections.command_drift_v_per_s, "r_null",
         "V/s", [-0.1, 0.1], None, (1e3, "mV/s"), "drift of the valve's null during each record"),
+    // Added last, so that the exported FMU's value references of the entries above stay as
+    // they were.
+    entry!("sensors.antialias_hz", sensors.antialias_hz, "f_aa", "Hz", [0.0, 1e5], None, (1.0, "Hz"),
+        "corner of the data acquisition's anti-alias filter (0: none)"),
+    entry!("sensors.antialias_order", sensors.antialias_order, "n_aa", "-", [1.0, 8.0], None,
+        (1.0, ""), "order of the anti-alias filter (Butterworth)"),
 ];
 
 /// The table entry of a dotted key (`valve.cd`), `None` for an unknown key.

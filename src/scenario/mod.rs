@@ -232,6 +232,19 @@ impl SampledMotion {
         self
     }
 
+    /// The motion `by` \[s\] earlier on the same grid: sample i reads the motion at
+    /// `i·dt + by` between the samples as [`Self::at`] does, held at the last. Undoes a
+    /// measurement's delay `by` (a data acquisition's anti-alias filter delays the slow
+    /// platform motion by its group delay, with its gain at 1).
+    pub fn advanced(&self, by: f64) -> Self {
+        let shift = |v: &[f64]| -> Vec<f64> {
+            (0..v.len())
+                .map(|i| catmull_rom(v, i as f64 + by / self.dt))
+                .collect()
+        };
+        Self::new(self.dt, shift(&self.x), shift(&self.xd), shift(&self.xdd))
+    }
+
     /// Sample step \[s\].
     pub fn dt(&self) -> f64 {
         self.dt
@@ -353,6 +366,17 @@ pub enum PlatformMotion {
     /// The acceleration given at one instant with its time derivatives, extrapolated by its
     /// Taylor polynomial (an FMU's input over a communication step).
     Extrapolated(InputSegment),
+}
+
+impl PlatformMotion {
+    /// A sampled motion `by` \[s\] earlier ([`SampledMotion::advanced`]); any other motion,
+    /// known at every instant rather than measured, as it is.
+    pub fn advanced(self, by: f64) -> Self {
+        match self {
+            PlatformMotion::Sampled(m) if by != 0.0 => PlatformMotion::Sampled(m.advanced(by)),
+            other => other,
+        }
+    }
 }
 
 /// A platform acceleration known at `t0` with its first three time derivatives, read at
@@ -632,6 +656,38 @@ impl CommandSignal {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A sampled sine advanced by 2.8 ms reads the sine 2.8 ms later (the cubic read between
+    /// samples, a 4 Hz motion at 200 Hz), held at the last sample at the end; a still platform
+    /// or a zero advance is unchanged.
+    #[test]
+    fn an_advanced_motion_reads_the_motion_later() {
+        let (dt, f, by) = (5e-3, 4.0, 2.8e-3);
+        let w = 2.0 * PI * f;
+        let n = 200;
+        let at = |t: f64| ((w * t).sin(), w * (w * t).cos(), -w * w * (w * t).sin());
+        let (x, xd, xdd): (Vec<f64>, Vec<f64>, Vec<f64>) = {
+            let s: Vec<_> = (0..n).map(|i| at(i as f64 * dt)).collect();
+            (
+                s.iter().map(|v| v.0).collect(),
+                s.iter().map(|v| v.1).collect(),
+                s.iter().map(|v| v.2).collect(),
+            )
+        };
+        let m = SampledMotion::new(dt, x, xd, xdd).advanced(by);
+        for i in 1..n - 3 {
+            let (want, _, want_dd) = at(i as f64 * dt + by);
+            let got = m.at_sample(i);
+            assert!((got.x - want).abs() < 2e-4, "{i}: {} vs {want}", got.x);
+            assert!((got.xdd - want_dd).abs() < 2e-4 * w * w, "{i}");
+        }
+        let last = m.at_sample(n - 1);
+        assert!((last.x - at((n - 1) as f64 * dt).0).abs() < 1e-12);
+        assert!(matches!(
+            PlatformMotion::Still.advanced(by),
+            PlatformMotion::Still
+        ));
+    }
 
     #[test]
     fn grid_reads_are_the_interpolated_values_at_grid_times() {

@@ -57,7 +57,7 @@ use crate::simulation::{Drive, Run, Sample, Simulation, step_for_rate};
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::dsp::{NoiseFloor, noise_floor, noise_gain};
+use crate::dsp::{NoiseFloor, SettledCascade, noise_floor, noise_gain};
 pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
 
 mod errors;
@@ -243,20 +243,46 @@ fn replay_samples(
         None => v_in,
     };
     let drive = Drive::OpenLoop(CommandSignal::Sampled { dt, values });
+    // The data acquisition's declared anti-alias filter: on the twin's measured channels,
+    // run at every step (the analogue filter before the sampling), with a step short enough
+    // for it; the platform's measured motion, filtered already, advanced by the filter's delay.
+    let acquisition = params.sensors.antialias_sections(1.0).map(|_| {
+        let h = step_for_rate(h.min(0.1 / params.sensors.antialias_hz), 1.0 / dt);
+        let sections = params.sensors.antialias_sections(h).unwrap_or_default();
+        (h, sections)
+    });
+    let (h, platform) = match &acquisition {
+        Some((h_aa, _)) => (*h_aa, platform.advanced(params.sensors.antialias_delay_s())),
+        None => (h, platform),
+    };
     let mut sim = Simulation::twin(params, h, drive, platform);
     let every = (dt / h).round().max(1.0) as u64;
     let t_end = (len.saturating_sub(1)) as f64 * dt;
     let mut done = 0;
     // The state at rest until the run records its first sample (which it always does, at 0).
     let mut last = sim.sample();
-    sim.run_until(t_end, every, |s| {
+    let mut record = |s: Sample| {
         if done < len {
             sink(s);
             last = s;
             done += 1;
         }
-    })
-    .map_err(|e| IdentifyError::Simulation {
+    };
+    let run = match acquisition {
+        None => sim.run_until(t_end, every, record),
+        Some((_, sections)) => {
+            let mut read = Acquisition::new(&sections);
+            let mut step = 0u64;
+            sim.run_until(t_end, 1, |s| {
+                let s = read.sample(s);
+                if step.is_multiple_of(every) {
+                    record(s);
+                }
+                step += 1;
+            })
+        }
+    };
+    run.map_err(|e| IdentifyError::Simulation {
         file: name.to_string(),
         source: e,
     })?;
@@ -268,6 +294,37 @@ fn replay_samples(
         });
     }
     Ok(())
+}
+
+/// The data acquisition's anti-alias filter on the twin's measured channels (u, u̇, ÿ, p1, p2
+/// and the platform's x, ẋ, ẍ), sample by sample at the twin's step, each started settled at
+/// its first value as a rig's filters are before a test. The valve's spool, the flows and the
+/// time are internal and pass unchanged.
+struct Acquisition {
+    channels: [SettledCascade; 8],
+}
+
+impl Acquisition {
+    fn new(sections: &[crate::dsp::Biquad]) -> Self {
+        Self {
+            channels: std::array::from_fn(|_| SettledCascade::new(sections.to_vec())),
+        }
+    }
+
+    fn sample(&mut self, s: Sample) -> Sample {
+        let [u, du, ydd, p1, p2, x, xd, xdd] = &mut self.channels;
+        Sample {
+            u: u.step(s.u),
+            du: du.step(s.du),
+            ydd: ydd.step(s.ydd),
+            p1: p1.step(s.p1),
+            p2: p2.step(s.p2),
+            x: x.step(s.x),
+            xd: xd.step(s.xd),
+            xdd: xdd.step(s.xdd),
+            ..s
+        }
+    }
 }
 
 /// A record made ready for repeated replays: inputs, filtered measured channels, weights.
