@@ -59,6 +59,41 @@ pub(super) struct RigEffects {
     /// run by the data acquisition on the samples (`y[n] = a·y[n−1] + (1 − a)·u[n]`,
     /// `a = e^(−Δt/T)`), as a rig's digital filter is.
     pub(super) u_lag_s: Option<f64>,
+    /// Sensor, not plant: the data acquisition's analogue anti-alias filter [Hz], a
+    /// second-order Butterworth low-pass on every measured channel (u, x, ẍ, ÿ, p1, p2; not
+    /// the command, which the controller sends digitally), run at the rig's 20 kHz step
+    /// before the channels are sampled.
+    pub(super) daq_antialias_hz: Option<f64>,
+}
+
+/// A second-order Butterworth low-pass at `fc` [Hz] run every `h` [s] (the bilinear
+/// transform, prewarped at `fc`), settled at its first input.
+struct Butter2 {
+    b: [f64; 3],
+    a: [f64; 2],
+    /// Last two inputs and outputs; `None` before the first input.
+    z: Option<([f64; 2], [f64; 2])>,
+}
+
+impl Butter2 {
+    fn new(fc: f64, h: f64) -> Self {
+        let k = (PI * fc * h).tan();
+        let q = std::f64::consts::FRAC_1_SQRT_2;
+        let norm = 1.0 / (1.0 + k / q + k * k);
+        let b0 = k * k * norm;
+        Self {
+            b: [b0, 2.0 * b0, b0],
+            a: [2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm],
+            z: None,
+        }
+    }
+
+    fn next(&mut self, x: f64) -> f64 {
+        let ([x1, x2], [y1, y2]) = self.z.unwrap_or(([x, x], [x, x]));
+        let y = self.b[0] * x + self.b[1] * x1 + self.b[2] * x2 - self.a[0] * y1 - self.a[1] * y2;
+        self.z = Some(([x, x1], [y, y1]));
+        y
+    }
 }
 
 pub(super) struct Rig {
@@ -252,6 +287,23 @@ impl Rig {
             (vec![], vec![], vec![], vec![], vec![], vec![]);
         let (mut p1_col, mut p2_col) = (vec![], vec![]);
         let mut t = 0.0;
+        // The measured channels' true values (u, x, ẍ, ÿ, p1, p2), and the anti-alias
+        // filters they pass through first when the rig has them.
+        let truths = |t: f64, y: &[f64; 10]| {
+            let (x, _, xdd) = plat(t);
+            [y[0], x, xdd, self.body_acc(y, xdd), y[2], y[3]]
+        };
+        let mut aa: Option<[Butter2; 6]> = self
+            .fx
+            .daq_antialias_hz
+            .map(|fc| std::array::from_fn(|_| Butter2::new(fc, h)));
+        let mut filtered = [0.0; 6];
+        if let Some(f) = &mut aa {
+            let v = truths(0.0, &y);
+            for i in 0..6 {
+                filtered[i] = f[i].next(v[i]);
+            }
+        }
         let mut u_sensed = 0.0;
         // What the valve acts on (before its delay): the command, or its lag from rest.
         let mut valve_hist: Vec<f64> = Vec::with_capacity(n * per_sample + 1);
@@ -263,32 +315,36 @@ impl Rig {
             hist[0]
         });
         for s in 0..n {
-            let (x, _, xdd) = plat(t);
+            let [u_in, x, xdd, ydd, p1, p2] = if aa.is_some() {
+                filtered
+            } else {
+                truths(t, &y)
+            };
             t_col.push(s as f64 * dt_s);
             v_col.push(hist[hist.len() - 1]);
             let u_true = match self.fx.u_lag_s {
                 Some(lag) if s > 0 => {
                     let a = (-dt_s / lag).exp();
-                    u_sensed = a * u_sensed + (1.0 - a) * y[0];
+                    u_sensed = a * u_sensed + (1.0 - a) * u_in;
                     u_sensed
                 }
                 Some(_) => {
-                    u_sensed = y[0];
+                    u_sensed = u_in;
                     u_sensed
                 }
-                None => y[0],
+                None => u_in,
             };
             let un = u_true + pos_noise.sample(&mut rng);
             u_col.push(lsb * ((un + 0.0375) / lsb).round() - 0.0375);
             x_col.push(x + pos_noise.sample(&mut rng));
             xdd_col.push(xdd + acc_noise.sample(&mut rng));
             ydd_col.push(
-                self.fx.ydd_scale.unwrap_or(1.0) * self.body_acc(&y, xdd)
+                self.fx.ydd_scale.unwrap_or(1.0) * ydd
                     + self.fx.ydd_offset.unwrap_or(0.0)
                     + acc_noise.sample(&mut rng),
             );
             if pressures {
-                for (col, p) in [(&mut p1_col, y[2]), (&mut p2_col, y[3])] {
+                for (col, p) in [(&mut p1_col, p1), (&mut p2_col, p2)] {
                     col.push(p_lsb * ((p + p_noise.sample(&mut rng)) / p_lsb).round());
                 }
             }
@@ -319,6 +375,12 @@ impl Rig {
                 }
                 y[8] = y[8].clamp(-0.8e-3, 0.8e-3);
                 t += h;
+                if let Some(f) = &mut aa {
+                    let v = truths(t, &y);
+                    for i in 0..6 {
+                        filtered[i] = f[i].next(v[i]);
+                    }
+                }
                 let c = cmd(t, &y);
                 if let Some(lag) = self.fx.command_lag_s {
                     let k = h / (2.0 * lag);
@@ -417,13 +479,13 @@ pub(super) fn run_with(fx: RigEffects, seed: u64, pressures: bool) -> Calibratio
 
 /// Calibrates `recs` from the paper preset with the default options.
 pub(super) fn calibrate_paper(recs: &[Record]) -> CalibrationReport {
-    identify::calibrate(
-        &Params::paper(),
-        recs,
-        &CalibrationOptions::default(),
-        &|_| true,
-    )
-    .expect("calibration runs")
+    calibrate_from(&Params::paper(), recs)
+}
+
+/// Calibrates `recs` from `start` with the default options.
+pub(super) fn calibrate_from(start: &Params, recs: &[Record]) -> CalibrationReport {
+    identify::calibrate(start, recs, &CalibrationOptions::default(), &|_| true)
+        .expect("calibration runs")
 }
 
 pub(super) fn first_ranked(r: &CalibrationReport) -> EffectId {

@@ -332,7 +332,10 @@ fn randomised_rigs_confusion_table() {
         }
         let recs = records_of(seed, i, c);
         let t0 = std::time::Instant::now();
-        let r = calibrate_paper(&recs);
+        let r = match declared_daq_filter() {
+            Some(start) => super::rig::calibrate_from(&start, &recs),
+            None => calibrate_paper(&recs),
+        };
         let secs = t0.elapsed().as_secs_f64();
         for (name, v, s, t) in checked_parameters(c, &r) {
             params_total += 1;
@@ -499,6 +502,23 @@ fn randomised_rigs_confusion_table() {
     }
 }
 
+/// The paper's parameters with the rig's anti-alias filter declared, when the survey's records
+/// pass through one (`SURVEY_DAQ_AA_HZ`) and `SURVEY_DAQ_AA_DECLARED=1` says the user declares
+/// it (a second-order Butterworth, as the rig's); `None` otherwise.
+fn declared_daq_filter() -> Option<seat_twin::params::Params> {
+    let hz: f64 = std::env::var("SURVEY_DAQ_AA_HZ")
+        .ok()?
+        .trim()
+        .parse()
+        .ok()?;
+    (std::env::var("SURVEY_DAQ_AA_DECLARED").ok()?.trim() == "1").then(|| {
+        let mut p = seat_twin::params::Params::paper();
+        p.sensors.antialias_hz = hz;
+        p.sensors.antialias_order = 2.0;
+        p
+    })
+}
+
 /// The records of case `i` (`c`) of the draw `seed`: noise seeds 500 + i for the README's
 /// table (2020), others for other draws; sampled at 1 kHz, or at `SURVEY_RATE_HZ` (a divisor
 /// of the rig's 20 kHz, 200 Hz to 10 kHz) for the survey at other rates.
@@ -519,14 +539,13 @@ pub(super) fn records_at(
     rate_hz: f64,
 ) -> Vec<seat_twin::dataset::Record> {
     let noise_seed = 500u64.wrapping_add(seed.wrapping_sub(2020).wrapping_mul(1000));
-    campaign_of(
-        c.cd,
-        c.tau,
-        c.fx,
-        noise_seed + i as u64,
-        c.pressures,
-        rate_hz,
-    )
+    // `SURVEY_DAQ_AA_HZ=80` records every measured channel through a data acquisition's
+    // anti-alias filter at that corner (a second-order Butterworth).
+    let mut fx = c.fx;
+    fx.daq_antialias_hz = std::env::var("SURVEY_DAQ_AA_HZ")
+        .ok()
+        .and_then(|v| v.trim().parse().ok());
+    campaign_of(c.cd, c.tau, fx, noise_seed + i as u64, c.pressures, rate_hz)
 }
 
 /// The raw error above the noise on u and ÿ ([`above_noise`]) of `recs` replayed with the
@@ -541,7 +560,11 @@ pub(super) fn replayed_above_noise(
         .save(&path)
         .expect("save");
     let cal = Preset::load(&path).expect("load");
-    (above_noise(&Preset::paper(), recs), above_noise(&cal, recs))
+    let mut nominal = Preset::paper();
+    if let Some(start) = declared_daq_filter() {
+        nominal.params = start;
+    }
+    (above_noise(&nominal, recs), above_noise(&cal, recs))
 }
 
 /// [`replayed_above_noise`] of `recs` cut at their first end-stop contact, as a calibration
