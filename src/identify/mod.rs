@@ -138,6 +138,22 @@ pub enum IdentifyError {
         /// The simulation error.
         source: SimError,
     },
+    /// The declared anti-alias filter's corner is far above what a record samples.
+    #[error(
+        "{file}: the declared anti-alias corner sensors.antialias_hz = {} Hz is above \
+         5 times the record's sample rate ({} Hz); an acquisition's anti-alias filter \
+         sits below the sample rate: give its corner, or 0 for none",
+        crate::format::general(*corner_hz),
+        crate::format::general(*rate_hz)
+    )]
+    AntialiasAboveRate {
+        /// The record's file name.
+        file: String,
+        /// The declared corner \[Hz\].
+        corner_hz: f64,
+        /// The record's sample rate \[Hz\].
+        rate_hz: f64,
+    },
     /// The starting parameters are invalid.
     #[error(transparent)]
     Params(#[from] ParamError),

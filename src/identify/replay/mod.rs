@@ -244,10 +244,20 @@ fn replay_samples(
     };
     let drive = Drive::OpenLoop(CommandSignal::Sampled { dt, values });
     // The data acquisition's declared anti-alias filter: on the twin's measured channels,
-    // run at every step (the analogue filter before the sampling), with a step short enough
-    // for it; the platform's measured motion, filtered already, advanced by the filter's delay.
-    let acquisition = params.sensors.antialias_sections(1.0).map(|_| {
-        let h = step_for_rate(h.min(0.1 / params.sensors.antialias_hz), 1.0 / dt);
+    // run at every step (the analogue filter before the sampling), with a step of at most a
+    // tenth of its corner's period; the platform's measured motion, filtered already,
+    // advanced by the filter's delay. A corner above 5 times the sample rate is refused (it
+    // is no anti-alias filter, and would ask for more than 50 steps a sample).
+    let corner = params.sensors.antialias_hz;
+    if corner > 5.0 / dt {
+        return Err(IdentifyError::AntialiasAboveRate {
+            file: name.to_string(),
+            corner_hz: corner,
+            rate_hz: 1.0 / dt,
+        });
+    }
+    let acquisition = (corner > 0.0).then(|| {
+        let h = step_for_rate(h.min(0.1 / corner), 1.0 / dt);
         let sections = params.sensors.antialias_sections(h).unwrap_or_default();
         (h, sections)
     });

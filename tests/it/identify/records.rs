@@ -331,6 +331,14 @@ fn replay_through_a_declared_acquisition_filter_matches_the_raw_record() {
         worst_undeclared = worst_undeclared.max(e_u_plain);
     }
     assert!(worst_undeclared > 5.0 * U_NOISE, "{worst_undeclared}");
+    // A corner above 5 times the sample rate is no anti-alias filter: refused by name.
+    let mut far = true_params();
+    far.sensors.antialias_hz = 5000.0;
+    let e = identify::replay(&far, &recs[0]).unwrap_err().to_string();
+    assert!(
+        e.contains("sensors.antialias_hz = 5000") && e.contains("(200 Hz)"),
+        "{e}"
+    );
 }
 
 /// The same acquisition filter under a calibration of a rig without hidden effects:
