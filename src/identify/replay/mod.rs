@@ -225,7 +225,7 @@ fn replay_samples(
     platform: PlatformMotion,
     len: usize,
     name: &str,
-    mut sink: impl FnMut(Sample),
+    sink: &mut dyn FnMut(Sample),
 ) -> Result<(), IdentifyError> {
     // Within the method's stability limit, and short enough to resolve the friction.
     let h = step_for_rate(
@@ -278,21 +278,27 @@ fn replay_samples(
             done += 1;
         }
     };
-    let run = match acquisition {
-        None => sim.run_until(t_end, every, record),
-        Some((_, sections)) => {
-            let mut read = Acquisition::new(&sections);
-            let mut step = 0u64;
-            sim.run_until(t_end, 1, |s| {
-                let s = read.sample(s);
-                if step.is_multiple_of(every) {
-                    record(s);
-                }
-                step += 1;
-            })
-        }
+    // One stepping loop for both (a second closure type would compile the whole hot loop
+    // once more): without the filter it records every `every` steps; with it, it runs the
+    // filter at every step and records every `every`-th filtered sample.
+    let mut read = acquisition.map(|(_, sections)| Acquisition::new(&sections));
+    let (run_every, keep_every) = if read.is_some() {
+        (1, every)
+    } else {
+        (every, 1)
     };
-    run.map_err(|e| IdentifyError::Simulation {
+    let mut step = 0u64;
+    sim.run_until(t_end, run_every, |s| {
+        let s = match &mut read {
+            Some(r) => r.sample(s),
+            None => s,
+        };
+        if step.is_multiple_of(keep_every) {
+            record(s);
+        }
+        step += 1;
+    })
+    .map_err(|e| IdentifyError::Simulation {
         file: name.to_string(),
         source: e,
     })?;
@@ -599,7 +605,7 @@ impl PreparedRecord {
         let (v_in, platform) = (self.v_in.clone(), self.platform.clone());
         let mut own = *params;
         own.plant.valve.cd *= self.cd_factor;
-        replay_samples(&own, self.dt, v_in, platform, n, &self.name, |s| {
+        replay_samples(&own, self.dt, v_in, platform, n, &self.name, &mut |s| {
             out.t.push(s.t);
             out.u.push(s.u);
             out.du.push(s.du);

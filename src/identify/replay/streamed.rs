@@ -74,7 +74,7 @@ pub fn replay_streamed(
     let mut i = 0;
     // The twin's u and ÿ as the calibrated sensors read them, as in `PreparedRecord::simulate`.
     let mut stroke = params.sensors.u_reader(dt);
-    replay_samples(params, dt, Arc::new(v_in), platform, len, &name, |s| {
+    replay_samples(params, dt, Arc::new(v_in), platform, len, &name, &mut |s| {
         let mut read = s;
         read.u = stroke.read(s.u);
         read.ydd = params.sensors.read_ydd_sample(s.ydd);
