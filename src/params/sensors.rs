@@ -15,8 +15,9 @@ use serde::{Deserialize, Serialize};
 /// tests a rig's controller drives (the command, sent and recorded as sent) it delays them
 /// all against the command by its group delay, which the records cannot tell from the valve's
 /// delay τ (a second-order filter at 80 Hz delays by 2.8 ms; undeclared, τ reads that much
-/// long). Declared, the replay reads the command through the same filter (see
-/// `identify::replay`), so τ stays the valve's own.
+/// long). Declared, the replay reads the twin's measured channels through the same filter at
+/// every step and advances the measured platform motion that drives it by the filter's
+/// delay (see `identify::replay`), so τ stays the valve's own.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SensorParams {
@@ -52,6 +53,11 @@ impl SensorParams {
         *self == Self::default()
     }
 
+    /// The declared anti-alias filter's order as a count of poles, 1 ..= 8.
+    fn antialias_poles(&self) -> usize {
+        self.antialias_order.round().clamp(1.0, 8.0) as usize
+    }
+
     /// The declared anti-alias filter's sections for the sample step `dt` \[s\]
     /// ([`crate::dsp::butterworth_lowpass_sections`]), or `None` without one.
     pub fn antialias_sections(&self, dt: f64) -> Option<Vec<crate::dsp::Biquad>> {
@@ -59,7 +65,7 @@ impl SensorParams {
             crate::dsp::butterworth_lowpass_sections(
                 dt,
                 self.antialias_hz,
-                self.antialias_order.round().clamp(1.0, 8.0) as usize,
+                self.antialias_poles(),
             )
         })
     }
@@ -70,7 +76,7 @@ impl SensorParams {
         if self.antialias_hz <= 0.0 {
             return 0.0;
         }
-        let n = self.antialias_order.round().clamp(1.0, 8.0) as usize;
+        let n = self.antialias_poles();
         let sum_inv_q: f64 = (1..=n / 2)
             .map(|k| 2.0 * (std::f64::consts::PI * (n - 2 * k + 1) as f64 / (2 * n) as f64).cos())
             .sum::<f64>()
