@@ -62,11 +62,7 @@ impl SensorParams {
     /// ([`crate::dsp::butterworth_lowpass_sections`]), or `None` without one.
     pub fn antialias_sections(&self, dt: f64) -> Option<Vec<crate::dsp::Biquad>> {
         (self.antialias_hz > 0.0).then(|| {
-            crate::dsp::butterworth_lowpass_sections(
-                dt,
-                self.antialias_hz,
-                self.antialias_poles(),
-            )
+            crate::dsp::butterworth_lowpass_sections(dt, self.antialias_hz, self.antialias_poles())
         })
     }
 
