@@ -60,7 +60,7 @@ impl Biquad {
 
     /// First-order low-pass `1/(1 + s/ωc)` at the corner `fc` \[Hz\] for the sample step `dt`
     /// \[s\] (bilinear transform, corner pre-warped), as a section with `b2 = a2 = 0`: the real
-    /// pole of an odd-order Butterworth filter ([`butterworth_lowpass_sections`]).
+    /// pole of an odd-order Butterworth filter ([`butterworth_sections`]).
     pub fn lowpass_first_order(dt: f64, fc: f64) -> Self {
         let k = (PI * fc * dt).tan();
         let b0 = k / (1.0 + k);
@@ -220,35 +220,38 @@ impl AnalogSection {
     }
 }
 
-/// The second-order sections of a Butterworth low-pass of even order `order` at `fc` \[Hz\]
-/// for the step `dt` \[s\]: `|H|² = 1/(1 + (f/fc)^(2·order))`.
-pub fn butterworth_sections(dt: f64, fc: f64, order: usize) -> Vec<Biquad> {
-    (1..=order / 2)
-        .map(|i| {
-            let theta = (2 * i - 1) as f64 * PI / (2 * order) as f64;
-            Biquad::lowpass(dt, fc, 1.0 / (2.0 * theta.cos()))
-        })
-        .collect()
+/// The angles θᵢ \[rad\] of a Butterworth low-pass's complex pole pairs from the negative
+/// real axis, smallest first: `θᵢ = (2i − 1 + n mod 2)·π/(2n)`, i = 1 … ⌊n/2⌋ (an odd order
+/// has a real pole besides, at θ = 0). Each pair is a second-order section of quality factor
+/// `1/(2·cos θᵢ)`.
+fn butterworth_pair_angles(order: usize) -> impl Iterator<Item = f64> {
+    (1..=order / 2).map(move |i| (2 * i - 1 + order % 2) as f64 * PI / (2 * order) as f64)
 }
 
-/// The sections of a Butterworth low-pass of any order `order` ≥ 1 at the corner `fc` \[Hz\]
-/// for the sample step `dt` \[s\]: a second-order section of quality factor `1/(2·cos θₖ)`
-/// for each pair of poles, `θₖ = π·(n − 2k + 1)/(2n)` from the negative real axis
-/// (k = 1 … ⌊n/2⌋), and a first-order section for the real pole of an odd order.
-/// `|H(f)|² = 1/(1 + (f/fc)^(2n))`, exactly at `fc` and closely below it when `fc·dt` is
-/// small (the bilinear transform warps frequencies towards Nyquist).
-pub fn butterworth_lowpass_sections(dt: f64, fc: f64, order: usize) -> Vec<Biquad> {
-    let n = order as f64;
-    let mut sections: Vec<Biquad> = (1..=order / 2)
-        .map(|k| {
-            let theta = PI * (n - 2.0 * k as f64 + 1.0) / (2.0 * n);
-            Biquad::lowpass(dt, fc, 1.0 / (2.0 * theta.cos()))
-        })
+/// The sections of a Butterworth low-pass of order `order` ≥ 1 at `fc` \[Hz\] for the step
+/// `dt` \[s\]: a second-order section for each pole pair ([`butterworth_pair_angles`]), and a
+/// first-order section last for the real pole of an odd order. `|H|² = 1/(1 + (f/fc)^(2n))`,
+/// exactly at `fc` and closely below it when `fc·dt` is small (the bilinear transform warps
+/// frequencies towards Nyquist).
+pub fn butterworth_sections(dt: f64, fc: f64, order: usize) -> Vec<Biquad> {
+    let mut sections: Vec<Biquad> = butterworth_pair_angles(order)
+        .map(|theta| Biquad::lowpass(dt, fc, 1.0 / (2.0 * theta.cos())))
         .collect();
     if order % 2 == 1 {
         sections.push(Biquad::lowpass_first_order(dt, fc));
     }
     sections
+}
+
+/// The low-frequency group delay \[s\] of a Butterworth low-pass of order `order` at `fc`
+/// \[Hz\]: `(1/ωc)·Σ 1/Qₖ` over its sections (a first-order section counts 1), √2/ωc for the
+/// second order, 2.613/ωc for the fourth.
+pub fn butterworth_delay_s(fc: f64, order: usize) -> f64 {
+    let sum_inv_q: f64 = butterworth_pair_angles(order)
+        .map(|t| 2.0 * t.cos())
+        .sum::<f64>()
+        + (order % 2) as f64;
+    sum_inv_q / (2.0 * PI * fc)
 }
 
 /// Runs `sections` over `x` forward, then backward ([`Biquad::pass`]): gain `|H|²`, zero
@@ -264,7 +267,7 @@ pub fn zero_phase(x: &[f64], sections: &[Biquad]) -> Vec<f64> {
     y
 }
 
-/// Zero-phase Butterworth low-pass of order `order` (even), run forward and backward:
+/// Zero-phase Butterworth low-pass of order `order`, run forward and backward:
 /// `|H|² = 1/(1 + (f/fc)^(2·order))`, no phase shift. Each pass starts in steady state at the
 /// end value it starts from.
 pub fn butterworth_zero_phase(x: &[f64], dt: f64, fc: f64, order: usize) -> Vec<f64> {
@@ -572,7 +575,7 @@ mod tests {
         let (dt, fc) = (1e-5, 80.0);
         let wc = 2.0 * PI * fc;
         for n in 1..=8usize {
-            let sections = butterworth_lowpass_sections(dt, fc, n);
+            let sections = butterworth_sections(dt, fc, n);
             assert_eq!(sections.len(), n.div_ceil(2));
             let h = |f: f64| {
                 sections
@@ -614,7 +617,7 @@ mod tests {
     #[test]
     fn settled_cascade_streams_the_forward_passes() {
         let (dt, fc) = (1e-3, 40.0);
-        let sections = butterworth_lowpass_sections(dt, fc, 5);
+        let sections = butterworth_sections(dt, fc, 5);
         let x: Vec<f64> = (0..400)
             .map(|i| 3.0 + (0.07 * i as f64).sin() + if i > 200 { 1.5 } else { 0.0 })
             .collect();

@@ -59,10 +59,10 @@ impl SensorParams {
     }
 
     /// The declared anti-alias filter's sections for the sample step `dt` \[s\]
-    /// ([`crate::dsp::butterworth_lowpass_sections`]), or `None` without one.
+    /// ([`crate::dsp::butterworth_sections`]), or `None` without one.
     pub fn antialias_sections(&self, dt: f64) -> Option<Vec<crate::dsp::Biquad>> {
         (self.antialias_hz > 0.0).then(|| {
-            crate::dsp::butterworth_lowpass_sections(dt, self.antialias_hz, self.antialias_poles())
+            crate::dsp::butterworth_sections(dt, self.antialias_hz, self.antialias_poles())
         })
     }
 
@@ -72,12 +72,7 @@ impl SensorParams {
         if self.antialias_hz <= 0.0 {
             return 0.0;
         }
-        let n = self.antialias_poles();
-        let sum_inv_q: f64 = (1..=n / 2)
-            .map(|k| 2.0 * (std::f64::consts::PI * (n - 2 * k + 1) as f64 / (2 * n) as f64).cos())
-            .sum::<f64>()
-            + (n % 2) as f64;
-        sum_inv_q / (2.0 * std::f64::consts::PI * self.antialias_hz)
+        crate::dsp::butterworth_delay_s(self.antialias_hz, self.antialias_poles())
     }
 
     /// The accelerometer's reading of `ydd` [m/s²], in place.
