@@ -216,7 +216,7 @@ fn butterworth_pair_angles(order: usize) -> impl Iterator<Item = f64> {
 }
 
 /// The sections of a Butterworth low-pass of order `order` ≥ 1 at `fc` \[Hz\] for the step
-/// `dt` \[s\]: a second-order section for each pole pair ([`butterworth_pair_angles`]), and a
+/// `dt` \[s\]: a second-order section for each pole pair (`butterworth_pair_angles`), and a
 /// first-order section last for the real pole of an odd order. `|H|² = 1/(1 + (f/fc)^(2n))`,
 /// exactly at `fc` and closely below it when `fc·dt` is small (the bilinear transform warps
 /// frequencies towards Nyquist).
