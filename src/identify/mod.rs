@@ -80,6 +80,7 @@ pub mod data;
 pub mod diagnose;
 pub mod drift;
 pub mod effects;
+mod error;
 mod evaluate;
 pub mod figures;
 pub mod fit;
@@ -98,69 +99,22 @@ pub mod testdata;
 pub mod units;
 
 use crate::dataset::Record;
-use crate::params::{ParamError, Params};
-use crate::simulation::SimError;
+use crate::params::Params;
 use fit::{Evaluator, Knob};
 use replay::{MetricOptions, PreparedRecord, Replay, replay_prepared};
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use data::{
     MIN_COMMAND_RMS_V, MIN_RECORDS_FOR_RECORD_SPLIT, MIN_SAMPLE_RATE_HZ, MIN_TOTAL_DURATION_S,
 };
+pub use error::IdentifyError;
 pub use progress::{CalibrationObserver, Progress, ProgressText, Stage, StopReason};
 pub use replay::SimChannels;
 pub use result::{
     AddedEffect, CalibrationReport, CandidateScore, Diagnostics, ErrorSummary, METRIC,
     PaperBaseline, RAW_NRMSE, RawNrmse, Split, StageErrors, Verdict,
 };
-
-/// Why identification failed.
-#[derive(Debug, thiserror::Error)]
-pub enum IdentifyError {
-    /// A record lacks a column the replay needs.
-    #[error("{}: the column `{column}` is required for replay", file.display())]
-    MissingColumn {
-        /// The file.
-        file: PathBuf,
-        /// The column.
-        column: String,
-    },
-    /// No records given.
-    #[error("no measured records given")]
-    NoRecords,
-    /// The twin diverged on a record.
-    #[error("{file}: {source}")]
-    Simulation {
-        /// The record's file name.
-        file: String,
-        /// The simulation error.
-        source: SimError,
-    },
-    /// The declared anti-alias filter's corner is far above what a record samples.
-    #[error(
-        "{file}: the declared anti-alias corner sensors.antialias_hz = {} Hz is above \
-         5 times the record's sample rate ({} Hz); an acquisition's anti-alias filter \
-         sits below the sample rate: give its corner, or 0 for none",
-        crate::format::general(*corner_hz),
-        crate::format::general(*rate_hz)
-    )]
-    AntialiasAboveRate {
-        /// The record's file name.
-        file: String,
-        /// The declared corner \[Hz\].
-        corner_hz: f64,
-        /// The record's sample rate \[Hz\].
-        rate_hz: f64,
-    },
-    /// The starting parameters are invalid.
-    #[error(transparent)]
-    Params(#[from] ParamError),
-    /// The caller cancelled.
-    #[error("calibration cancelled")]
-    Cancelled,
-}
 
 /// A physical effect of the twin's library ([`crate::params::EffectsParams`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
