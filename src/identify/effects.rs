@@ -492,13 +492,20 @@ fn fitted_without(
 }
 
 /// Rounds of [`rank_candidates`] and [`try_effect`] from the declared fit `start` (of
-/// `knobs`): the best candidate
-/// is tried when its ΔBIC < 0 and it removes at least
+/// `knobs`): the best candidate is tried when its ΔBIC < 0 and it removes at least
 /// [`CalibrationOptions::min_relative_gain`] of the residual
 /// ([`CalibrationOptions::min_relative_gain_later`] after the first effect), and added when it
-/// improves the held-out error. Stops when a round's best does not qualify, after
-/// [`CalibrationOptions::max_effects`] effects or twice as many rounds, or when no candidate
-/// is left.
+/// improves the held-out error.
+///
+/// While the raw error (the verdict's measure) is above its limit, a round's best that does
+/// not qualify is still tried: the criterion's best if its ΔBIC < 0, else the candidate whose
+/// screening fit lowers the raw error's worst band most, if by a quarter. Either is added only
+/// if its re-fit lowers that band by a quarter, improves the held-out error and leaves its
+/// size determined (more than 2σ from none, every uncertainty finite).
+///
+/// Stops when a round's best does not qualify (and is not tried, or tried and not added),
+/// after [`CalibrationOptions::max_effects`] effects or twice as many rounds, or when no
+/// candidate is left.
 pub fn search(
     cx: &SearchContext<'_>,
     campaign: &Campaign,
@@ -550,27 +557,51 @@ pub fn search(
         // parameters may rank above by the criterion and still remove too little (beside an
         // overlap at 200 Hz, compliance ΔBIC −26.0 at 34 %, friction −22.8 at 42 %: friction
         // is the rig's). Without one, the criterion's best overall.
-        let pick = ranked
+        let mut pick = ranked
             .iter()
             .position(|r| r.score < 0.0 && r.gain >= min_gain)
             .unwrap_or(0);
         if pick >= ranked.len() {
             break;
         }
-        let best = ranked.remove(pick);
-        let runner_up = ranked.first().map(|r| (r.effect, r.score, r.gain));
-        let qualifies = best.score < 0.0 && best.gain >= min_gain;
+        let qualifies = ranked[pick].score < 0.0 && ranked[pick].gain >= min_gain;
         // Under the gain bar, a candidate the criterion favours is still tried while the raw
         // error (the verdict's measure) is above its limit: the weighted fit metric can
         // under-rate an effect whose signature lies where it weighs little (friction's at
         // the reversals, beside an overlap's). It is kept only if it also takes a quarter
         // off the raw error's worst band.
-        let raw_before = if !qualifies && best.score < 0.0 {
+        let raw_before = if !qualifies {
             Some(worst_raw_ratio(cx, campaign, params, &current.params)?)
                 .filter(|&w| w > options.raw_error_limit)
         } else {
             None
         };
+        // Where the criterion favours none, the candidates' screening fits are judged by the
+        // raw error instead, and the one that lowers its worst band most is tried, if by a
+        // quarter: the weighted metric stops at 25 Hz, and an effect that damps the oil
+        // column's ringing shows above it (friction through an acquisition's anti-alias
+        // filter, which takes away the ringing that point sampling folds below 25 Hz).
+        let mut by_raw = None;
+        if let Some(before) = raw_before
+            && ranked[pick].score >= 0.0
+        {
+            let mut lowest: Option<(usize, f64)> = None;
+            for (i, r) in ranked.iter().enumerate() {
+                let w = worst_raw_ratio(cx, campaign, params, &r.fit.params)?;
+                if lowest.is_none_or(|(_, l)| w < l) {
+                    lowest = Some((i, w));
+                }
+            }
+            match lowest {
+                Some((i, w)) if w <= REFINEMENT_MAX_RAW_RATIO * before => {
+                    by_raw = Some((ranked[pick].score, w));
+                    pick = i;
+                }
+                _ => break,
+            }
+        }
+        let best = ranked.remove(pick);
+        let runner_up = ranked.first().map(|r| (r.effect, r.score, r.gain));
         if !qualifies && raw_before.is_none() {
             break;
         }
@@ -595,15 +626,28 @@ pub fn search(
             let determinate = why.is_empty();
             let lowers_raw = after <= REFINEMENT_MAX_RAW_RATIO * before;
             let kept = trial.improves && determinate && lowers_raw;
+            let why_tried = match by_raw {
+                Some((best_score, screened)) => format!(
+                    "the criterion favoured no candidate (best ΔBIC {best_score:+.1}; `{}` \
+                     {score:+.1}, {:.1} % of the weighted residual), but the raw error was above \
+                     its limit (worst band {before:.1}× its floor) and `{}`'s screening fit \
+                     lowered it most (to {screened:.1}×)",
+                    best.effect.name(),
+                    100.0 * best.gain,
+                    best.effect.name(),
+                ),
+                None => format!(
+                    "`{}` removed {:.1} % of the weighted residual (ΔBIC {score:.1}), under the \
+                     {:.0} % a further effect needs, but the raw error was above its limit \
+                     (worst band {before:.1}× its floor)",
+                    best.effect.name(),
+                    100.0 * best.gain,
+                    100.0 * min_gain,
+                ),
+            };
             notes.push(format!(
-                "round {round}: `{}` removed {:.1} % of the weighted residual (ΔBIC {score:.1}), \
-                 under the {:.0} % a further effect needs, but the raw error was above its \
-                 limit (worst band {before:.1}× its floor): tried, it {} the worst band to \
-                 {after:.1}× and the held-out weighted RMS {current_val:.3} → {trial_val:.3}{}: \
-                 {}",
-                best.effect.name(),
-                100.0 * best.gain,
-                100.0 * min_gain,
+                "round {round}: {why_tried}: tried, it {} the worst band to {after:.1}× and the \
+                 held-out weighted RMS {current_val:.3} → {trial_val:.3}{}: {}",
                 if after < before { "lowers" } else { "leaves" },
                 if determinate {
                     String::new()
