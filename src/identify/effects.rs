@@ -620,11 +620,31 @@ pub fn search(
                 .filter(|v| !v.std.is_finite())
                 .map(|v| format!("{}'s uncertainty is not determined", v.name))
                 .collect();
-            if let Some(no_size) = unsized_effect(&trial.refit, best.effect) {
-                why.insert(0, no_size);
+            let no_size = unsized_effect(&trial.refit, best.effect);
+            let lowers_raw = after <= REFINEMENT_MAX_RAW_RATIO * before;
+            // Sizes that trade off (friction's Coulomb, Stribeck and viscous forces at 200 Hz
+            // through an acquisition filter: each within 2σ of none below 25 Hz) leave each
+            // undetermined alone, not the effect. Where only that stands against it, the raw
+            // error judges the effect as a whole: the model without it, fitted again from the
+            // re-fit's other parameters, must not take the same quarter off the worst band.
+            let degenerate = !why.is_empty();
+            let without = if (no_size.is_some() || degenerate) && trial.improves && lowers_raw {
+                let again = fitted_without(cx, &trial.refit.params, best.effect, &knobs)?;
+                let w = worst_raw_ratio(cx, campaign, params, &again.params)?;
+                Some((again, w))
+            } else {
+                None
+            };
+            let as_a_whole = without
+                .as_ref()
+                .map(|(_, w)| *w)
+                .filter(|&w| !degenerate && w > REFINEMENT_MAX_RAW_RATIO * before);
+            if let Some(no_size) = &no_size
+                && as_a_whole.is_none()
+            {
+                why.insert(0, no_size.clone());
             }
             let determinate = why.is_empty();
-            let lowers_raw = after <= REFINEMENT_MAX_RAW_RATIO * before;
             let kept = trial.improves && determinate && lowers_raw;
             let why_tried = match by_raw {
                 Some((best_score, screened)) => format!(
@@ -649,10 +669,14 @@ pub fn search(
                 "round {round}: {why_tried}: tried, it {} the worst band to {after:.1}× and the \
                  held-out weighted RMS {current_val:.3} → {trial_val:.3}{}: {}",
                 if after < before { "lowers" } else { "leaves" },
-                if determinate {
-                    String::new()
-                } else {
-                    format!(", but {}", why.join(", "))
+                match (&no_size, as_a_whole) {
+                    _ if !determinate => format!(", but {}", why.join(", ")),
+                    (Some(no_size), Some(w)) => format!(
+                        "; {no_size}, but the model without it, fitted again from the re-fit's \
+                         other parameters, leaves the worst band at {w:.1}×: its sizes trade \
+                         off, the effect as a whole is determined"
+                    ),
+                    _ => String::new(),
                 },
                 if kept { "added" } else { "not added" }
             ));
@@ -660,19 +684,18 @@ pub fn search(
                 // A re-fit that lowered the raw error with the tried effect at no size of its
                 // own: the other parameters moved to a deeper valley of the model as it was.
                 // Fitted again from there without the effect, that is kept if deeper.
-                if !determinate && trial.improves && lowers_raw {
-                    let again = fitted_without(cx, &trial.refit.params, best.effect, &knobs)?;
-                    let w = worst_raw_ratio(cx, campaign, params, &again.params)?;
-                    if again.rss < current.rss && w < before {
-                        notes.push(format!(
-                            "round {round}: fitted again from that re-fit's other parameters \
-                             without `{}`, the model as it was reaches a deeper valley (weighted \
-                             residual −{:.1} %, worst raw band {before:.1}× → {w:.1}×): kept",
-                            best.effect.name(),
-                            100.0 * (1.0 - again.rss / current.rss),
-                        ));
-                        current = again;
-                    }
+                if let Some((again, w)) = without
+                    && again.rss < current.rss
+                    && w < before
+                {
+                    notes.push(format!(
+                        "round {round}: fitted again from that re-fit's other parameters \
+                         without `{}`, the model as it was reaches a deeper valley (weighted \
+                         residual −{:.1} %, worst raw band {before:.1}× → {w:.1}×): kept",
+                        best.effect.name(),
+                        100.0 * (1.0 - again.rss / current.rss),
+                    ));
+                    current = again;
                 }
                 break;
             }
@@ -728,7 +751,9 @@ pub fn search(
                 continue;
             }
         }
-        if let Some((other, other_score, other_gain)) = runner_up
+        if by_raw.is_some() {
+            // Chosen by the raw error, not the criterion: the note above says so.
+        } else if let Some((other, other_score, other_gain)) = runner_up
             && other_score < score
         {
             notes.push(format!(

@@ -24,7 +24,12 @@
 //!    if ΔBIC < 0 and it removes at least `min_relative_gain` of the residual (a further effect:
 //!    `min_relative_gain_later` of what remains); all parameters are re-fitted, and the effect
 //!    is kept only if it lowers the weighted error on the held-out part by at least
-//!    `min_validation_gain`. The round repeats.
+//!    `min_validation_gain`. The round repeats. While the raw error of step 5 is above its
+//!    limit, a round's best that does not qualify is still tried (the criterion's best if
+//!    its ΔBIC < 0, else the candidate that lowers the raw error's worst band most), and kept
+//!    only if it also lowers that band by a quarter with its size determined
+//!    ([`effects::search`]): the weighted metric stops at 25 Hz, and an effect that damps the
+//!    oil column's ringing shows above it.
 //! 5. [`diagnose`] gives the evidence: whiteness, correlations with the signature features,
 //!    spectra. The verdict uses one measure, the report's own ([`raw_error`]): per record and
 //!    raw channel (`u`, `ÿ`, `p1`, `p2`), the residual on the record's grid in bands from DC
