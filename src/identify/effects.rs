@@ -414,6 +414,20 @@ pub struct Added {
     pub gain: f64,
     /// Held-out weighted RMS `[before, after]` adding it.
     pub validation: [f64; 2],
+    /// Where it was added on the raw error's terms (under the criterion's bars, while the
+    /// raw error was above its limit): that error's worst band `[before, after]` in units of
+    /// its floor, and, where its sizes trade off, the worst band with it fitted out again.
+    pub raw: Option<RawTerms>,
+}
+
+/// The raw error's evidence for an effect added on its terms ([`Added::raw`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RawTerms {
+    /// The raw error's worst band `[before, after]` adding it \[× its floor\].
+    pub worst: [f64; 2],
+    /// The worst band of the model without it, fitted again from the re-fit's other
+    /// parameters, where its sizes trade off \[× its floor\].
+    pub without: Option<f64>,
 }
 
 /// What the effect search found.
@@ -608,6 +622,7 @@ pub fn search(
         let trial = try_effect(cx, campaign, params, &best, &knobs, round, current_val)?;
         remaining.retain(|e| *e != best.effect);
         let (score, trial_val) = (best.score, trial.validation_rms);
+        let mut raw_terms = None;
         if let Some(before) = raw_before {
             let after = worst_raw_ratio(cx, campaign, params, &trial.refit.params)?;
             // Its size determined and more than 2σ from "off", and every uncertainty of the
@@ -646,6 +661,10 @@ pub fn search(
             }
             let determinate = why.is_empty();
             let kept = trial.improves && determinate && lowers_raw;
+            raw_terms = Some(RawTerms {
+                worst: [before, after],
+                without: as_a_whole,
+            });
             let why_tried = match by_raw {
                 Some((best_score, screened)) => format!(
                     "the criterion favoured no candidate (best ΔBIC {best_score:+.1}; `{}` \
@@ -803,6 +822,7 @@ pub fn search(
             score,
             gain: best.gain,
             validation: [current_val, trial_val],
+            raw: raw_terms,
         });
         current = trial.refit;
         current_val = trial_val;

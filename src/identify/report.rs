@@ -487,7 +487,10 @@ pub fn report_markdown(r: &CalibrationReport, elapsed_s: Option<f64>) -> String 
         s,
         "## Candidates\n\nScore = ΔBIC against the model of the round, on the fit records \
          (n = {}, n_eff = {:.0}); an effect is added when ΔBIC < 0, it removes enough of the \
-         residual and it lowers the validation error on the held-out records.\n",
+         residual and it lowers the validation error on the held-out records. While the raw \
+         error is above its limit, one under those bars is also added when it takes a quarter \
+         off the raw error's worst band with its size determined (its evidence and the notes \
+         say so).\n",
         r.n, r.n_eff
     );
     let _ = writeln!(

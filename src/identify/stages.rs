@@ -529,11 +529,21 @@ pub fn report(
                 evidence: format!(
                     "ΔBIC = {:.1} when added; removed {:.1} % of the remaining weighted \
                      residual sum of squares on the fit records; validation weighted RMS \
-                     {:.3} → {:.3} on the held-out records{sig}",
+                     {:.3} → {:.3} on the held-out records{sig}{}",
                     a.score,
                     100.0 * a.gain,
                     a.validation[0],
-                    a.validation[1]
+                    a.validation[1],
+                    a.raw.map_or(String::new(), |r| format!(
+                        "; added on the raw error's terms, under the criterion's bars: the \
+                         raw error's worst band {:.1}× → {:.1}× its floor{}",
+                        r.worst[0],
+                        r.worst[1],
+                        r.without.map_or(String::new(), |w| format!(
+                            ", {w:.1}× with the effect fitted out again from the other \
+                             parameters: its sizes trade off, the effect as a whole is determined"
+                        ))
+                    ))
                 ),
             }
         })
