@@ -514,8 +514,10 @@ fn fitted_without(
 /// While the raw error (the verdict's measure) is above its limit, a round's best that does
 /// not qualify is still tried: the criterion's best if its ΔBIC < 0, else the candidate whose
 /// screening fit lowers the raw error's worst band most, if by a quarter. Either is added only
-/// if its re-fit lowers that band by a quarter, improves the held-out error and leaves its
-/// size determined (more than 2σ from none, every uncertainty finite).
+/// if its re-fit lowers that band by a quarter, improves the held-out error and leaves every
+/// uncertainty finite and its size determined: one of its sizes more than 2σ from none, or,
+/// where its sizes trade off, the model without it (fitted again from the re-fit's other
+/// parameters) unable to take the same quarter off that band.
 ///
 /// Stops when a round's best does not qualify (and is not tried, or tried and not added),
 /// after [`CalibrationOptions::max_effects`] effects or twice as many rounds, or when no
