@@ -62,8 +62,9 @@
 //! [`calibrate_with`] runs the loop as stages, each a function with typed inputs and
 //! outputs: [`data::check`] and [`data::split`] (the data stage), [`stages::nominal`],
 //! [`stages::paper`], [`stages::declared_fit`], the effect search of [`effects`]
-//! ([`effects::rank_candidates`], [`effects::try_effect`], looped by [`effects::search`],
-//! which ends with the profile of a hose/chamber split, [`profile::hose_split`]),
+//! ([`effects::rank_candidates`], whose fits start from [`starts::multi_start`],
+//! [`effects::try_effect`], looped by [`effects::search`], which ends with the profile of a
+//! hose/chamber split, [`profile::hose_split`]),
 //! and [`stages::report`] (final replays, errors, diagnostics, verdict). One cancel flag
 //! stops it at the next replay; a [`CalibrationObserver`] hears each stage's [`Progress`].
 //! [`calibrate`] is the same with a callback that gets the stage as text and returns `false`
@@ -100,6 +101,7 @@ pub mod report;
 pub mod result;
 pub mod ringing;
 pub mod stages;
+pub mod starts;
 pub mod testdata;
 pub mod units;
 

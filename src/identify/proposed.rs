@@ -10,10 +10,10 @@
 //! terms are and whether they bring every raw channel to its floor.
 
 use super::context::{SearchContext, validation_rms};
-use super::effects::best_of;
 use super::fit::{self, FitResult, Knob};
 use super::progress::Stage;
 use super::result::{ProposedScore, ProposedTerm};
+use super::starts::best_of;
 use super::{CalibrationOptions, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;

@@ -44,7 +44,7 @@ fn friction_alone_is_explained() {
         .iter()
         .find(|e| e.effect == EffectId::Friction)
         .unwrap_or_else(|| panic!("friction not found: {s}"));
-    // Before the Stribeck starts (effects::multi_start) the fit left the Stribeck velocity
+    // Before the Stribeck starts (starts::multi_start) the fit left the Stribeck velocity
     // at the preset's 5 mm/s.
     let vs = friction.params["stribeck_velocity_m_s"];
     assert!((vs / 0.01 - 1.0).abs() < 0.25, "{friction:?}");
