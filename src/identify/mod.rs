@@ -35,8 +35,8 @@
 //!    raw channel (`u`, `ÿ`, `p1`, `p2`), the residual on the record's grid in bands from DC
 //!    and drift up, each against a noise floor estimated from the measured channel.
 //!    `explained` when effects were added *and* every band of every record's every channel is
-//!    at most `raw_error_limit` (3) times its floor; `no_missing_effect` when the re-fitted
-//!    twin is there without any effect; otherwise `unexplained`, naming record, channel, band
+//!    at most `raw_error_limit` (3) times its floor; `no_missing_effect` when the calibrated
+//!    twin (the one calibrated.toml carries) is there without any effect; otherwise `unexplained`, naming record, channel, band
 //!    and time window, with the effects that helped and what is left
 //!    ([`diagnose::ResidualLeft`]: records, channels, band, correlations). The fit's own
 //!    metric gains a stroke-drift channel (`u` below 0.5 Hz) so that the fit sees what the
