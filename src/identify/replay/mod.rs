@@ -3,8 +3,7 @@
 //! The record's `v_in` drives the valve in open loop (the command as sent, before the valve's
 //! delay) and its platform motion (`xdd`, else `x`, else still) drives the base. The twin runs
 //! on the record's time grid with the largest RK4 step ≤ `numerics.max_step_s` that divides the
-//! sample step or, for a record sampled faster than that (8 kHz and up), with a step of a whole
-//! number of samples (at most 0.25 ms), the samples between interpolated (`ReplayGrid`).
+//! sample step.
 //!
 //! **Conditioning of the measured excitation** ([`EXCITATION_CONDITIONING`]). The recorded
 //! platform acceleration is not fed raw: it is low-passed at [`EXCITATION_LOWPASS_HZ`] with a
@@ -229,11 +228,14 @@ fn replay_samples(
     sink: &mut dyn FnMut(Sample),
 ) -> Result<(), IdentifyError> {
     // Within the method's stability limit, and short enough to resolve the friction.
-    let allowed = params
-        .numerics
-        .max_step_s
-        .min(0.9 * params.step_limit_s())
-        .min(params.friction_resolving_step_s());
+    let h = step_for_rate(
+        params
+            .numerics
+            .max_step_s
+            .min(0.9 * params.step_limit_s())
+            .min(params.friction_resolving_step_s()),
+        1.0 / dt,
+    );
     // A proposed lag of the valve command filters the command as sent, a proposed drift of
     // the valve's null offsets it.
     let values = match params.plant.corrections.acted_command(&v_in, dt) {
@@ -254,50 +256,36 @@ fn replay_samples(
             rate_hz: 1.0 / dt,
         });
     }
-    let allowed = if corner > 0.0 {
-        allowed.min(0.1 / corner)
-    } else {
-        allowed
-    };
-    let grid = ReplayGrid::new(allowed, dt);
-    let h = grid.step_s;
-    let acquisition =
-        (corner > 0.0).then(|| params.sensors.antialias_sections(h).unwrap_or_default());
-    let platform = match &acquisition {
-        Some(_) => platform.advanced(params.sensors.antialias_delay_s()),
-        None => platform,
+    let acquisition = (corner > 0.0).then(|| {
+        let h = step_for_rate(h.min(0.1 / corner), 1.0 / dt);
+        let sections = params.sensors.antialias_sections(h).unwrap_or_default();
+        (h, sections)
+    });
+    let (h, platform) = match &acquisition {
+        Some((h_aa, _)) => (*h_aa, platform.advanced(params.sensors.antialias_delay_s())),
+        None => (h, platform),
     };
     let mut sim = Simulation::twin(params, h, drive, platform);
+    let every = (dt / h).round().max(1.0) as u64;
     let t_end = (len.saturating_sub(1)) as f64 * dt;
     let mut done = 0;
     // The state at rest until the run records its first sample (which it always does, at 0).
     let mut last = sim.sample();
-    let mut previous: Option<Sample> = None;
     let mut record = |s: Sample| {
-        // A step that spans several samples: the ones it skipped, interpolated.
-        if let Some(p) = previous {
-            for k in 1..grid.stride {
-                if done < len {
-                    sink(lerp_sample(&p, &s, k as f64 / grid.stride as f64));
-                    done += 1;
-                }
-            }
-        }
         if done < len {
             sink(s);
             last = s;
             done += 1;
         }
-        previous = Some(s);
     };
     // One stepping loop for both (a second closure type would compile the whole hot loop
     // once more): without the filter it records every `every` steps; with it, it runs the
     // filter at every step and records every `every`-th filtered sample.
-    let mut read = acquisition.map(|sections| Acquisition::new(&sections));
+    let mut read = acquisition.map(|(_, sections)| Acquisition::new(&sections));
     let (run_every, keep_every) = if read.is_some() {
-        (1, grid.every)
+        (1, every)
     } else {
-        (grid.every, 1)
+        (every, 1)
     };
     let mut step = 0u64;
     sim.run_until(t_end, run_every, |s| {
@@ -322,80 +310,6 @@ fn replay_samples(
         });
     }
     Ok(())
-}
-
-/// Longest RK4 step that spans several samples \[s\]: the fit's step
-/// ([`super::CalibrationOptions::fit_step_s`]'s default). Replays of a 10 kHz record that
-/// stepped at the preset's 0.5 ms moved a friction twin's ÿ in 0.5–5 Hz by several times the
-/// 10 kHz noise floor (survey draw 2020, case 2: the 20 Hz test at 5.4× its floor against
-/// 1.2× at 0.2 ms and at the record's own 0.1 ms), where at 1 kHz, whose floor is three times
-/// higher, the same step is within it. So a record sampled faster than the preset's step is
-/// replayed no coarser than the fit replays it.
-const SPANNING_STEP_MAX_S: f64 = 2.5e-4;
-
-/// How a replay steps over a record's grid: the RK4 step, how many steps make a sample
-/// (`every`), or how many samples a step spans (`stride`).
-///
-/// Where the allowed step (the preset's or the fit's, within the integrator's limits) is
-/// shorter than two samples, the step is the largest that divides the sample step and every
-/// sample is a step's end (`stride` 1). Where a record is sampled faster than that (a 10 kHz
-/// record with the fit's 0.25 ms step), the step is the largest whole number of samples
-/// within the allowed step and the samples between two steps' ends are interpolated linearly:
-/// the twin is integrated as finely as at a rate where its step divides the sample step, not
-/// 2.5 times finer only because the sensors sampled faster (a step that spans samples is at
-/// most [`SPANNING_STEP_MAX_S`]). Linear interpolation over a step
-/// `H` is exact to `(2πfH)²/8` of a component at `f`: 2·10⁻³ at the oil column's 77 Hz over
-/// 0.25 ms, 2·10⁻⁵ for the platform's motion below 25 Hz.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct ReplayGrid {
-    /// RK4 step \[s\].
-    step_s: f64,
-    /// Steps per sample (1 when a step spans samples).
-    every: u64,
-    /// Samples per step (1 when a sample takes whole steps).
-    stride: usize,
-}
-
-impl ReplayGrid {
-    fn new(allowed_s: f64, dt: f64) -> Self {
-        let samples = (allowed_s.min(SPANNING_STEP_MAX_S) / dt + 1e-9).floor();
-        if samples >= 2.0 {
-            Self {
-                step_s: samples * dt,
-                every: 1,
-                stride: samples as usize,
-            }
-        } else {
-            let step_s = step_for_rate(allowed_s, 1.0 / dt);
-            Self {
-                step_s,
-                every: (dt / step_s).round().max(1.0) as u64,
-                stride: 1,
-            }
-        }
-    }
-}
-
-/// The sample a fraction `w` of the way from `a` to `b` (linear in every channel; in contact
-/// if either is).
-fn lerp_sample(a: &Sample, b: &Sample, w: f64) -> Sample {
-    let l = |x: f64, y: f64| x + w * (y - x);
-    Sample {
-        t: l(a.t, b.t),
-        x: l(a.x, b.x),
-        xd: l(a.xd, b.xd),
-        xdd: l(a.xdd, b.xdd),
-        u: l(a.u, b.u),
-        du: l(a.du, b.du),
-        ydd: l(a.ydd, b.ydd),
-        v_in: l(a.v_in, b.v_in),
-        xv: l(a.xv, b.xv),
-        p1: l(a.p1, b.p1),
-        p2: l(a.p2, b.p2),
-        q1: l(a.q1, b.q1),
-        q2: l(a.q2, b.q2),
-        contact: a.contact || b.contact,
-    }
 }
 
 /// The data acquisition's anti-alias filter on the twin's measured channels (u, u̇, ÿ, p1, p2
@@ -779,83 +693,6 @@ pub fn replay_prepared(params: &Params, rec: &PreparedRecord) -> Result<Replay, 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The grid: at 1 kHz the fit's 0.25 ms step divides the sample step (4 steps a sample);
-    /// at 10 kHz a step spans two samples (0.2 ms, not 0.1); the preset's 0.5 ms at 10 kHz is
-    /// held to 0.25 ms (two samples); at 5 kHz a sample is one step.
-    #[test]
-    fn a_step_spans_samples_only_where_the_record_is_sampled_faster_than_it() {
-        let g = ReplayGrid::new(2.5e-4, 1e-3);
-        assert_eq!((g.every, g.stride), (4, 1));
-        assert!((g.step_s - 2.5e-4).abs() < 1e-15);
-        let g = ReplayGrid::new(2.5e-4, 1e-4);
-        assert_eq!((g.every, g.stride), (1, 2));
-        assert!((g.step_s - 2e-4).abs() < 1e-15);
-        assert_eq!(ReplayGrid::new(5e-4, 1e-4), g);
-        let g = ReplayGrid::new(2.5e-4, 2e-4);
-        assert_eq!((g.every, g.stride), (1, 1));
-        assert!((g.step_s - 2e-4).abs() < 1e-15);
-        // 2 kHz with the preset's step: one step a sample, as before.
-        let g = ReplayGrid::new(5e-4, 5e-4);
-        assert_eq!((g.every, g.stride), (1, 1));
-    }
-
-    /// A 10 kHz record replayed with steps that span two samples (0.2 ms, the samples between
-    /// interpolated) against the same record replayed with a step at every sample (0.1 ms, the
-    /// reference): a valve sine at 10 Hz and a platform moving, every channel within 0.1 % of
-    /// its own RMS about the mean (measured: 1·10⁻⁴), u within 1 µm (a 12-bit sensor on a
-    /// 70 mm stroke resolves 17 µm). Holding each step's value instead of interpolating
-    /// would be off by 0.6 % of u's RMS at 10 Hz.
-    #[test]
-    fn a_replay_whose_steps_span_samples_keeps_to_one_stepped_at_every_sample() {
-        let dt = 1e-4;
-        let n = 5001;
-        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
-        let tau = std::f64::consts::TAU;
-        let record = Record {
-            path: "fast.csv".into(),
-            metadata: vec![],
-            dt,
-            v_in: Some(t.iter().map(|t| 2.0 * (tau * 10.0 * t).sin()).collect()),
-            u: Some(vec![0.0; n]),
-            x: None,
-            xdd: Some(t.iter().map(|t| 1.5 * (tau * 2.0 * t).sin()).collect()),
-            ydd: Some(vec![0.0; n]),
-            p1: None,
-            p2: None,
-            t,
-            warnings: vec![],
-        };
-        let prepared = PreparedRecord::new(&record, &MetricOptions::default()).unwrap();
-        let mut fine = Params::default();
-        fine.numerics.max_step_s = 1e-4;
-        let mut spanning = Params::default();
-        spanning.numerics.max_step_s = 2.5e-4;
-        assert_eq!(ReplayGrid::new(2.5e-4, dt).stride, 2);
-        let a = prepared.simulate(&fine).unwrap();
-        let b = prepared.simulate(&spanning).unwrap();
-        assert_eq!((a.u.len(), b.u.len()), (n, n));
-        let spread = |v: &[f64]| {
-            let m = v.iter().sum::<f64>() / v.len() as f64;
-            rms(&v.iter().map(|x| x - m).collect::<Vec<_>>())
-        };
-        for (name, x, y) in [
-            ("u", &a.u, &b.u),
-            ("ydd", &a.ydd, &b.ydd),
-            ("p1", &a.p1, &b.p1),
-            ("p2", &a.p2, &b.p2),
-        ] {
-            let diff: Vec<f64> = x.iter().zip(y.iter()).map(|(p, q)| p - q).collect();
-            let (d, s) = (rms(&diff), spread(x));
-            assert!(d <= 1e-3 * s, "{name}: {d:e} against its RMS {s:e}");
-        }
-        let worst_u =
-            a.u.iter()
-                .zip(&b.u)
-                .map(|(p, q)| (p - q).abs())
-                .fold(0.0, f64::max);
-        assert!(worst_u < 1e-6, "u differs by {worst_u:e} m");
-    }
 
     /// The written replay holds the record's times and the twin's channels, number for
     /// number, in the documented columns.
