@@ -100,6 +100,7 @@ pub mod replay;
 pub mod report;
 pub mod result;
 pub mod ringing;
+mod sensors;
 pub mod stages;
 pub mod starts;
 pub mod testdata;

@@ -16,9 +16,9 @@ use super::progress::{Monitor, Stage};
 use super::raw_error::{RawErrorReport, raw_error_report};
 use super::replay::Replay;
 use super::result::{
-    AddedEffect, CalibrationReport, ErrorSummary, PaperBaseline, RAW_NRMSE, RawNrmse,
-    SensorEstimate, Verdict,
+    AddedEffect, CalibrationReport, ErrorSummary, PaperBaseline, RAW_NRMSE, RawNrmse, Verdict,
 };
+use super::sensors::{keep_needed_sensors, set_back_exact_sensors};
 use super::{CalibrationOptions, IdentifyError};
 use crate::params::Params;
 
@@ -290,40 +290,6 @@ pub fn verdict(effects_added: bool, after: &RawErrorReport) -> Verdict {
     }
 }
 
-/// Sensor properties of `fit` within 3σ of exact are exact: set back in its parameters, not
-/// applied, not listed. Returns the others, as reported, and a note for each one set back
-/// (its estimate, so that a property near the limit of detection is not silently lost).
-fn set_back_exact_sensors(fit: &mut FitResult) -> (Vec<SensorEstimate>, Vec<String>) {
-    let mut sensors = Vec::new();
-    let mut notes = Vec::new();
-    for v in &fit.values {
-        if let Some((channel, kind, exact)) = v.knob.sensor() {
-            if (v.value - exact).abs() > 3.0 * v.std && v.std.is_finite() {
-                sensors.push(SensorEstimate {
-                    channel: channel.into(),
-                    kind: kind.into(),
-                    value: v.value,
-                    uncertainty: v.std,
-                });
-            } else {
-                if v.std.is_finite() {
-                    // In the parameter table's display unit (a lag in ms).
-                    let name = v.knob.name();
-                    notes.push(format!(
-                        "sensor {channel} {kind}: estimated {}, {:.1}σ from exact ({}), \
-                         within 3σ: not reported, the replays take it as exact",
-                        super::units::format_parameter(name, v.value, v.std),
-                        (v.value - exact).abs() / v.std,
-                        super::units::format_value(name, exact),
-                    ));
-                }
-                v.knob.spec().set_unchecked(&mut fit.params, exact);
-            }
-        }
-    }
-    (sensors, notes)
-}
-
 /// The declared parameters (Cd, τ, mass) of a fit, with their uncertainties.
 fn declared_values(fit: &FitResult) -> Vec<FittedValue> {
     fit.values
@@ -383,12 +349,32 @@ pub fn report(
     let before_params = with_numerics_of(found.declared.fit.params, params);
     let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
-    let (sensors, sensor_notes) = set_back_exact_sensors(&mut current);
+    // The fit with every sensor property it could size (a finite uncertainty) as estimated.
+    let mut estimated = current.clone();
+    for v in &current.values {
+        if let Some((_, _, exact)) = v.knob.sensor().filter(|_| !v.std.is_finite()) {
+            v.knob.spec().set_unchecked(&mut estimated.params, exact);
+        }
+    }
+    let (mut sensors, mut sensor_notes) = set_back_exact_sensors(&mut current);
     // The calibrated twin's replays; when they ring out of time with the records, the mass
     // is searched again for that ringing (and the replays are those of the mass kept).
-    let replays_after = replay_all(&current.params, all)?;
+    let mut replays_after = replay_all(&current.params, all)?;
     let sims_after: Vec<_> = replays_after.iter().map(|r| &r.sim).collect();
-    let raw_error_after = raw_error_report(all, &sims_after, options.raw_error_limit);
+    let mut raw_error_after = raw_error_report(all, &sims_after, options.raw_error_limit);
+    // Sensor properties within 3σ of exact that the raw error needs are kept as estimated
+    // (the twin judged is the twin delivered).
+    let needs_sensors = !raw_error_after.at_floor() && current.params != estimated.params;
+    if needs_sensors
+        && let Some(kept) =
+            keep_needed_sensors(&estimated, &raw_error_after, all, options.raw_error_limit)?
+    {
+        sensor_notes = vec![kept.note];
+        sensors = kept.sensors;
+        current = kept.fit;
+        replays_after = kept.replays;
+        raw_error_after = kept.raw;
+    }
     let (replays_after, raw_error_after, ringing_note) = match super::ringing::refine_for_ringing(
         &mut current,
         all,

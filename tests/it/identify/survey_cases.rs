@@ -295,3 +295,46 @@ fn a_leakage_growth_hidden_by_soft_hoses_is_fitted_again_after_the_search() {
     );
     assert_leakage_on_the_rigs(2028, 8, &r);
 }
+
+/// Case 4 of the draw 2020 (no plant effect; the accelerometer reads 0.5 % high, with an
+/// offset of 0.22 m/s²): the scale came out 1.0050 ± 0.0024, 2.1σ from exact, and was set
+/// back to 1, which left the 10 Hz test's ÿ at 3.9× its floor in 5–25 Hz. The verdict was
+/// then judged on the twin before the set-back (`no_missing_effect`) while the twin
+/// calibrated.toml carried was above its floor. Judged on the delivered twin (2026-11-30), the
+/// case read `unexplained`; a sensor property the raw error needs is now kept as estimated,
+/// reported, and the delivered twin is at its floor.
+#[test]
+fn an_accelerometer_scale_the_raw_error_needs_is_kept_though_within_3_sigma() {
+    let (c, r) = survey_case(2020, 4);
+    let s = super::rig::summary(&r);
+    assert_eq!(r.verdict, Verdict::NoMissingEffect, "{s}; {:?}", r.notes);
+    assert!(
+        r.raw_error_after.at_floor(),
+        "{}",
+        r.raw_error_after.summary()
+    );
+    assert!(effects_right(&c, &r), "{s}; sensors {:?}", r.sensors);
+    let truth = c.fx.ydd_scale.expect("a scale error");
+    let scale = r
+        .sensors
+        .iter()
+        .find(|e| e.channel == "ydd" && e.kind == "scale")
+        .expect("the scale reported");
+    assert!(
+        (scale.value - truth).abs() <= 3.0 * scale.uncertainty,
+        "scale {} ± {}, truth {truth}",
+        scale.value,
+        scale.uncertainty
+    );
+    assert!(
+        r.notes.iter().any(|n| n.contains("kept as estimated")),
+        "{:?}",
+        r.notes
+    );
+    // Only what the raw error needs: no stroke lag on a rig without one.
+    assert!(
+        c.fx.u_lag_s.is_some() || !r.sensors.iter().any(|e| e.kind == "lag"),
+        "{:?}",
+        r.sensors
+    );
+}
