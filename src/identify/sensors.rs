@@ -21,12 +21,7 @@ pub(super) fn set_back_exact_sensors(fit: &mut FitResult) -> (Vec<SensorEstimate
     for v in &fit.values {
         if let Some((channel, kind, exact)) = v.knob.sensor() {
             if (v.value - exact).abs() > 3.0 * v.std && v.std.is_finite() {
-                sensors.push(SensorEstimate {
-                    channel: channel.into(),
-                    kind: kind.into(),
-                    value: v.value,
-                    uncertainty: v.std,
-                });
+                sensors.extend(estimate_of(v));
             } else {
                 if v.std.is_finite() {
                     // In the parameter table's display unit (a lag in ms).
@@ -148,13 +143,28 @@ fn sensor_estimates(fit: &FitResult) -> Vec<SensorEstimate> {
     fit.values
         .iter()
         .filter(|v| v.std.is_finite())
-        .filter_map(|v| {
-            v.knob.sensor().map(|(channel, kind, _)| SensorEstimate {
-                channel: channel.into(),
-                kind: kind.into(),
-                value: v.value,
-                uncertainty: v.std,
-            })
-        })
+        .filter_map(estimate_of)
         .collect()
+}
+
+/// `v` as a sensor estimate, if it is a sensor property.
+fn estimate_of(v: &FittedValue) -> Option<SensorEstimate> {
+    v.knob.sensor().map(|(channel, kind, _)| SensorEstimate {
+        channel: channel.into(),
+        kind: kind.into(),
+        value: v.value,
+        uncertainty: v.std,
+    })
+}
+
+/// `fit` with every sensor property it could size (a finite uncertainty) as estimated and
+/// the others exact: the twin [`keep_needed_sensors`] tries.
+pub(super) fn with_sized_sensors(fit: &FitResult) -> FitResult {
+    let mut sized = fit.clone();
+    for v in &fit.values {
+        if let Some((_, _, exact)) = v.knob.sensor().filter(|_| !v.std.is_finite()) {
+            v.knob.spec().set_unchecked(&mut sized.params, exact);
+        }
+    }
+    sized
 }

@@ -18,7 +18,7 @@ use super::replay::Replay;
 use super::result::{
     AddedEffect, CalibrationReport, ErrorSummary, PaperBaseline, RAW_NRMSE, RawNrmse, Verdict,
 };
-use super::sensors::{keep_needed_sensors, set_back_exact_sensors};
+use super::sensors::{keep_needed_sensors, set_back_exact_sensors, with_sized_sensors};
 use super::{CalibrationOptions, IdentifyError};
 use crate::params::Params;
 
@@ -349,13 +349,7 @@ pub fn report(
     let before_params = with_numerics_of(found.declared.fit.params, params);
     let mut current = found.search.current;
     current.params = with_numerics_of(current.params, params);
-    // The fit with every sensor property it could size (a finite uncertainty) as estimated.
-    let mut estimated = current.clone();
-    for v in &current.values {
-        if let Some((_, _, exact)) = v.knob.sensor().filter(|_| !v.std.is_finite()) {
-            v.knob.spec().set_unchecked(&mut estimated.params, exact);
-        }
-    }
+    let estimated = with_sized_sensors(&current);
     let (mut sensors, mut sensor_notes) = set_back_exact_sensors(&mut current);
     // The calibrated twin's replays; when they ring out of time with the records, the mass
     // is searched again for that ringing (and the replays are those of the mass kept).
