@@ -160,6 +160,30 @@ impl Record {
         }
     }
 
+    /// Every `k`-th sample of the record, from the first (`k` ≥ 1; 1 gives the record
+    /// itself), every column alike: the record a data acquisition sampling `k` times slower
+    /// would have written, without an anti-alias filter (each kept sample is the recorded one,
+    /// noise and quantisation included; the noise's variance per sample is unchanged).
+    pub fn decimated(&self, k: usize) -> Record {
+        let k = k.max(1);
+        let take = |v: &Vec<f64>| v.iter().step_by(k).copied().collect::<Vec<f64>>();
+        let col = |c: &Option<Vec<f64>>| c.as_ref().map(take);
+        Record {
+            t: take(&self.t),
+            v_in: col(&self.v_in),
+            u: col(&self.u),
+            x: col(&self.x),
+            xdd: col(&self.xdd),
+            ydd: col(&self.ydd),
+            p1: col(&self.p1),
+            p2: col(&self.p2),
+            path: self.path.clone(),
+            metadata: self.metadata.clone(),
+            dt: self.dt * k as f64,
+            warnings: self.warnings.clone(),
+        }
+    }
+
     /// The column called `name` (one of [`COLUMNS`]), if present.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
         match name {

@@ -734,3 +734,38 @@ fn text_errors_across_chunk_ends_name_the_whole_file_position() {
         assert_eq!(r.t, [0.0, 0.01, 0.02, 0.03]);
     }
 }
+
+/// Every k-th sample from the first, every column alike, the step k times longer; k = 1
+/// gives the record itself.
+#[test]
+fn a_decimated_record_keeps_every_kth_sample_of_every_column() {
+    let n = 11;
+    let col = |a: f64| Some((0..n).map(|i| a * i as f64).collect::<Vec<f64>>());
+    let r = Record {
+        path: "fast.csv".into(),
+        metadata: vec![("sample_rate_hz".into(), "10000".into())],
+        dt: 1e-4,
+        t: (0..n).map(|i| i as f64 * 1e-4).collect(),
+        v_in: col(1.0),
+        u: col(2.0),
+        x: None,
+        xdd: col(3.0),
+        ydd: col(4.0),
+        p1: col(5.0),
+        p2: None,
+        warnings: vec![],
+    };
+    let d = r.decimated(5);
+    assert_eq!(d.len(), 3);
+    assert!((d.dt - 5e-4).abs() < 1e-18);
+    assert_eq!(d.t, vec![0.0, 5e-4, 1e-3]);
+    assert_eq!(d.u, Some(vec![0.0, 10.0, 20.0]));
+    assert_eq!(d.p1, Some(vec![0.0, 25.0, 50.0]));
+    assert_eq!((d.x, d.p2), (None, None));
+    assert_eq!(d.metadata, r.metadata);
+    let same = r.decimated(1);
+    assert_eq!(
+        (same.t, same.ydd, same.dt),
+        (r.t.clone(), r.ydd.clone(), r.dt)
+    );
+}
