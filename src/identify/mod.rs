@@ -65,7 +65,10 @@
 //! ([`effects::rank_candidates`], whose fits start from [`starts::multi_start`],
 //! [`effects::try_effect`], looped by [`effects::search`], which ends with the profile of a
 //! hose/chamber split, [`profile::hose_split`]),
-//! and [`stages::report`] (final replays, errors, diagnostics, verdict). One cancel flag
+//! and [`stages::report`] (final replays, errors, diagnostics, verdict). Records sampled at
+//! 4 kHz and faster are searched on every k-th sample (about 2 kHz) and fitted and reported
+//! on every sample ([`search_rate`]), and calibrated again on every sample where the two
+//! disagree about the raw error's floor. One cancel flag
 //! stops it at the next replay; a [`CalibrationObserver`] hears each stage's [`Progress`].
 //! [`calibrate`] is the same with a callback that gets the stage as text and returns `false`
 //! to cancel.
@@ -91,6 +94,7 @@ mod evaluate;
 pub mod figures;
 pub mod fit;
 pub mod paper;
+mod pass;
 pub mod profile;
 pub mod progress;
 pub mod proposed;
@@ -100,6 +104,7 @@ pub mod replay;
 pub mod report;
 pub mod result;
 pub mod ringing;
+pub mod search_rate;
 mod sensors;
 pub mod stages;
 pub mod starts;
@@ -108,7 +113,8 @@ pub mod units;
 
 use crate::dataset::Record;
 use crate::params::Params;
-use fit::{Evaluator, Knob};
+use fit::Knob;
+use pass::{Pass, library_pass};
 use replay::{MetricOptions, PreparedRecord, Replay, replay_prepared};
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -348,28 +354,71 @@ pub fn calibrate_with(
             1e3 * sensors.antialias_delay_s()
         ));
     }
-    let mut campaign = data::split(checked.records);
-    let nominal = stages::nominal(params, &campaign, &monitor)?;
-    let paper = stages::paper(
-        params,
-        &stages::fit_params(params, options),
-        &campaign,
-        &monitor,
-    )?;
+    let full = data::split(checked.records);
+    // Records sampled far faster than the twin needs: the search reads every k-th sample
+    // ([`search_rate`]). When that gives another verdict than every sample would, the
+    // campaign is calibrated again on every sample (the second round cannot ask for a third).
+    let mut coarse = search_rate::coarse_campaign(&records, &full, options)?;
+    loop {
+        match calibrate_campaign(
+            params,
+            &full,
+            coarse.take(),
+            notes.clone(),
+            options,
+            &monitor,
+        )? {
+            Outcome::Done(report) => return Ok(report),
+            Outcome::Again(why) => notes.push(why),
+        }
+    }
+}
+
+/// What calibrating a campaign gives: the report, or why the campaign is calibrated again on
+/// every sample (only after a search that read fewer, [`search_rate`]).
+enum Outcome {
+    Done(CalibrationReport),
+    Again(String),
+}
+
+/// Calibrates the checked, split records `full`; the search reads `coarse` (with its note)
+/// when given, the final fits and the report read `full` ([`search_rate`]).
+fn calibrate_campaign(
+    params: &Params,
+    full: &data::Campaign,
+    coarse: Option<(data::Campaign, String)>,
+    mut notes: Vec<String>,
+    options: &CalibrationOptions,
+    monitor: &progress::Monitor<'_>,
+) -> Result<Outcome, IdentifyError> {
+    let nominal = stages::nominal(params, full, monitor)?;
+    let paper = stages::paper(params, &stages::fit_params(params, options), full, monitor)?;
     if paper.baseline.is_none() {
         notes.push("no open-loop sine test found: the fit starts from the nominal Cd and τ".into());
     }
-    let mut pass = match library_pass(params, &campaign, &paper.start, options, &monitor)? {
+    // The campaign the search reads: every k-th sample of fast records, else the records.
+    let (mut campaign, coarse_note) = match coarse {
+        Some((c, note)) => (c, Some(note)),
+        None => (full.clone(), None),
+    };
+    let mut pass = match library_pass(params, &campaign, &paper.start, options, monitor)? {
         Pass::Done(p) => p,
+        Pass::Undetermined(_) if coarse_note.is_some() => {
+            return Ok(Outcome::Again(
+                "read on fewer samples, the records left Cd or τ undetermined: searched again \
+                 on every sample"
+                    .into(),
+            ));
+        }
         Pass::Undetermined(declared) => {
             notes.extend(declared.notes.iter().cloned());
-            return Ok(evaluate::insufficient_report(
+            return Ok(Outcome::Done(evaluate::insufficient_report(
                 params,
                 campaign.all,
                 nominal.replays,
                 declared.undetermined,
                 notes,
-            ));
+            )));
         }
     };
     // A Cd drifting through the campaign: the library fitted one Cd to every record and may
@@ -382,7 +431,7 @@ pub fn calibrate_with(
         // 20 Hz test's Cd read 5 % low beside `compliance`).
         monitor.enter(Stage::Drifts, 1);
         let declared_params = pass.declared.fit.params;
-        let (plain, _) = drift::find(&declared_params, &campaign.all, pass.bic.ratio(), &monitor)?;
+        let (plain, _) = drift::find(&declared_params, &campaign.all, pass.bic.ratio(), monitor)?;
         monitor.advance();
         let (per_record, campaign_cd) = match plain.iter().find(|p| p.parameter == d.parameter) {
             Some(p) => (&p.per_record, declared_params.plant.valve.cd),
@@ -390,7 +439,7 @@ pub fn calibrate_with(
         };
         let mut own = campaign.clone();
         drift::give_records_their_cd(&mut own, per_record, campaign_cd);
-        if let Pass::Done(again) = library_pass(params, &own, &paper.start, options, &monitor)?
+        if let Pass::Done(again) = library_pass(params, &own, &paper.start, options, monitor)?
             && let Some(d2) = again.drifts.iter().find(|d| d.parameter == Knob::Cd.name())
         {
             // The replays of the report use the per-record values reported (and written to
@@ -424,6 +473,20 @@ pub fn calibrate_with(
             pass = again;
         }
     }
+    // Read on fewer samples: every fit again on every sample, and the report on every sample.
+    let mut coarse_at_floor = false;
+    if let Some(note) = coarse_note {
+        coarse_at_floor = search_rate::at_floor(
+            &campaign,
+            &evaluate::with_numerics_of(pass.final_params, params),
+            options,
+        )?;
+        let mut fine = full.clone();
+        search_rate::copy_cd_factors(&campaign, &mut fine);
+        search_rate::refit_on_every_sample(&mut pass, &fine, monitor)?;
+        notes.push(note);
+        campaign = fine;
+    }
     notes.extend(pass.notes);
     let found = stages::Findings {
         campaign,
@@ -436,8 +499,17 @@ pub fn calibrate_with(
         bic: pass.bic,
         notes,
     };
-    let report = stages::report(params, found, options, &monitor)?;
-    Ok(refuse_undetermined(step_within_limits(report)))
+    let report = stages::report(params, found, options, monitor)?;
+    if coarse_at_floor && !report.raw_error_after.at_floor() {
+        return Ok(Outcome::Again(format!(
+            "read on fewer samples the calibrated twin was at its raw-error floor, on every \
+             sample it is not ({}): searched again on every sample",
+            report.raw_error_after.summary()
+        )));
+    }
+    Ok(Outcome::Done(refuse_undetermined(step_within_limits(
+        report,
+    ))))
 }
 
 /// The calibrated parameters with a step their own law can run at. Replays take the preset's
@@ -472,129 +544,6 @@ fn step_within_limits(mut report: CalibrationReport) -> CalibrationReport {
         p.numerics.max_step_s = step;
     }
     report
-}
-
-/// One calibration of the campaign by the library from `start`: the declared fit, the effect
-/// search, the search beyond the library and the drifts.
-struct LibraryPass {
-    declared: stages::Declared,
-    bic: fit::Bic,
-    search: effects::EffectSearch,
-    proposal: Option<proposed::Proposal>,
-    /// The parameters the drifts were judged at (the proposal's, else the search's).
-    final_params: Params,
-    drifts: Vec<result::Drift>,
-    notes: Vec<String>,
-}
-
-/// A [`LibraryPass`], or the declared fit that left Cd or τ undetermined.
-enum Pass {
-    Done(Box<LibraryPass>),
-    Undetermined(Box<stages::Declared>),
-}
-
-/// Runs a [`LibraryPass`] on `campaign` (its records with the Cd factors they carry).
-fn library_pass(
-    params: &Params,
-    campaign: &data::Campaign,
-    start: &Params,
-    options: &CalibrationOptions,
-    monitor: &progress::Monitor<'_>,
-) -> Result<Pass, IdentifyError> {
-    let ev = Evaluator {
-        records: &campaign.fit,
-        monitor,
-    };
-    let declared = stages::declared_fit(&ev, start, params.plant.body.mass_kg, options)?;
-    let mut notes = declared.notes.clone();
-    let bic = fit::Bic::at(&ev, &declared.fit)?;
-    let cx = context::SearchContext {
-        ev: &ev,
-        bic,
-        validation: &campaign.validation,
-        options,
-    };
-    let search = effects::search(&cx, campaign, params, &declared.fit, &declared.knobs)?;
-    if !declared.undetermined.is_empty() {
-        // An effect can hide Cd and τ from the declared fit (an overlap as wide as the small
-        // tests' spool travel): they count as determined only if the search added an effect
-        // and its fit determines both.
-        let determined =
-            !search.added.is_empty() && !search.current.values.iter().any(stages::undetermined);
-        if !determined {
-            return Ok(Pass::Undetermined(Box::new(declared)));
-        }
-        notes.push(format!(
-            "the declared parameters alone left {} undetermined; with the effect(s) added \
-             they are determined",
-            declared.undetermined.len()
-        ));
-    }
-    notes.extend(search.notes.iter().cloned());
-    let proposal = beyond_the_library(params, &cx, campaign, &search)?;
-    if let Some(p) = &proposal {
-        notes.extend(p.notes.iter().cloned());
-    }
-    monitor.enter(Stage::Drifts, 1);
-    let final_params = proposal
-        .as_ref()
-        .map_or(search.current.params, |p| p.fit.params);
-    let (mut drifts, drift_notes) =
-        drift::find(&final_params, &campaign.all, bic.ratio(), monitor)?;
-    notes.extend(drift_notes);
-    // An effect added to follow a drifting Cd bends each record's Cd towards itself (supply
-    // sag raises the large tests' Cd), so that the drift no longer looks ordered. Where the
-    // library's twin still leaves the raw error above its limit, each record's Cd is also
-    // read where no effect was added yet (the declared fit); a drift found there is
-    // calibrated as one by `calibrate_with`, which judges the effects again with each
-    // record's own Cd.
-    if !search.added.is_empty()
-        && !drifts.iter().any(|d| d.parameter == Knob::Cd.name())
-        && !context::raw_error_at(&cx, campaign, params, &final_params)?.at_floor()
-    {
-        let (plain, _) = drift::find(&declared.fit.params, &campaign.all, bic.ratio(), monitor)?;
-        if let Some(d) = plain.into_iter().find(|d| d.parameter == Knob::Cd.name()) {
-            notes.push(format!(
-                "with {} added the raw error stays above its limit; read before any effect \
-                 was added, `cd` drifts through the campaign",
-                search
-                    .added
-                    .iter()
-                    .map(|a| format!("`{}`", a.effect.name()))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-            drifts.push(d);
-        }
-    }
-    monitor.advance();
-    Ok(Pass::Done(Box::new(LibraryPass {
-        declared,
-        bic,
-        search,
-        proposal,
-        final_params,
-        drifts,
-        notes,
-    })))
-}
-
-/// The search beyond the library ([`proposed`]), run only when the library's final twin,
-/// replayed at the preset's step, leaves a raw residual above the floor on some record
-/// ([`raw_error`]), and when [`CalibrationOptions::max_proposed`] allows it.
-fn beyond_the_library(
-    params: &Params,
-    cx: &context::SearchContext<'_>,
-    campaign: &data::Campaign,
-    search: &effects::EffectSearch,
-) -> Result<Option<proposed::Proposal>, IdentifyError> {
-    if cx.options.max_proposed == 0 {
-        return Ok(None);
-    }
-    if context::raw_error_at(cx, campaign, params, &search.current.params)?.at_floor() {
-        return Ok(None);
-    }
-    proposed::search(cx, &search.current, &search.knobs)
 }
 
 /// The final fit's own uncertainty decides as the declared fit's does (issue 21): a Cd or τ

@@ -45,6 +45,9 @@ pub enum Stage {
     /// The mass or the oil's stiffness searched again for the oil column's ringing
     /// ([`super::ringing`]; only when the calibrated twin rings out of time with the records).
     Ringing,
+    /// The search's fits again on every sample, for records the search read at a lower rate
+    /// ([`super::search_rate`]).
+    RecordRate,
     /// Final replays at the preset's step, errors, diagnostics and the verdict.
     Report,
 }
@@ -52,7 +55,10 @@ pub enum Stage {
 impl Stage {
     /// Whether the Jacobians of the stage's fits count as its work (`done`).
     fn counts_jacobians(self) -> bool {
-        matches!(self, Stage::DeclaredFit | Stage::Refit { .. })
+        matches!(
+            self,
+            Stage::DeclaredFit | Stage::Refit { .. } | Stage::RecordRate
+        )
     }
 }
 
@@ -71,6 +77,7 @@ impl fmt::Display for Stage {
             Stage::Ringing => {
                 f.write_str("the mass or the oil's stiffness against the oil column's ringing")
             }
+            Stage::RecordRate => f.write_str("the fits again on every sample of the records"),
             Stage::Report => f.write_str("diagnostics"),
         }
     }

@@ -1,0 +1,254 @@
+//! Records sampled far faster than the twin needs: the search reads every k-th sample, the
+//! final fit and every reported error read every sample.
+//!
+//! The replay steps the twin at every sample of a record (at most the preset's 0.5 ms, less
+//! where friction or the integrator's limit asks for it). A 10 kHz record therefore costs five
+//! times the steps of a 2 kHz one, and a calibration replays its campaign several hundred
+//! times: a ten-record, 60 s campaign at 10 kHz took 48 s with no effect in it and two minutes
+//! with friction, where the same campaign at 1 or 2 kHz takes 9–15 s. Steps that span several
+//! samples, with the samples between interpolated, were tried and reverted: at a friction's
+//! stick–slip reversals the interpolated samples missed the raw record by several times a
+//! low-noise 10 kHz floor, and the verdict turned wrong.
+//!
+//! So a record sampled at [`MIN_RATE_FOR_COARSE_SEARCH_HZ`] or more is searched on every k-th
+//! sample, `k = ⌊rate / SEARCH_RATE_HZ⌋` ([`Record::decimated`]): exactly the record a
+//! data acquisition sampling at about 2 kHz would have written, noise and quantisation
+//! included, with no filter in between (the twin's signals lie below 1 kHz: its oil column
+//! near 77 Hz, friction's reversals over a few milliseconds; only the sensors' white noise
+//! folds into the lower band, where it reads as a 2 kHz record's noise). The whole loop runs
+//! on those records as on any 2 kHz campaign — the declared fit, the effect search, the
+//! search beyond the library, the drifts — and then:
+//!
+//! 1. every fit the report shows (the declared fit, the library's, the proposal's) is fitted
+//!    again on every sample from where the search left it ([`refit_on_every_sample`]), so
+//!    values and uncertainties are those of the records as recorded (a sensor filter that runs
+//!    on the samples, such as the stroke sensor's lag, delays by `T − Δt/2` of the record's own
+//!    step);
+//! 2. the report stage — replays, the raw error and the verdict, the sensors' rule, the
+//!    ringing search — runs on every sample, as without this module;
+//! 3. if the twin the search delivered was at its raw-error floor on the read samples but is
+//!    not on every sample (10 kHz floors are √5 lower than 2 kHz floors in every band below
+//!    the search's Nyquist), the campaign is calibrated again from the start on every sample,
+//!    and a note says why. The faster path is taken only where it gives the verdict the slow
+//!    one would.
+//!
+//! The evidence of each added effect (its ΔBIC, its share of the residual, the held-out error)
+//! is the search's, on the read samples; a note in the report says so.
+
+use super::data::{self, Campaign};
+use super::evaluate::replay_all;
+use super::fit::{self, Bic, Evaluator, Knob};
+use super::pass::LibraryPass;
+use super::progress::{Monitor, Stage};
+use super::raw_error::raw_error_report;
+use super::replay::SimChannels;
+use super::{CalibrationOptions, IdentifyError};
+use crate::dataset::Record;
+use crate::params::Params;
+
+/// About the rate the search reads a fast record at \[Hz\]: a record is read every
+/// `⌊rate / SEARCH_RATE_HZ⌋`-th sample. 2 kHz is a rate the loop is proven at (the second demo
+/// campaign; the randomised rigs at 1 kHz and 200 Hz), and one where the twin's step (0.5 ms,
+/// 0.25 ms with a stiff friction) still fits the sample step.
+pub const SEARCH_RATE_HZ: f64 = 2000.0;
+
+/// Lowest sample rate at which a record is searched on fewer samples than it has \[Hz\]: twice
+/// [`SEARCH_RATE_HZ`], so that at least every second sample is dropped.
+pub const MIN_RATE_FOR_COARSE_SEARCH_HZ: f64 = 2.0 * SEARCH_RATE_HZ;
+
+/// Jacobians of each fit on every sample. The search's minimum on the read samples lies
+/// within a fraction of a standard uncertainty of the one on every sample, so two steps
+/// (and the covariance at the last) reach it.
+pub const REFIT_JACOBIANS: usize = 2;
+
+/// How many samples the search steps over in a record sampled at `rate_hz` (1: it reads
+/// every one).
+pub fn read_every(rate_hz: f64) -> usize {
+    if rate_hz.is_finite() && rate_hz >= MIN_RATE_FOR_COARSE_SEARCH_HZ {
+        (rate_hz / SEARCH_RATE_HZ).floor() as usize
+    } else {
+        1
+    }
+}
+
+/// The campaign the search reads, when some record is sampled at
+/// [`MIN_RATE_FOR_COARSE_SEARCH_HZ`] or more: every record read every [`read_every`]-th
+/// sample, prepared and split as `full` is, with the note the report gives. `None` when every
+/// record is read whole, or when the records so read would not pass the data check that the
+/// records as recorded passed (then the search reads every sample).
+pub fn coarse_campaign(
+    records: &[Record],
+    full: &Campaign,
+    options: &CalibrationOptions,
+) -> Result<Option<(Campaign, String)>, IdentifyError> {
+    let every: Vec<usize> = records
+        .iter()
+        .map(|r| read_every(r.sample_rate_hz()))
+        .collect();
+    if every.iter().all(|&k| k == 1) {
+        return Ok(None);
+    }
+    let read: Vec<Record> = records
+        .iter()
+        .zip(&every)
+        .map(|(r, &k)| r.decimated(k))
+        .collect();
+    let checked = data::check(&read, options)?;
+    if !checked.missing.is_empty() || checked.records.len() != full.all.len() {
+        return Ok(None);
+    }
+    let coarse = data::split(checked.records);
+    // One phrase per sample rate: "the 10 records sampled at 10000 Hz on every 5th sample
+    // (2000 Hz)".
+    let mut groups: Vec<(f64, usize, usize)> = Vec::new();
+    for (r, &k) in records.iter().zip(&every).filter(|(_, k)| **k > 1) {
+        let rate = r.sample_rate_hz();
+        match groups
+            .iter_mut()
+            .find(|g| g.1 == k && (g.0 / rate - 1.0).abs() < 0.01)
+        {
+            Some(g) => g.2 += 1,
+            None => groups.push((rate, k, 1)),
+        }
+    }
+    let read: Vec<String> = groups
+        .iter()
+        .map(|&(rate, k, n)| {
+            format!(
+                "{} sampled at {} Hz on every {} sample ({} Hz)",
+                if n == 1 {
+                    "the record".to_string()
+                } else {
+                    format!("the {n} records")
+                },
+                crate::format::general(rate.round()),
+                ordinal(k),
+                crate::format::general((rate / k as f64).round())
+            )
+        })
+        .collect();
+    let whole = every.iter().filter(|&&k| k == 1).count();
+    let note = format!(
+        "sampled faster than the search needs: the effect search read {}{} — the records an \
+         acquisition at that rate would have written; the declared fit, the library's and \
+         any proposal's were then fitted again on every sample, and every error, the verdict \
+         included, is on every sample. The evidence of each effect (ΔBIC, share of the \
+         residual, held-out error) is the search's",
+        read.join(", "),
+        if whole > 0 {
+            format!(" and the other {whole} whole")
+        } else {
+            String::new()
+        }
+    );
+    Ok(Some((coarse, note)))
+}
+
+/// `2nd`, `3rd`, `4th`, … `21st`.
+fn ordinal(k: usize) -> String {
+    let suffix = match (k % 10, k % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{k}{suffix}")
+}
+
+/// Gives the records of `to` the per-record Cd factors (a drift's) of the records of the same
+/// name in `from`.
+pub fn copy_cd_factors(from: &Campaign, to: &mut Campaign) {
+    for rec in [&mut to.all, &mut to.fit, &mut to.validation]
+        .into_iter()
+        .flat_map(|p| p.iter_mut())
+    {
+        if let Some(r) = from.all.iter().find(|r| r.name == rec.name) {
+            rec.cd_factor = r.cd_factor;
+        }
+    }
+}
+
+/// Whether the twin `p` is at its raw-error floor on `campaign` (replayed at the preset's
+/// step, as the verdict replays it).
+pub fn at_floor(
+    campaign: &Campaign,
+    p: &Params,
+    options: &CalibrationOptions,
+) -> Result<bool, IdentifyError> {
+    let reps = replay_all(p, &campaign.all)?;
+    let sims: Vec<&SimChannels> = reps.iter().map(|r| &r.sim).collect();
+    Ok(raw_error_report(&campaign.all, &sims, options.raw_error_limit).at_floor())
+}
+
+/// Fits the pass's fits (the declared one, the library's and the proposal's) again on the
+/// fit records of `fine`, each from where the search left it, with the same knobs and at
+/// most [`REFIT_JACOBIANS`] Jacobians; the criterion's counts are taken on `fine` too. A
+/// drifting Cd's per-record values move with the campaign's Cd, so that each record keeps
+/// the factor its replays use (`fine` carries the search's factors, [`copy_cd_factors`]).
+pub(super) fn refit_on_every_sample(
+    pass: &mut LibraryPass,
+    fine: &Campaign,
+    monitor: &Monitor<'_>,
+) -> Result<(), IdentifyError> {
+    let fits = 2 + usize::from(pass.proposal.is_some());
+    let cd_before = pass.final_params.plant.valve.cd;
+    monitor.enter(Stage::RecordRate, fits * (REFIT_JACOBIANS + 1));
+    let ev = Evaluator {
+        records: &fine.fit,
+        monitor,
+    };
+    let bic = Bic::at(&ev, &pass.declared.fit)?;
+    let again = |f: &fit::FitResult, knobs: &[Knob]| {
+        fit::fit(&ev, &f.params, knobs, REFIT_JACOBIANS, bic.ratio())
+    };
+    pass.declared.fit = again(&pass.declared.fit, &pass.declared.knobs)?;
+    pass.search.current = again(&pass.search.current, &pass.search.knobs)?;
+    if let Some(p) = &mut pass.proposal {
+        p.fit = again(&p.fit, &p.knobs)?;
+    }
+    pass.final_params = pass
+        .proposal
+        .as_ref()
+        .map_or(pass.search.current.params, |p| p.fit.params);
+    pass.bic = bic;
+    let scale = pass.final_params.plant.valve.cd / cd_before;
+    for d in pass
+        .drifts
+        .iter_mut()
+        .filter(|d| d.parameter == Knob::Cd.name())
+    {
+        for v in d
+            .per_record
+            .values_mut()
+            .chain(d.per_record_uncertainty.values_mut())
+        {
+            *v *= scale;
+        }
+        d.uncertainty *= scale;
+    }
+    monitor.check()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 10 kHz is read every 5th sample (2 kHz), 8 kHz every 4th, 5 kHz every 2nd (2.5 kHz);
+    /// below 4 kHz every sample.
+    #[test]
+    fn fast_records_are_read_at_about_the_search_rate() {
+        assert_eq!(read_every(10_000.0), 5);
+        assert_eq!(read_every(8_000.0), 4);
+        assert_eq!(read_every(5_000.0), 2);
+        assert_eq!(read_every(4_000.0), 2);
+        assert_eq!(read_every(3_999.0), 1);
+        assert_eq!(read_every(2_000.0), 1);
+        assert_eq!(read_every(200.0), 1);
+        assert_eq!(read_every(f64::NAN), 1);
+        assert_eq!(
+            [2, 3, 4, 5, 11, 12, 21, 22].map(ordinal),
+            ["2nd", "3rd", "4th", "5th", "11th", "12th", "21st", "22nd"]
+        );
+    }
+}
