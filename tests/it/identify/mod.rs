@@ -24,4 +24,5 @@ mod records;
 mod rig;
 mod survey;
 mod survey_cases;
+mod timing;
 mod twin_made;

@@ -64,6 +64,9 @@ pub(super) struct RigEffects {
     /// the command, which the controller sends digitally), run at the rig's 20 kHz step
     /// before the channels are sampled.
     pub(super) daq_antialias_hz: Option<f64>,
+    /// Sensor: the accelerometers' white noise RMS [m/s²] (default [`ACC_NOISE`], a MEMS
+    /// sensor's 0.08 m/s²; a laboratory accelerometer is several times quieter).
+    pub(super) acc_noise: Option<f64>,
 }
 
 /// A second-order Butterworth low-pass at `fc` [Hz] run every `h` [s] (the bilinear
@@ -278,7 +281,7 @@ impl Rig {
             }
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let acc_noise = Normal::new(0.0, 0.08).unwrap();
+        let acc_noise = Normal::new(0.0, self.fx.acc_noise.unwrap_or(ACC_NOISE)).unwrap();
         let pos_noise = Normal::new(0.0, 1e-5).unwrap();
         let lsb = 0.075 / 4096.0;
         let p_noise = Normal::new(0.0, 2e4).unwrap();

@@ -579,7 +579,7 @@ fn replayed_above_noise_before_stops(
 }
 
 /// Writes `recs` as CSV files into `dir` (named as the records are), for the CLI to read.
-fn write_records(recs: &[seat_twin::dataset::Record], dir: &std::path::Path) {
+pub(super) fn write_records(recs: &[seat_twin::dataset::Record], dir: &std::path::Path) {
     std::fs::create_dir_all(dir).expect("records dir");
     for rec in recs {
         let mut cols: Vec<(&str, &Vec<f64>)> = vec![("t", &rec.t)];
