@@ -143,21 +143,7 @@ impl Record {
     /// The record's first `n` samples (all of it when `n` is not shorter), every column cut
     /// alike.
     pub fn truncated(&self, n: usize) -> Record {
-        let cut = |c: &Option<Vec<f64>>| c.as_ref().map(|v| v[..n.min(v.len())].to_vec());
-        Record {
-            t: self.t[..n.min(self.t.len())].to_vec(),
-            v_in: cut(&self.v_in),
-            u: cut(&self.u),
-            x: cut(&self.x),
-            xdd: cut(&self.xdd),
-            ydd: cut(&self.ydd),
-            p1: cut(&self.p1),
-            p2: cut(&self.p2),
-            path: self.path.clone(),
-            metadata: self.metadata.clone(),
-            dt: self.dt,
-            warnings: self.warnings.clone(),
-        }
+        self.with_columns(self.dt, |v| v[..n.min(v.len())].to_vec())
     }
 
     /// Every `k`-th sample of the record, from the first (`k` ≥ 1; 1 gives the record
@@ -166,10 +152,17 @@ impl Record {
     /// noise and quantisation included; the noise's variance per sample is unchanged).
     pub fn decimated(&self, k: usize) -> Record {
         let k = k.max(1);
-        let take = |v: &Vec<f64>| v.iter().step_by(k).copied().collect::<Vec<f64>>();
-        let col = |c: &Option<Vec<f64>>| c.as_ref().map(take);
+        self.with_columns(self.dt * k as f64, |v| {
+            v.iter().step_by(k).copied().collect()
+        })
+    }
+
+    /// The record with each column (the time too) made by `f` from its own, the sampling step
+    /// `dt` \[s\], and the same file, metadata and warnings.
+    fn with_columns(&self, dt: f64, f: impl Fn(&[f64]) -> Vec<f64>) -> Record {
+        let col = |c: &Option<Vec<f64>>| c.as_deref().map(&f);
         Record {
-            t: take(&self.t),
+            t: f(&self.t),
             v_in: col(&self.v_in),
             u: col(&self.u),
             x: col(&self.x),
@@ -179,7 +172,7 @@ impl Record {
             p2: col(&self.p2),
             path: self.path.clone(),
             metadata: self.metadata.clone(),
-            dt: self.dt * k as f64,
+            dt,
             warnings: self.warnings.clone(),
         }
     }
