@@ -2,7 +2,9 @@
 //! to record, sample rates from 200 Hz to 10 kHz, an accelerometer with an offset and a
 //! scale error.
 
-use super::rig::{RigEffects, above_noise, calibrate_paper, campaign, campaign_at, summary};
+use super::rig::{
+    RigEffects, above_noise, calibrate_paper, campaign, campaign_at, reported_sensor, summary,
+};
 use seat_twin::dataset::Record;
 use seat_twin::identify::{self, CalibrationReport, Verdict};
 use seat_twin::preset::Preset;
@@ -256,12 +258,7 @@ fn a_10_khz_campaign_is_searched_at_2_khz_and_fitted_on_every_sample() {
     );
     assert_eq!(r.verdict, Verdict::NoMissingEffect, "{s}");
     assert!(r.effects.is_empty(), "{s}");
-    let find = |c: &str, k: &str| {
-        r.sensors
-            .iter()
-            .find(|e| e.channel == c && e.kind == k)
-            .unwrap_or_else(|| panic!("{c} {k} not reported: {:?}; {s}", r.sensors))
-    };
+    let find = |c: &str, k: &str| reported_sensor(&r, c, k);
     let lag = find("u", "lag");
     assert!(
         (lag.value - 2e-3).abs() <= 3.0 * lag.uncertainty,

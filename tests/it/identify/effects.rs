@@ -433,12 +433,7 @@ fn sensor_scale_and_lag_are_found_as_sensors_not_effects() {
     let r = run(fx, 26);
     let s = summary(&r);
     eprintln!("sensors: {s}; {:?}", r.sensors);
-    let find = |c: &str, k: &str| {
-        r.sensors
-            .iter()
-            .find(|e| e.channel == c && e.kind == k)
-            .unwrap_or_else(|| panic!("{c} {k} not reported: {:?}; {s}", r.sensors))
-    };
+    let find = |c: &str, k: &str| reported_sensor(&r, c, k);
     let scale = find("ydd", "scale");
     assert!((scale.value - 0.96).abs() < 0.005, "{scale:?}");
     let lag = find("u", "lag");

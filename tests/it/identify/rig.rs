@@ -500,6 +500,25 @@ pub(super) fn first_ranked(r: &CalibrationReport) -> EffectId {
         .effect
 }
 
+/// The sensor property of `channel` and `kind` that `r` reports; the test fails, naming what
+/// was reported, if there is none.
+pub(super) fn reported_sensor<'a>(
+    r: &'a CalibrationReport,
+    channel: &str,
+    kind: &str,
+) -> &'a identify::result::SensorEstimate {
+    r.sensors
+        .iter()
+        .find(|e| e.channel == channel && e.kind == kind)
+        .unwrap_or_else(|| {
+            panic!(
+                "{channel} {kind} not reported: {:?}; {}",
+                r.sensors,
+                summary(r)
+            )
+        })
+}
+
 pub(super) fn summary(r: &CalibrationReport) -> String {
     let c: Vec<String> = r
         .candidates
