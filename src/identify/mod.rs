@@ -368,7 +368,7 @@ pub fn calibrate_with(
             options,
             &monitor,
         )? {
-            Outcome::Done(report) => return Ok(report),
+            Outcome::Done(report) => return Ok(*report),
             Outcome::Again(why) => notes.push(why),
         }
     }
@@ -377,7 +377,7 @@ pub fn calibrate_with(
 /// What calibrating a campaign gives: the report, or why the campaign is calibrated again on
 /// every sample (only after a search that read fewer, [`search_rate`]).
 enum Outcome {
-    Done(CalibrationReport),
+    Done(Box<CalibrationReport>),
     Again(String),
 }
 
@@ -412,13 +412,13 @@ fn calibrate_campaign(
         }
         Pass::Undetermined(declared) => {
             notes.extend(declared.notes.iter().cloned());
-            return Ok(Outcome::Done(evaluate::insufficient_report(
+            return Ok(Outcome::Done(Box::new(evaluate::insufficient_report(
                 params,
                 campaign.all,
                 nominal.replays,
                 declared.undetermined,
                 notes,
-            )));
+            ))));
         }
     };
     // A Cd drifting through the campaign: the library fitted one Cd to every record and may
@@ -507,9 +507,8 @@ fn calibrate_campaign(
             report.raw_error_after.summary()
         )));
     }
-    Ok(Outcome::Done(refuse_undetermined(step_within_limits(
-        report,
-    ))))
+    let report = refuse_undetermined(step_within_limits(report));
+    Ok(Outcome::Done(Box::new(report)))
 }
 
 /// The calibrated parameters with a step their own law can run at. Replays take the preset's

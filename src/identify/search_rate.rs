@@ -4,8 +4,8 @@
 //! The replay steps the twin at every sample of a record (at most the preset's 0.5 ms, less
 //! where friction or the integrator's limit asks for it). A 10 kHz record therefore costs five
 //! times the steps of a 2 kHz one, and a calibration replays its campaign several hundred
-//! times: a ten-record, 60 s campaign at 10 kHz took 48 s with no effect in it and two minutes
-//! with friction, where the same campaign at 1 or 2 kHz takes 9–15 s. Steps that span several
+//! times: a ten-record, 60 s campaign at 10 kHz took 53 s with no effect in it and 191 s with
+//! friction on this project's 2-core machine (release build), 19.5 s and about 80 s this way. Steps that span several
 //! samples, with the samples between interpolated, were tried and reverted: at a friction's
 //! stick–slip reversals the interpolated samples missed the raw record by several times a
 //! low-noise 10 kHz floor, and the verdict turned wrong.
@@ -20,7 +20,7 @@
 //! search beyond the library, the drifts — and then:
 //!
 //! 1. every fit the report shows (the declared fit, the library's, the proposal's) is fitted
-//!    again on every sample from where the search left it ([`refit_on_every_sample`]), so
+//!    again on every sample from where the search left it (`refit_on_every_sample`), so
 //!    values and uncertainties are those of the records as recorded (a sensor filter that runs
 //!    on the samples, such as the stroke sensor's lag, delays by `T − Δt/2` of the record's own
 //!    step);
