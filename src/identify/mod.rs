@@ -355,14 +355,30 @@ pub fn calibrate_with(
         ));
     }
     let full = data::split(checked.records);
+    // The nominal replays and the paper's method read every sample, whatever the search reads.
+    let nominal = stages::nominal(params, &full, &monitor)?;
+    let paper = stages::paper(
+        params,
+        &stages::fit_params(params, options),
+        &full,
+        &monitor,
+    )?;
+    if paper.baseline.is_none() {
+        notes.push("no open-loop sine test found: the fit starts from the nominal Cd and τ".into());
+    }
     // Records sampled far faster than the twin needs: the search reads every k-th sample
     // ([`search_rate`]). When that gives another verdict than every sample would, the
     // campaign is calibrated again on every sample (the second round cannot ask for a third).
     let mut coarse = search_rate::coarse_campaign(&records, &full, options)?;
     loop {
+        let given = Given {
+            full: &full,
+            nominal: &nominal,
+            paper: &paper,
+        };
         match calibrate_campaign(
             params,
-            &full,
+            given,
             coarse.take(),
             notes.clone(),
             options,
@@ -381,21 +397,30 @@ enum Outcome {
     Again(String),
 }
 
-/// Calibrates the checked, split records `full`; the search reads `coarse` (with its note)
-/// when given, the final fits and the report read `full` ([`search_rate`]).
+/// What every calibration of a campaign starts from: the checked, split records and their
+/// nominal and paper-method stages, each on every sample.
+#[derive(Clone, Copy)]
+struct Given<'a> {
+    full: &'a data::Campaign,
+    nominal: &'a stages::Nominal,
+    paper: &'a stages::Paper,
+}
+
+/// Calibrates the records of `given`; the search reads `coarse` (with its note) when given,
+/// the final fits and the report read every sample ([`search_rate`]).
 fn calibrate_campaign(
     params: &Params,
-    full: &data::Campaign,
+    given: Given<'_>,
     coarse: Option<(data::Campaign, String)>,
     mut notes: Vec<String>,
     options: &CalibrationOptions,
     monitor: &progress::Monitor<'_>,
 ) -> Result<Outcome, IdentifyError> {
-    let nominal = stages::nominal(params, full, monitor)?;
-    let paper = stages::paper(params, &stages::fit_params(params, options), full, monitor)?;
-    if paper.baseline.is_none() {
-        notes.push("no open-loop sine test found: the fit starts from the nominal Cd and τ".into());
-    }
+    let Given {
+        full,
+        nominal,
+        paper,
+    } = given;
     // The campaign the search reads: every k-th sample of fast records, else the records.
     let (mut campaign, coarse_note) = match coarse {
         Some((c, note)) => (c, Some(note)),
@@ -415,7 +440,7 @@ fn calibrate_campaign(
             return Ok(Outcome::Done(Box::new(evaluate::insufficient_report(
                 params,
                 campaign.all,
-                nominal.replays,
+                nominal.replays.clone(),
                 declared.undetermined,
                 notes,
             ))));
@@ -490,8 +515,8 @@ fn calibrate_campaign(
     notes.extend(pass.notes);
     let found = stages::Findings {
         campaign,
-        nominal,
-        paper,
+        nominal: nominal.clone(),
+        paper: paper.clone(),
         declared: pass.declared,
         search: pass.search,
         proposal: pass.proposal,
