@@ -37,12 +37,23 @@ pub fn raw_error_at(
     preset: &Params,
     p: &Params,
 ) -> Result<RawErrorReport, IdentifyError> {
+    raw_error_of(campaign, preset, p, cx.options)
+}
+
+/// [`raw_error_at`] without a search's context: the raw error of `p` replayed on every
+/// record of `campaign` at the preset's step, against `options`' limit.
+pub fn raw_error_of(
+    campaign: &Campaign,
+    preset: &Params,
+    p: &Params,
+    options: &CalibrationOptions,
+) -> Result<RawErrorReport, IdentifyError> {
     let reps = replay_all(&with_numerics_of(*p, preset), &campaign.all)?;
     let sims: Vec<&SimChannels> = reps.iter().map(|r| &r.sim).collect();
     Ok(raw_error_report(
         &campaign.all,
         &sims,
-        cx.options.raw_error_limit,
+        options.raw_error_limit,
     ))
 }
 

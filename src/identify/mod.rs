@@ -501,13 +501,17 @@ fn calibrate_campaign(
     // Read on fewer samples: every fit again on every sample, and the report on every sample.
     let mut coarse_at_floor = false;
     if let Some(note) = coarse_note {
-        coarse_at_floor = search_rate::at_floor(
-            &campaign,
-            &evaluate::with_numerics_of(pass.final_params, params),
-            options,
-        )?;
+        coarse_at_floor =
+            context::raw_error_of(&campaign, params, &pass.final_params, options)?.at_floor();
+        // Each record keeps the Cd factor (a drift's) the search gave it: factors relative
+        // to a campaign Cd of 1.
+        let factors = campaign
+            .all
+            .iter()
+            .map(|r| (r.name.clone(), r.cd_factor))
+            .collect();
         let mut fine = full.clone();
-        search_rate::copy_cd_factors(&campaign, &mut fine);
+        drift::give_records_their_cd(&mut fine, &factors, 1.0);
         search_rate::refit_on_every_sample(&mut pass, &fine, monitor)?;
         notes.push(note);
         campaign = fine;

@@ -41,15 +41,11 @@
 //! is the search's, on the read samples; a note in the report says so.
 
 use super::data::{self, Campaign};
-use super::evaluate::replay_all;
 use super::fit::{self, Bic, Evaluator, Knob};
 use super::pass::LibraryPass;
 use super::progress::{Monitor, Stage};
-use super::raw_error::raw_error_report;
-use super::replay::SimChannels;
 use super::{CalibrationOptions, IdentifyError};
 use crate::dataset::Record;
-use crate::params::Params;
 
 /// About the rate the search reads a fast record at \[Hz\]: a record is read every
 /// `⌊rate / SEARCH_RATE_HZ⌋`-th sample. 2 kHz is a rate the loop is proven at (the second demo
@@ -164,36 +160,11 @@ fn ordinal(k: usize) -> String {
     format!("{k}{suffix}")
 }
 
-/// Gives the records of `to` the per-record Cd factors (a drift's) of the records of the same
-/// name in `from`.
-pub fn copy_cd_factors(from: &Campaign, to: &mut Campaign) {
-    for rec in [&mut to.all, &mut to.fit, &mut to.validation]
-        .into_iter()
-        .flat_map(|p| p.iter_mut())
-    {
-        if let Some(r) = from.all.iter().find(|r| r.name == rec.name) {
-            rec.cd_factor = r.cd_factor;
-        }
-    }
-}
-
-/// Whether the twin `p` is at its raw-error floor on `campaign` (replayed at the preset's
-/// step, as the verdict replays it).
-pub fn at_floor(
-    campaign: &Campaign,
-    p: &Params,
-    options: &CalibrationOptions,
-) -> Result<bool, IdentifyError> {
-    let reps = replay_all(p, &campaign.all)?;
-    let sims: Vec<&SimChannels> = reps.iter().map(|r| &r.sim).collect();
-    Ok(raw_error_report(&campaign.all, &sims, options.raw_error_limit).at_floor())
-}
-
 /// Fits the pass's fits (the declared one, the library's and the proposal's) again on the
 /// fit records of `fine`, each from where the search left it, with the same knobs and at
 /// most [`REFIT_JACOBIANS`] Jacobians; the criterion's counts are taken on `fine` too. A
 /// drifting Cd's per-record values move with the campaign's Cd, so that each record keeps
-/// the factor its replays use (`fine` carries the search's factors, [`copy_cd_factors`]).
+/// the factor its replays use (`fine` carries the search's factors).
 pub(super) fn refit_on_every_sample(
     pass: &mut LibraryPass,
     fine: &Campaign,
