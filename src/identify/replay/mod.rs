@@ -72,8 +72,10 @@ pub const EXCITATION_LOWPASS_HZ: f64 = 20.0;
 /// How the measured excitation is conditioned, and why (for file headers and reports).
 pub const EXCITATION_CONDITIONING: &str = "platform xdd (or x) low-passed before it drives the \
 twin: zero-phase 6th-order Butterworth at 20 Hz, run forward and backward (|H|^2 = \
-1/(1+(f/20 Hz)^12); flat within 1 % to 13 Hz, -87 dB at 46 Hz, -140 dB at 77 Hz); xd and x are \
-its trapezoidal integrals. Why: the twin's oil-column mode (about 77 Hz, 46 Hz with an \
+1/(1+(f/20 Hz)^12); flat within 1 % to 13 Hz, -87 dB at 46 Hz, -140 dB at 77 Hz), the record \
+extended at each end by its point reflection over the filter's settling time (0.43 s), so that \
+a platform still moving when the record starts or stops is filtered there as in its middle; xd \
+and x are its trapezoidal integrals. Why: the twin's oil-column mode (about 77 Hz, 46 Hz with an \
 effective bulk modulus of 0.5 GPa; damping ratio about 3e-4) is almost undamped, and the \
 accelerometer's white noise, fed raw, makes the replayed ydd ring far above the measured one; \
 the platform motion of a seat rig lies below 13 Hz. v_in is used as recorded.";
@@ -82,7 +84,9 @@ the platform motion of a seat rig lies below 13 Hz. v_in is used as recorded.";
 /// [`EXCITATION_CONDITIONING`]).
 pub fn condition_excitation(xdd: &[f64], dt: f64) -> Vec<f64> {
     let fc = EXCITATION_LOWPASS_HZ.min(0.3 / dt);
-    butterworth_zero_phase(xdd, dt, fc, 6)
+    let sections = crate::dsp::butterworth_sections(dt, fc, 6);
+    let pad = crate::dsp::butterworth_settling_samples(dt, fc, 6);
+    crate::dsp::zero_phase_odd_padded(xdd, &sections, pad)
 }
 
 /// Cut-off of the stroke-drift channel of the metric \[Hz\]: the raw error measure's band with
