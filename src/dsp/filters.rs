@@ -278,8 +278,8 @@ pub fn zero_phase_odd_padded(x: &[f64], sections: &[Biquad], pad: usize) -> Vec<
 }
 
 /// Samples at step `dt` \[s\] over which the start-up transient of a Butterworth low-pass of
-/// order `order` at `fc` \[Hz\] has died out: 20 time constants of its
-/// slowest pole (e⁻²⁰ = 2·10⁻⁹), whose decay rate is `ωc·sin(π/(2·order))` (0.26·ωc for the 6th order: 0.62 s
+/// order `order` at `fc` \[Hz\] has died out: 20 time constants (e⁻²⁰ = 2·10⁻⁹) of its
+/// slowest pole, whose decay rate is `ωc·sin(π/(2·order))` (0.26·ωc for the 6th order: 0.62 s
 /// at 20 Hz).
 pub fn butterworth_settling_samples(dt: f64, fc: f64, order: usize) -> usize {
     let sigma = 2.0 * PI * fc * (PI / (2 * order.max(1)) as f64).sin();

@@ -21,7 +21,12 @@
 //! the 20 Hz cut-off 0.080 both). A
 //! seat rig's platform motion (the ISO 7096, ISO 5007 and EN 13490 classes, a ride, a bump)
 //! lies below 13 Hz, so the filter removes noise, not motion. A record with `x` but no `xdd`
-//! is filtered the same way before its double difference.
+//! is filtered the same way before its double difference. The record is extended at each
+//! end by its point reflection over the filter's settling time
+//! ([`crate::dsp::zero_phase_odd_padded`]): a platform still moving when the record starts
+//! or stops is filtered there as in its middle. Each pass used to start settled at the end
+//! value instead, and the twin's `ÿ` then left a quiet accelerometer's over the last tens of
+//! milliseconds of a ride, enough for a false `unexplained` at 10 kHz.
 //!
 //! **Error metric.** Open-loop replay of a flow-controlled cylinder integrates every flow error
 //! into a drift of `u`, so position is a poor thing to fit. The metric compares two channels
@@ -73,7 +78,7 @@ pub const EXCITATION_LOWPASS_HZ: f64 = 20.0;
 pub const EXCITATION_CONDITIONING: &str = "platform xdd (or x) low-passed before it drives the \
 twin: zero-phase 6th-order Butterworth at 20 Hz, run forward and backward (|H|^2 = \
 1/(1+(f/20 Hz)^12); flat within 1 % to 13 Hz, -87 dB at 46 Hz, -140 dB at 77 Hz), the record \
-extended at each end by its point reflection over the filter's settling time (0.43 s), so that \
+extended at each end by its point reflection over the filter's settling time (0.62 s), so that \
 a platform still moving when the record starts or stops is filtered there as in its middle; xd \
 and x are its trapezoidal integrals. Why: the twin's oil-column mode (about 77 Hz, 46 Hz with an \
 effective bulk modulus of 0.5 GPa; damping ratio about 3e-4) is almost undamped, and the \
