@@ -423,12 +423,18 @@ impl Traces {
                     self.metrics.max_u_reference = self.metrics.max_u_reference.max(r.u.abs());
                 }
             }
-            self.rows.push(Row {
-                t,
-                twin: *tw,
-                linear: *li,
-                passive: *pa,
-            });
+            // A restarted run's first sample (at rest) falls on the instant of the last one
+            // (the display time, like the toolbar's clock, continues without a gap): the
+            // scopes draw both, the rows (an exported traces.csv, whose time must increase
+            // strictly to be read back) keep the one already there.
+            if self.rows().last().is_none_or(|r| t > r.t) {
+                self.rows.push(Row {
+                    t,
+                    twin: *tw,
+                    linear: *li,
+                    passive: *pa,
+                });
+            }
             self.t_now = t;
         }
         self.trim();

@@ -62,6 +62,19 @@ fn restart_continues_the_time_axis_and_reset_clears() {
     tr.mark_restart();
     tr.push_batch(&batch(0.0, 10, |_| false));
     assert!(tr.t_now() > t_end);
+    // The restarted run's first sample falls on the last one's instant: the rows (an
+    // exported traces.csv) keep one row there and stay strictly increasing in time, and the
+    // restarted run's other nine follow it.
+    let rows = tr.rows();
+    assert!(
+        rows.windows(2).all(|w| w[1].t > w[0].t),
+        "time not increasing"
+    );
+    assert_eq!(rows.iter().filter(|r| r.t > t_end + 1e-12).count(), 9);
+    assert_eq!(
+        rows.iter().filter(|r| (r.t - t_end).abs() < 1e-12).count(),
+        1
+    );
     // Time going backwards without a restart: stale data before a reset.
     tr.push_batch(&batch(0.0, 10, |_| false));
     assert!(tr.t_now() < 0.1);
