@@ -623,11 +623,23 @@ impl CommandStream {
 
 impl CommandSignal {
     /// Command at `t` \[V\].
-    #[inline]
+    ///
+    /// A sampled command (every replay of a record) is read here, inlined into the stepping
+    /// loop, which reads it at every stage; the other kinds are read out of line.
+    #[inline(always)]
     pub fn at(&self, t: f64) -> f64 {
         if t < 0.0 {
             return 0.0;
         }
+        match self {
+            CommandSignal::Sampled { dt, values } => catmull_rom(values, t / dt),
+            other => other.at_formula(t),
+        }
+    }
+
+    /// [`Self::at`] for every kind but a sampled one, at `t ≥ 0`.
+    #[inline(never)]
+    fn at_formula(&self, t: f64) -> f64 {
         match self {
             CommandSignal::Zero => 0.0,
             CommandSignal::Sine {
