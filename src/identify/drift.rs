@@ -25,6 +25,7 @@ use super::IdentifyError;
 use super::fit::{self, Evaluator, Knob};
 use super::progress::Monitor;
 use super::replay::PreparedRecord;
+use super::replay::StepRule;
 use super::result::Drift;
 use crate::params::Params;
 use rayon::prelude::*;
@@ -150,6 +151,7 @@ pub fn find(
                 let ev = Evaluator {
                     records: std::slice::from_ref(rec),
                     monitor,
+                    step: StepRule::Resolving,
                 };
                 let f = fit::fit(&ev, params, &[knob], PER_RECORD_JACOBIANS, n_eff_ratio)?;
                 // A record replayed with its own Cd ([`give_records_their_cd`]) has the fitted

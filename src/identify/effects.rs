@@ -7,14 +7,15 @@
 use super::CalibrationOptions;
 use super::context::{SearchContext, validation_rms, worst_raw_ratio};
 use super::data::Campaign;
-use super::fit::{self, FitResult, FittedValue, Knob, Screened};
+use super::fit::{self, Evaluator, FitResult, FittedValue, Knob, Screened};
 use super::progress::Stage;
 use super::refine::{self, REFINEMENT_MAX_RAW_RATIO, REFINEMENT_MIN_DBIC};
-use super::replay::PreparedRecord;
+use super::replay::{PreparedRecord, StepRule};
 use super::result::CandidateScore;
 use super::starts::multi_start;
 use super::{EffectId, IdentifyError};
 use crate::params::Params;
+use crate::simulation::step_for_rate;
 use rayon::prelude::*;
 
 /// Why two effects can be confounded, when the physics says so (for the ambiguity note).
@@ -46,6 +47,12 @@ pub struct Ranked {
 /// Fits every effect of `remaining` on top of `current` (in parallel; the mass stays fixed)
 /// with [`CalibrationOptions::screen_iterations`] Jacobians, and ranks them by ΔBIC, best
 /// first.
+///
+/// The screening replays at [`StepRule::Screening`] (the integrator's stability limit, not
+/// the finer step a friction's reversals ask for). Where the current model has a friction
+/// that asks for the finer step, it is first fitted again at the screening step (one short
+/// fit), and the candidates start from there and are held against its residual; every
+/// screening replay of the round then takes half the steps or fewer.
 pub fn rank_candidates(
     cx: &SearchContext<'_>,
     current: &FitResult,
@@ -53,10 +60,37 @@ pub fn rank_candidates(
     remaining: &[EffectId],
     round: usize,
 ) -> Result<Vec<Ranked>, IdentifyError> {
-    let (ev, bic, options) = (cx.ev, &cx.bic, cx.options);
+    let (bic, options) = (&cx.bic, cx.options);
+    let screening = Evaluator {
+        records: cx.ev.records,
+        monitor: cx.ev.monitor,
+        step: StepRule::Screening,
+    };
+    let ev = &screening;
     ev.monitor
         .enter(Stage::Candidates { round }, remaining.len());
     let screen_knobs: Vec<Knob> = knobs.iter().copied().filter(|k| *k != Knob::Mass).collect();
+    // The current model at the screening step: itself where that is its step, else fitted
+    // again there (its own knobs, the screening's Jacobians), so that no candidate is
+    // credited with what the others' knobs gain from the coarser step alone.
+    let same_step = ev.records.iter().all(|r| {
+        let rate = 1.0 / r.dt;
+        step_for_rate(StepRule::Screening.largest_step_s(&current.params), rate)
+            == step_for_rate(StepRule::Resolving.largest_step_s(&current.params), rate)
+    });
+    let reference = if same_step {
+        Screened {
+            params: current.params,
+            rss: current.rss,
+        }
+    } else {
+        fit::screen(
+            ev,
+            &current.params,
+            &screen_knobs,
+            options.screen_iterations,
+        )?
+    };
     let results: Vec<Result<(EffectId, Screened), IdentifyError>> = remaining
         .par_iter()
         .map(|&e| {
@@ -64,7 +98,7 @@ pub fn rank_candidates(
             ks.extend_from_slice(e.knobs());
             // From each start, keeping the fit with the smallest residual.
             let mut best: Option<Screened> = None;
-            for p0 in multi_start(ev, &current.params, e)? {
+            for p0 in multi_start(ev, &reference.params, e)? {
                 let f = fit::screen(ev, &p0, &ks, options.screen_iterations)?;
                 if best.as_ref().is_none_or(|b| f.rss < b.rss) {
                     best = Some(f);
@@ -79,8 +113,8 @@ pub fn rank_candidates(
     for r in results {
         let (effect, fit) = r?;
         let k = effect.knobs().len();
-        let score = bic.value(fit.rss, knobs.len() + k) - bic.value(current.rss, knobs.len());
-        let gain = 1.0 - fit.rss / current.rss;
+        let score = bic.value(fit.rss, knobs.len() + k) - bic.value(reference.rss, knobs.len());
+        let gain = 1.0 - fit.rss / reference.rss;
         ranked.push(Ranked {
             effect,
             fit,

@@ -9,7 +9,7 @@
 
 use super::IdentifyError;
 use super::progress::{Monitor, StopReason};
-use super::replay::PreparedRecord;
+use super::replay::{PreparedRecord, StepRule};
 use crate::params::{ParamSpec, Params, spec};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt, MinimizationReport};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
@@ -334,6 +334,8 @@ pub struct Evaluator<'a> {
     pub records: &'a [PreparedRecord],
     /// Progress, cancel and the count of evaluations.
     pub monitor: &'a Monitor<'a>,
+    /// How short the replays' step is.
+    pub step: StepRule,
 }
 
 /// Penalty residual for a diverged replay (per element).
@@ -356,7 +358,7 @@ impl Evaluator<'_> {
             .par_iter()
             .map(|rec| {
                 let mut v = Vec::with_capacity(rec.residual_len());
-                match rec.simulate(params) {
+                match rec.simulate_with(params, self.step) {
                     Ok(sim) => rec.weighted_residuals(&sim, &mut v),
                     Err(_) => v.resize(rec.residual_len(), DIVERGED_PENALTY),
                 }

@@ -68,7 +68,10 @@
 //! and [`stages::report`] (final replays, errors, diagnostics, verdict). Records sampled at
 //! 4 kHz and faster are searched on every k-th sample (about 2 kHz) and fitted and reported
 //! on every sample ([`search_rate`]), and calibrated again on every sample where the two
-//! disagree about the raw error's floor. One cancel flag
+//! disagree about the raw error's floor. The candidates' screening replays at the
+//! integrator's stability limit rather than the finer step a friction's reversals ask for
+//! ([`replay::StepRule`]); every fit the report shows, and every error, is at the finer step.
+//! One cancel flag
 //! stops it at the next replay; a [`CalibrationObserver`] hears each stage's [`Progress`].
 //! [`calibrate`] is the same with a callback that gets the stage as text and returns `false`
 //! to cancel.

@@ -4,6 +4,7 @@
 
 use super::fit::{self, Evaluator, Knob};
 use super::progress::{self, Stage};
+use super::replay::StepRule;
 use super::{
     CalibrationOptions, IdentifyError, context, data, drift, effects, proposed, result, stages,
 };
@@ -39,6 +40,7 @@ pub(super) fn library_pass(
     let ev = Evaluator {
         records: &campaign.fit,
         monitor,
+        step: StepRule::Resolving,
     };
     let declared = stages::declared_fit(&ev, start, params.plant.body.mass_kg, options)?;
     let mut notes = declared.notes.clone();

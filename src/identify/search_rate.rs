@@ -44,6 +44,7 @@ use super::data::{self, Campaign};
 use super::fit::{self, Bic, Evaluator, Knob};
 use super::pass::LibraryPass;
 use super::progress::{Monitor, Stage};
+use super::replay::StepRule;
 use super::{CalibrationOptions, IdentifyError};
 use crate::dataset::Record;
 
@@ -176,6 +177,7 @@ pub(super) fn refit_on_every_sample(
     let ev = Evaluator {
         records: &fine.fit,
         monitor,
+        step: StepRule::Resolving,
     };
     let bic = Bic::at(&ev, &pass.declared.fit)?;
     let again = |f: &fit::FitResult, knobs: &[Knob]| {

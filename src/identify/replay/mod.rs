@@ -66,8 +66,10 @@ use crate::dsp::{NoiseFloor, SettledCascade, noise_floor, noise_gain};
 pub use crate::dsp::{butterworth_zero_phase, filtered_derivative, lowpass, rms};
 
 mod errors;
+mod step;
 mod streamed;
 pub use errors::{ChannelErrors, RawChannel, RawErrors};
+pub use step::StepRule;
 pub use streamed::{BeforeEndStop, StreamedErrors, replay_streamed};
 
 /// Cut-off of the zero-phase low-pass applied to the recorded platform motion before it drives
@@ -227,8 +229,10 @@ fn record_platform(record: &Record) -> (PlatformMotion, bool) {
 /// Replays `len` samples at `dt` through the twin: `v_in` drives the valve in open loop and
 /// `platform` the base; every sample on the record's grid goes to `sink`, the last repeated
 /// (with its own time) if rounding of the last step left the run a sample short.
+#[allow(clippy::too_many_arguments)]
 fn replay_samples(
     params: &Params,
+    rule: StepRule,
     dt: f64,
     v_in: Arc<Vec<f64>>,
     platform: PlatformMotion,
@@ -236,15 +240,9 @@ fn replay_samples(
     name: &str,
     sink: &mut dyn FnMut(Sample),
 ) -> Result<(), IdentifyError> {
-    // Within the method's stability limit, and short enough to resolve the friction.
-    let h = step_for_rate(
-        params
-            .numerics
-            .max_step_s
-            .min(0.9 * params.step_limit_s())
-            .min(params.friction_resolving_step_s()),
-        1.0 / dt,
-    );
+    // Within the method's stability limit, and (but for screening) short enough to resolve
+    // the friction.
+    let h = step_for_rate(rule.largest_step_s(params), 1.0 / dt);
     // A proposed lag of the valve command filters the command as sent, a proposed drift of
     // the valve's null offsets it.
     let values = match params.plant.corrections.acted_command(&v_in, dt) {
@@ -599,6 +597,15 @@ impl PreparedRecord {
 
     /// Replays the record through the twin with `params`.
     pub fn simulate(&self, params: &Params) -> Result<SimChannels, IdentifyError> {
+        self.simulate_with(params, StepRule::Resolving)
+    }
+
+    /// Replays the record through the twin with `params`, at the step `rule` allows.
+    pub fn simulate_with(
+        &self,
+        params: &Params,
+        rule: StepRule,
+    ) -> Result<SimChannels, IdentifyError> {
         let n = self.len;
         let mut out = SimChannels {
             t: Vec::with_capacity(n),
@@ -614,17 +621,26 @@ impl PreparedRecord {
         let (v_in, platform) = (self.v_in.clone(), self.platform.clone());
         let mut own = *params;
         own.plant.valve.cd *= self.cd_factor;
-        replay_samples(&own, self.dt, v_in, platform, n, &self.name, &mut |s| {
-            out.t.push(s.t);
-            out.u.push(s.u);
-            out.du.push(s.du);
-            out.ydd.push(s.ydd);
-            out.p1.push(s.p1);
-            out.p2.push(s.p2);
-            out.xv.push(s.xv);
-            out.q1.push(s.q1);
-            out.q2.push(s.q2);
-        })?;
+        replay_samples(
+            &own,
+            rule,
+            self.dt,
+            v_in,
+            platform,
+            n,
+            &self.name,
+            &mut |s| {
+                out.t.push(s.t);
+                out.u.push(s.u);
+                out.du.push(s.du);
+                out.ydd.push(s.ydd);
+                out.p1.push(s.p1);
+                out.p2.push(s.p2);
+                out.xv.push(s.xv);
+                out.q1.push(s.q1);
+                out.q2.push(s.q2);
+            },
+        )?;
         // Read u and ÿ through the calibrated sensors.
         params.sensors.read_u(&mut out.u, self.dt);
         params.sensors.read_ydd(&mut out.ydd);

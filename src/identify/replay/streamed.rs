@@ -1,6 +1,6 @@
 //! Replay of a long record in bounded memory, for `seat-twin replay`.
 
-use super::{MetricOptions, record_platform, replay_samples};
+use super::{MetricOptions, StepRule, record_platform, replay_samples};
 use crate::dataset::Record;
 use crate::dsp::{filtered_derivative, lowpass, rms};
 use crate::identify::IdentifyError;
@@ -74,17 +74,26 @@ pub fn replay_streamed(
     let mut i = 0;
     // The twin's u and ÿ as the calibrated sensors read them, as in `PreparedRecord::simulate`.
     let mut stroke = params.sensors.u_reader(dt);
-    replay_samples(params, dt, Arc::new(v_in), platform, len, &name, &mut |s| {
-        let mut read = s;
-        read.u = stroke.read(s.u);
-        read.ydd = params.sensors.read_ydd_sample(s.ydd);
-        sample(record.t[i], &read);
-        u_sim.push(read.u);
-        if keep_ydd {
-            ydd_sim.push(read.ydd);
-        }
-        i += 1;
-    })?;
+    replay_samples(
+        params,
+        StepRule::Resolving,
+        dt,
+        Arc::new(v_in),
+        platform,
+        len,
+        &name,
+        &mut |s| {
+            let mut read = s;
+            read.u = stroke.read(s.u);
+            read.ydd = params.sensors.read_ydd_sample(s.ydd);
+            sample(record.t[i], &read);
+            u_sim.push(read.u);
+            if keep_ydd {
+                ydd_sim.push(read.ydd);
+            }
+            i += 1;
+        },
+    )?;
     let lowpass_hz = opt.lowpass_hz.min(0.4 / dt);
     let diff_rms = |a: &[f64], b: &[f64]| {
         let sum: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();

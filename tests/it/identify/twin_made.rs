@@ -7,6 +7,7 @@
 
 use seat_twin::identify::fit::{Evaluator, Knob};
 use seat_twin::identify::progress::Monitor;
+use seat_twin::identify::replay::StepRule;
 use seat_twin::identify::report::{report_json, report_markdown};
 use seat_twin::identify::stages::{declared_fit, fit_params};
 use seat_twin::identify::testdata::{true_params, twin_record};
@@ -36,6 +37,7 @@ fn declared_fit_recovers_known_cd_and_tau() {
     let ev = Evaluator {
         records: &campaign.fit,
         monitor: &monitor,
+        step: StepRule::Resolving,
     };
     let start = fit_params(&Params::paper(), &options);
     let d = declared_fit(&ev, &start, start.plant.body.mass_kg, &options).unwrap();
