@@ -653,6 +653,18 @@ pub fn search(
             notes.push(note);
         }
     }
+    // The mass, where a modulus of the oil was fitted beside it: its profile.
+    let mass = super::profile::mass_trade(
+        cx.ev,
+        &current,
+        &knobs,
+        options.max_iterations,
+        cx.bic.ratio(),
+    )?;
+    if let Some(mass) = mass.filter(|m| m.trades_off()) {
+        mass.apply(&mut current);
+        notes.push(mass.note(&current));
+    }
     Ok(EffectSearch {
         current,
         knobs,
