@@ -34,6 +34,32 @@ pub fn noise_gain(len: usize, op: impl Fn(&[f64]) -> Vec<f64>) -> f64 {
     op(&x).iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
+/// Runs `f` with this thread's FFT planner for transforms of length `n`. The planner keeps
+/// the plans (and their twiddle factors) it made, since a calibration takes the spectra of
+/// the same record lengths again and again; it starts afresh after [`PLANNED_LENGTHS`]
+/// lengths, so that a long-running app holds a bounded number of plans.
+fn with_planner<R>(n: usize, f: impl FnOnce(&mut RealFftPlanner<f64>) -> R) -> R {
+    use std::cell::RefCell;
+    use std::collections::BTreeSet;
+    thread_local! {
+        static PLANNER: RefCell<(RealFftPlanner<f64>, BTreeSet<usize>)> =
+            RefCell::new((RealFftPlanner::new(), BTreeSet::new()));
+    }
+    PLANNER.with(|cell| {
+        let mut cell = cell.borrow_mut();
+        let (planner, lengths) = &mut *cell;
+        if lengths.insert(n) && lengths.len() > PLANNED_LENGTHS {
+            *planner = RealFftPlanner::new();
+            lengths.clear();
+            lengths.insert(n);
+        }
+        f(planner)
+    })
+}
+
+/// How many transform lengths a thread's planner keeps plans for ([`with_planner`]).
+const PLANNED_LENGTHS: usize = 64;
+
 /// Noise RMS of a raw channel, estimated from the top of its spectrum: the power in
 /// `[0.3, 0.5]·fs` (where the rig's motion has almost nothing) extrapolated to the whole band
 /// as white noise. Includes quantisation (which is white at these levels).
@@ -45,8 +71,7 @@ pub fn noise_rms(x: &[f64], dt: f64) -> f64 {
     }
     let mean = x.iter().sum::<f64>() / n as f64;
     let mut buf: Vec<f64> = x.iter().map(|v| v - mean).collect();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(n);
+    let fft = with_planner(n, |p| p.plan_fft_forward(n));
     let mut spec = fft.make_output_vec();
     if fft.process(&mut buf, &mut spec).is_err() {
         return 0.0;
@@ -102,8 +127,7 @@ pub fn noise_floor(x: &[f64]) -> NoiseFloor {
         })
         .collect();
     let mean_w2 = 3.0 / 8.0;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(n);
+    let fft = with_planner(n, |p| p.plan_fft_forward(n));
     let mut spec = fft.make_output_vec();
     let spectral = if fft.process(&mut buf, &mut spec).is_ok() {
         let m = spec.len();
@@ -195,9 +219,7 @@ pub fn band_parts(x: &[f64], dt: f64, bands_hz: &[[f64; 2]]) -> Vec<Vec<f64>> {
     let (ia, ib) = ((m - 1) as f64 / 2.0, (n - 1) as f64 - (m - 1) as f64 / 2.0);
     let slope = if ib > ia { (b - a) / (ib - ia) } else { 0.0 };
     let ramp = |i: usize| a + slope * (i as f64 - ia);
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(n);
-    let inv = planner.plan_fft_inverse(n);
+    let (fwd, inv) = with_planner(n, |p| (p.plan_fft_forward(n), p.plan_fft_inverse(n)));
     let mut buf: Vec<f64> = x.iter().enumerate().map(|(i, v)| v - ramp(i)).collect();
     let mut spec = fwd.make_output_vec();
     if fwd.process(&mut buf, &mut spec).is_err() {
@@ -253,8 +275,7 @@ pub fn spectrum(x: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
             (v - mean) * w
         })
         .collect();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(n);
+    let fft = with_planner(n, |p| p.plan_fft_forward(n));
     let mut spec = fft.make_output_vec();
     if fft.process(&mut buf, &mut spec).is_err() {
         return (Vec::new(), Vec::new());

@@ -29,6 +29,33 @@ pub(super) fn replay_all(
         .collect()
 }
 
+/// The replays of `recs` taken from `replays`, the replays of `all` with the same parameters:
+/// a replay depends only on the parameters and the record, and `recs` (the fit or the
+/// held-out part) are copies of records of `all`, so the report replays each twin once.
+/// `None` when a record of `recs` is not in `all` exactly once by name and length (then the
+/// caller replays it).
+pub(super) fn replays_of(
+    all: &[PreparedRecord],
+    replays: &[Replay],
+    recs: &[PreparedRecord],
+) -> Option<Vec<Replay>> {
+    if replays.len() != all.len() {
+        return None;
+    }
+    recs.iter()
+        .map(|r| {
+            let mut same = all
+                .iter()
+                .zip(replays)
+                .filter(|(a, _)| a.name == r.name && a.len == r.len && a.cd_factor == r.cd_factor);
+            match (same.next(), same.next()) {
+                (Some((_, rep)), None) => Some(rep.clone()),
+                _ => None,
+            }
+        })
+        .collect()
+}
+
 /// Per channel, `√(Σ num / Σ den)` over `replays`, where `terms` gives each replay's
 /// `(num, den)` per channel (`None` for a channel it lacks); a channel whose `Σ den` is not
 /// positive is left out.

@@ -375,6 +375,8 @@ impl Evaluator<'_> {
 
 struct Problem<'a, 'b> {
     ev: &'a Evaluator<'b>,
+    /// Where the optimiser's Jacobians are taken, if not on `ev` ([`fit_steered`]).
+    steer: Option<&'a Evaluator<'b>>,
     base: Params,
     knobs: &'a [Knob],
     theta: DVector<f64>,
@@ -416,16 +418,37 @@ impl Problem<'_, '_> {
         Some(r)
     }
 
+    /// The Jacobian of the residual at `theta`, by forward differences.
     fn jacobian_at(&self, theta: &DVector<f64>) -> Option<DMatrix<f64>> {
-        let r0 = self.eval(theta)?;
+        self.columns(self.ev, &self.eval(theta)?, theta)
+    }
+
+    /// The Jacobian the optimiser steps with: on `steer` where given, else [`jacobian_at`].
+    fn steering_jacobian(&self, theta: &DVector<f64>) -> Option<DMatrix<f64>> {
+        match self.steer {
+            Some(steer) => {
+                let r0 = steer.residuals(&params_at(&self.base, self.knobs, theta))?;
+                self.columns(steer, &DVector::from_vec(r0), theta)
+            }
+            None => self.jacobian_at(theta),
+        }
+    }
+
+    /// Forward differences of `ev`'s residual (`r0` at `theta`), one replay per knob.
+    fn columns(
+        &self,
+        ev: &Evaluator<'_>,
+        r0: &DVector<f64>,
+        theta: &DVector<f64>,
+    ) -> Option<DMatrix<f64>> {
         let cols: Vec<Option<DVector<f64>>> = (0..self.knobs.len())
             .into_par_iter()
             .map(|j| {
                 let h = 1e-2 * theta[j].abs().max(1.0);
                 let mut t = theta.clone();
                 t[j] += h;
-                let r = self.ev.residuals(&params_at(&self.base, self.knobs, &t))?;
-                Some((DVector::from_vec(r) - &r0) / h)
+                let r = ev.residuals(&params_at(&self.base, self.knobs, &t))?;
+                Some((DVector::from_vec(r) - r0) / h)
             })
             .collect();
         let mut jac = DMatrix::zeros(r0.len(), self.knobs.len());
@@ -457,9 +480,12 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
         if self.jacobians.fetch_add(1, Ordering::Relaxed) >= self.max_jacobians {
             return None;
         }
-        let j = self.jacobian_at(&self.theta)?;
+        let j = self.steering_jacobian(&self.theta)?;
         self.ev.monitor.jacobian();
-        if let Ok(mut l) = self.last_jacobian.lock() {
+        // Only a Jacobian of `ev` itself serves the covariance.
+        if self.steer.is_none()
+            && let Ok(mut l) = self.last_jacobian.lock()
+        {
             *l = Some((self.theta.clone(), j.clone()));
         }
         Some(j)
@@ -557,6 +583,7 @@ pub struct Screened {
 /// squares with its θ.
 fn minimise<'a, 'b>(
     ev: &'a Evaluator<'b>,
+    steer: Option<&'a Evaluator<'b>>,
     start: &Params,
     knobs: &'a [Knob],
     max_jacobians: usize,
@@ -564,6 +591,7 @@ fn minimise<'a, 'b>(
     let theta0 = DVector::from_iterator(knobs.len(), knobs.iter().map(|k| k.theta(start)));
     let problem = Problem {
         ev,
+        steer,
         base: *start,
         knobs,
         theta: theta0.clone(),
@@ -599,7 +627,20 @@ pub fn screen(
     knobs: &[Knob],
     max_jacobians: usize,
 ) -> Result<Screened, IdentifyError> {
-    let (_, _, rss, theta) = minimise(ev, start, knobs, max_jacobians)?;
+    screen_steered(ev, None, start, knobs, max_jacobians)
+}
+
+/// [`screen`], with the optimiser's Jacobians taken on `steer` where given (see
+/// [`fit_steered`]).
+pub fn screen_steered(
+    ev: &Evaluator<'_>,
+    steer: Option<&Evaluator<'_>>,
+    start: &Params,
+    knobs: &[Knob],
+    max_jacobians: usize,
+) -> Result<Screened, IdentifyError> {
+    let steer = steer.filter(|s| s.residual_len() == ev.residual_len());
+    let (_, _, rss, theta) = minimise(ev, steer, start, knobs, max_jacobians)?;
     Ok(Screened {
         params: params_at(start, knobs, &theta),
         rss,
@@ -615,8 +656,25 @@ pub fn fit(
     max_jacobians: usize,
     n_eff_ratio: f64,
 ) -> Result<FitResult, IdentifyError> {
+    fit_steered(ev, None, start, knobs, max_jacobians, n_eff_ratio)
+}
+
+/// [`fit`], with the optimiser's Jacobians taken on `steer` where given: the same records
+/// read on fewer samples and weighted as `ev`'s, so that its residual has `ev`'s rows
+/// ([`Evaluator::residual_len`]; the fits on every sample of fast records,
+/// [`super::search_rate`]). The residual minimised, the step accepted and the Jacobian of
+/// the uncertainties are `ev`'s.
+pub fn fit_steered(
+    ev: &Evaluator<'_>,
+    steer: Option<&Evaluator<'_>>,
+    start: &Params,
+    knobs: &[Knob],
+    max_jacobians: usize,
+    n_eff_ratio: f64,
+) -> Result<FitResult, IdentifyError> {
+    let steer = steer.filter(|s| s.residual_len() == ev.residual_len());
     let evals_before = ev.monitor.evaluations();
-    let (problem, report, rss, theta) = minimise(ev, start, knobs, max_jacobians)?;
+    let (problem, report, rss, theta) = minimise(ev, steer, start, knobs, max_jacobians)?;
     let jac = match problem.last_jacobian.lock().ok().and_then(|l| l.clone()) {
         Some((t, j)) if t == theta => Some(j),
         _ => None,

@@ -364,6 +364,7 @@ pub fn calibrate_with(
         params,
         &stages::fit_params(params, options),
         &full,
+        &nominal,
         &monitor,
     )?;
     if paper.baseline.is_none() {
@@ -515,7 +516,7 @@ fn calibrate_campaign(
             .collect();
         let mut fine = full.clone();
         drift::give_records_their_cd(&mut fine, &factors, 1.0);
-        search_rate::refit_on_every_sample(&mut pass, &fine, monitor)?;
+        search_rate::refit_on_every_sample(&mut pass, &campaign, &fine, monitor)?;
         notes.push(note);
         campaign = fine;
     }

@@ -26,6 +26,7 @@
 
 use super::replay::{PreparedRecord, RESOLUTION, SimChannels, part_name, rms};
 use crate::dsp::{NoiseFloor, band_parts};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// The bands of the measure \[Hz\]: drift and DC, the rig's motion, its upper harmonics, and
@@ -401,7 +402,7 @@ pub fn raw_error_report(
     limit: f64,
 ) -> RawErrorReport {
     let records: Vec<RecordRawError> = recs
-        .iter()
+        .par_iter()
         .zip(sims)
         .map(|(r, s)| record_raw_error(r, s))
         .collect();

@@ -24,7 +24,9 @@
 //!    again on every sample from where the search left it (`refit_on_every_sample`), so
 //!    values and uncertainties are those of the records as recorded (a sensor filter that runs
 //!    on the samples, such as the stroke sensor's lag, delays by `T − Δt/2` of the record's own
-//!    step);
+//!    step). The optimiser's steps there are steered by Jacobians of the read samples (the
+//!    same residual rows, weighted alike); the residual it minimises, every step it accepts
+//!    and the Jacobian of the uncertainties are on every sample;
 //! 2. the report stage — replays, the raw error and the verdict, the sensors' rule, the
 //!    ringing search — runs on every sample, as without this module;
 //! 3. if the twin the search delivered was at its raw-error floor on the read samples but is
@@ -44,7 +46,7 @@ use super::data::{self, Campaign};
 use super::fit::{self, Bic, Evaluator, Knob};
 use super::pass::LibraryPass;
 use super::progress::{Monitor, Stage};
-use super::replay::StepRule;
+use super::replay::{PreparedRecord, StepRule};
 use super::{CalibrationOptions, IdentifyError};
 use crate::dataset::Record;
 
@@ -149,6 +151,29 @@ pub fn coarse_campaign(
     Ok(Some((coarse, note)))
 }
 
+/// The records read on fewer samples (`coarse`) with the weights of the same records on every
+/// sample (`fine`, matched by name): their weighted residual has `fine`'s rows, so its
+/// Jacobian steers a fit on `fine` ([`refit_on_every_sample`]). `None` where a record has no
+/// match with as many residual rows.
+fn steering_records(
+    coarse: &[PreparedRecord],
+    fine: &[PreparedRecord],
+) -> Option<Vec<PreparedRecord>> {
+    fine.iter()
+        .map(|f| {
+            let c = coarse.iter().find(|c| c.name == f.name)?;
+            (c.residual_len() == f.residual_len()).then(|| PreparedRecord {
+                scale_du: f.scale_du,
+                scale_ydd: f.scale_ydd,
+                scale_p: f.scale_p,
+                scale_u_drift: f.scale_u_drift,
+                cd_factor: f.cd_factor,
+                ..c.clone()
+            })
+        })
+        .collect()
+}
+
 /// `2nd`, `3rd`, `4th`, … `21st`.
 fn ordinal(k: usize) -> String {
     let suffix = match (k % 10, k % 100) {
@@ -162,12 +187,18 @@ fn ordinal(k: usize) -> String {
 }
 
 /// Fits the pass's fits (the declared one, the library's and the proposal's) again on the
-/// fit records of `fine`, each from where the search left it, with the same knobs and at
-/// most [`REFIT_JACOBIANS`] Jacobians; the criterion's counts are taken on `fine` too. A
-/// drifting Cd's per-record values move with the campaign's Cd, so that each record keeps
+/// fit records of `fine`, each from where the search on `coarse` left it, with the same
+/// knobs and at most [`REFIT_JACOBIANS`] Jacobians; the criterion's counts are taken on
+/// `fine` too. The optimiser steps with Jacobians taken on `coarse`'s records weighted as
+/// `fine`'s ([`steering_records`]): the fit's residual is low-passed and decimated to the
+/// same rows at either rate, and its slopes differ by the twin's step only, while a replay
+/// of a 10 kHz record costs about four of its 2 kHz read. The residual minimised, each step
+/// accepted and the Jacobian of the uncertainties are on every sample ([`fit::fit_steered`]).
+/// A drifting Cd's per-record values move with the campaign's Cd, so that each record keeps
 /// the factor its replays use (`fine` carries the search's factors).
 pub(super) fn refit_on_every_sample(
     pass: &mut LibraryPass,
+    coarse: &Campaign,
     fine: &Campaign,
     monitor: &Monitor<'_>,
 ) -> Result<(), IdentifyError> {
@@ -179,11 +210,38 @@ pub(super) fn refit_on_every_sample(
         monitor,
         step: StepRule::Resolving,
     };
+    let steering = steering_records(&coarse.fit, &fine.fit);
+    let steer = steering.as_ref().map(|records| Evaluator {
+        records,
+        monitor,
+        step: StepRule::Resolving,
+    });
     let bic = Bic::at(&ev, &pass.declared.fit)?;
     let again = |f: &fit::FitResult, knobs: &[Knob]| {
-        fit::fit(&ev, &f.params, knobs, REFIT_JACOBIANS, bic.ratio())
+        fit::fit_steered(
+            &ev,
+            steer.as_ref(),
+            &f.params,
+            knobs,
+            REFIT_JACOBIANS,
+            bic.ratio(),
+        )
     };
-    pass.declared.fit = again(&pass.declared.fit, &pass.declared.knobs)?;
+    // The declared fit serves the report as the twin "before" (its replays and the
+    // criterion's baseline): its minimum is found again on every sample, without the
+    // Jacobian of uncertainties nothing reads (its values keep the search's 1-σ).
+    let declared = fit::screen_steered(
+        &ev,
+        steer.as_ref(),
+        &pass.declared.fit.params,
+        &pass.declared.knobs,
+        REFIT_JACOBIANS,
+    )?;
+    let d = &mut pass.declared.fit;
+    for v in &mut d.values {
+        v.value = v.knob.value(&declared.params);
+    }
+    (d.params, d.rss, d.n) = (declared.params, declared.rss, ev.residual_len());
     pass.search.current = again(&pass.search.current, &pass.search.knobs)?;
     if let Some(p) = &mut pass.proposal {
         p.fit = again(&p.fit, &p.knobs)?;

@@ -7,14 +7,14 @@ use super::data::Campaign;
 use super::diagnose;
 use super::effects::EffectSearch;
 use super::evaluate::{
-    diagnostics, fmt_signed, raw_pooled, replay_all, stage_errors, summary, weighted_of,
-    with_numerics_of,
+    diagnostics, fmt_signed, raw_pooled, replay_all, replays_of, stage_errors, summary,
+    weighted_of, with_numerics_of,
 };
 use super::fit::{self, Bic, Evaluator, FitResult, FittedValue, Knob};
 use super::paper::paper_baseline;
 use super::progress::{Monitor, Stage};
 use super::raw_error::{RawErrorReport, raw_error_report};
-use super::replay::Replay;
+use super::replay::{PreparedRecord, Replay};
 use super::result::{
     AddedEffect, CalibrationReport, ErrorSummary, PaperBaseline, RAW_NRMSE, RawNrmse, Verdict,
 };
@@ -65,15 +65,20 @@ pub struct Paper {
     pub error: Option<ErrorSummary>,
 }
 
-/// The paper's section-4 calibration on the fit records, from `start` (the fit parameters).
+/// The paper's section-4 calibration on the fit records, from `start` (the fit parameters);
+/// `nominal` is the [`nominal`] stage of `campaign`.
 pub fn paper(
     params: &Params,
     start: &Params,
     campaign: &Campaign,
+    nominal: &Nominal,
     monitor: &Monitor<'_>,
 ) -> Result<Paper, IdentifyError> {
     monitor.enter(Stage::PaperBaseline, 1);
-    let nominal_fit = replay_all(params, &campaign.fit)?;
+    let nominal_fit = match replays_of(&campaign.all, &nominal.replays, &campaign.fit) {
+        Some(r) => r,
+        None => replay_all(params, &campaign.fit)?,
+    };
     let baseline = paper_baseline(params, &campaign.fit, &nominal_fit);
     let mut start = *start;
     let mut error = None;
@@ -380,10 +385,24 @@ pub fn report(
         None => (replays_after, raw_error_after, None),
     };
     monitor.enter(Stage::Report, 7);
-    let replay = |p: &Params, recs| -> Result<Vec<Replay>, IdentifyError> {
+    let replay = |p: &Params, recs: &[PreparedRecord]| -> Result<Vec<Replay>, IdentifyError> {
         let r = replay_all(p, recs)?;
         monitor.advance();
         Ok(r)
+    };
+    // A part's replays taken from those of every record with the same parameters (`of`),
+    // replayed only where a record cannot be matched.
+    let part = |p: &Params,
+                of: (&[PreparedRecord], &[Replay]),
+                recs: &[PreparedRecord]|
+     -> Result<Vec<Replay>, IdentifyError> {
+        match replays_of(of.0, of.1, recs) {
+            Some(r) => {
+                monitor.advance();
+                Ok(r)
+            }
+            None => replay(p, recs),
+        }
     };
     // Beyond the library: the proposed fit, replayed as its calibrated.toml is.
     let beyond = match &found.proposal {
@@ -396,7 +415,10 @@ pub fn report(
             let sims: Vec<_> = reps.iter().map(|r| &r.sim).collect();
             let raw = raw_error_report(all, &sims, options.raw_error_limit);
             let nrmse = raw_pooled(&reps);
-            let val = raw_pooled(&replay_all(&fit.params, val_recs)?);
+            let val = raw_pooled(&match replays_of(all, &reps, val_recs) {
+                Some(r) => r,
+                None => replay_all(&fit.params, val_recs)?,
+            });
             Some(Beyond {
                 terms: super::proposed::terms(prop, &fit),
                 calibrated: declared_values(&fit),
@@ -417,20 +439,20 @@ pub fn report(
     let w_after = weighted_of(all, &replays_after);
     let error_after = summary(all, &replays_after, &w_after);
     let diagnostics_after = diagnostics(all, &replays_after, &w_after);
-    let fit_before = replay(&before_params, fit_recs)?;
-    let fit_after = replay(&current.params, fit_recs)?;
+    let fit_before = part(&before_params, (all, &replays_before), fit_recs)?;
+    let fit_after = part(&current.params, (all, &replays_after), fit_recs)?;
     let error_training = stage_errors(fit_recs, &fit_before, &fit_after);
     // Nominal is the preset as it is: without the per-record Cd of a drift.
     let plain: Vec<_> = val_recs
         .iter()
-        .map(|r| super::replay::PreparedRecord {
+        .map(|r| PreparedRecord {
             cd_factor: 1.0,
             ..r.clone()
         })
         .collect();
-    let val_nominal = replay(params, &plain)?;
-    let val_before = replay(&before_params, val_recs)?;
-    let val_after = replay(&current.params, val_recs)?;
+    let val_nominal = part(params, (all, &found.nominal.replays), &plain)?;
+    let val_before = part(&before_params, (all, &replays_before), val_recs)?;
+    let val_after = part(&current.params, (all, &replays_after), val_recs)?;
     let error_validation = stage_errors(val_recs, &val_before, &val_after);
     let raw_nrmse = RawNrmse {
         definition: RAW_NRMSE.into(),
@@ -592,7 +614,7 @@ pub fn report(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::identify::replay::{PreparedRecord, SimChannels};
+    use crate::identify::replay::SimChannels;
 
     /// A 12-bit stroke record (10 µm noise) of a 2 Hz motion, and the twin's replay of it:
     /// the same motion, its own noise, plus `drift` [m] at time `t` [s].
