@@ -272,6 +272,47 @@ pub(super) fn refit_on_every_sample(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::identify::replay::MetricOptions;
+
+    /// A 10 kHz record of `n` samples and its every-5th-sample read have the same residual
+    /// rows, whatever `n`, so the refit on every sample is steered (not silently unsteered).
+    #[test]
+    fn a_10_khz_record_and_its_read_samples_have_the_same_residual_rows() {
+        for n in [20_001, 20_002, 20_003, 20_004, 20_005, 23_457] {
+            let dt = 1e-4;
+            let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+            let wave = |a: f64, f: f64| -> Vec<f64> {
+                t.iter()
+                    .map(|t| a * (2.0 * std::f64::consts::PI * f * t).sin())
+                    .collect()
+            };
+            let rec = Record {
+                path: "ten_khz.csv".into(),
+                metadata: vec![],
+                dt,
+                t: t.clone(),
+                v_in: Some(wave(0.5, 3.0)),
+                u: Some(wave(2e-3, 3.0)),
+                x: None,
+                xdd: None,
+                ydd: Some(wave(0.4, 3.0)),
+                p1: None,
+                p2: None,
+                warnings: vec![],
+            };
+            let opt = MetricOptions::default();
+            let fine = PreparedRecord::new(&rec, &opt).expect("a valid record");
+            let coarse = PreparedRecord::new(&rec.decimated(read_every(1.0 / dt)), &opt)
+                .expect("a valid record");
+            let steering = steering_records(&[coarse], std::slice::from_ref(&fine));
+            let s = steering.unwrap_or_else(|| panic!("{n} samples: rows differ"));
+            assert_eq!(s[0].residual_len(), fine.residual_len());
+            assert_eq!(
+                (s[0].scale_du, s[0].scale_ydd),
+                (fine.scale_du, fine.scale_ydd)
+            );
+        }
+    }
 
     /// 10 kHz is read every 5th sample (2 kHz), 8 kHz every 4th, 5 kHz every 2nd (2.5 kHz);
     /// below 4 kHz every sample.
