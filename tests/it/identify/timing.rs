@@ -10,8 +10,10 @@
 //! ```
 //!
 //! `CAMPAIGN_EFFECT` is `null` (the default), `friction` (Coulomb 40 N, Stribeck 15 N at
-//! 10 mm/s, viscous 80 N·s/m), `overlap` (40 µm) or `compliance` (hoses 0.6 GPa, chambers
-//! 1.2 GPa); the rig's declared mismatch is the campaign tests' (Cd −5 %, τ +1.5 ms).
+//! 10 mm/s, viscous 80 N·s/m), `overlap` (40 µm), `compliance` (hoses 0.6 GPa, chambers
+//! 1.2 GPa), `leakage_compliance` (3.5·10⁻¹² m³/(s·Pa) beside hoses at 0.68 GPa), or one
+//! outside the library: `quadratic_damping` (2250 N·s²/m²) or `null_drift` (the valve's null
+//! drifting 2 mV/s); the rig's declared mismatch is the campaign tests' (Cd −5 %, τ +1.5 ms).
 //! `CAMPAIGN_ACC_NOISE` sets the accelerometers' noise RMS [m/s²] (default the rig's 0.08).
 
 use super::rig::{Rig, RigEffects, Test};
@@ -36,7 +38,17 @@ fn effects(name: &str) -> RigEffects {
         "friction" => fx.friction = Some((40.0, 15.0, 0.01, 80.0)),
         "overlap" => fx.overlap = Some(40e-6),
         "compliance" => fx.compliance = Some((0.6e9, 1.2e9)),
-        other => panic!("CAMPAIGN_EFFECT={other}: one of null, friction, overlap, compliance"),
+        "leakage_compliance" => {
+            fx.leakage = Some(3.5e-12);
+            fx.compliance = Some((0.68e9, 1.2e9));
+        }
+        // Outside the library (the survey's middle magnitudes).
+        "quadratic_damping" => fx.quadratic_damping = Some(2250.0),
+        "null_drift" => fx.null_drift_v_per_s = Some(2e-3),
+        other => panic!(
+            "CAMPAIGN_EFFECT={other}: one of null, friction, overlap, compliance, \
+             leakage_compliance, quadratic_damping, null_drift"
+        ),
     }
     fx
 }
