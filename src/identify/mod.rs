@@ -533,11 +533,19 @@ fn calibrate_campaign(
         notes,
     };
     let report = stages::report(params, found, options, monitor)?;
-    if coarse_at_floor && !report.raw_error_after.at_floor() {
+    // The same twin on both sides: the one whose raw error was taken on the read samples
+    // (`pass.final_params`, a proposal's where there is one), so a proposal's twin is held
+    // against its own raw error on every sample, not against the library's, which a
+    // proposal is there for because it is above the floor.
+    let delivered = report
+        .raw_error_proposed
+        .as_ref()
+        .unwrap_or(&report.raw_error_after);
+    if coarse_at_floor && !delivered.at_floor() {
         return Ok(Outcome::Again(format!(
             "read on fewer samples the calibrated twin was at its raw-error floor, on every \
              sample it is not ({}): searched again on every sample",
-            report.raw_error_after.summary()
+            delivered.summary()
         )));
     }
     let report = refuse_undetermined(step_within_limits(report));
