@@ -32,9 +32,22 @@ pub(super) fn replay_all(
 /// The replays of `recs` taken from `replays`, the replays of `all` with the same parameters:
 /// a replay depends only on the parameters and the record, and `recs` (the fit or the
 /// held-out part) are copies of records of `all`, so the report replays each twin once.
-/// `None` when a record of `recs` is not in `all` exactly once by name and length (then the
-/// caller replays it).
+/// Where a record of `recs` is not in `all` exactly once by name, length and Cd factor, the
+/// part is replayed with `params`.
 pub(super) fn replays_of(
+    params: &Params,
+    all: &[PreparedRecord],
+    replays: &[Replay],
+    recs: &[PreparedRecord],
+) -> Result<Vec<Replay>, IdentifyError> {
+    match picked(all, replays, recs) {
+        Some(r) => Ok(r),
+        None => replay_all(params, recs),
+    }
+}
+
+/// [`replays_of`]'s pick: `None` where a record cannot be matched.
+fn picked(
     all: &[PreparedRecord],
     replays: &[Replay],
     recs: &[PreparedRecord],

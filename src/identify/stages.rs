@@ -75,10 +75,7 @@ pub fn paper(
     monitor: &Monitor<'_>,
 ) -> Result<Paper, IdentifyError> {
     monitor.enter(Stage::PaperBaseline, 1);
-    let nominal_fit = match replays_of(&campaign.all, &nominal.replays, &campaign.fit) {
-        Some(r) => r,
-        None => replay_all(params, &campaign.fit)?,
-    };
+    let nominal_fit = replays_of(params, &campaign.all, &nominal.replays, &campaign.fit)?;
     let baseline = paper_baseline(params, &campaign.fit, &nominal_fit);
     let mut start = *start;
     let mut error = None;
@@ -390,19 +387,14 @@ pub fn report(
         monitor.advance();
         Ok(r)
     };
-    // A part's replays taken from those of every record with the same parameters (`of`),
-    // replayed only where a record cannot be matched.
+    // A part's replays taken from those of every record with the same parameters (`of`).
     let part = |p: &Params,
-                of: (&[PreparedRecord], &[Replay]),
+                of: &[Replay],
                 recs: &[PreparedRecord]|
      -> Result<Vec<Replay>, IdentifyError> {
-        match replays_of(of.0, of.1, recs) {
-            Some(r) => {
-                monitor.advance();
-                Ok(r)
-            }
-            None => replay(p, recs),
-        }
+        let r = replays_of(p, all, of, recs)?;
+        monitor.advance();
+        Ok(r)
     };
     // Beyond the library: the proposed fit, replayed as its calibrated.toml is.
     let beyond = match &found.proposal {
@@ -415,10 +407,7 @@ pub fn report(
             let sims: Vec<_> = reps.iter().map(|r| &r.sim).collect();
             let raw = raw_error_report(all, &sims, options.raw_error_limit);
             let nrmse = raw_pooled(&reps);
-            let val = raw_pooled(&match replays_of(all, &reps, val_recs) {
-                Some(r) => r,
-                None => replay_all(&fit.params, val_recs)?,
-            });
+            let val = raw_pooled(&replays_of(&fit.params, all, &reps, val_recs)?);
             Some(Beyond {
                 terms: super::proposed::terms(prop, &fit),
                 calibrated: declared_values(&fit),
@@ -439,8 +428,8 @@ pub fn report(
     let w_after = weighted_of(all, &replays_after);
     let error_after = summary(all, &replays_after, &w_after);
     let diagnostics_after = diagnostics(all, &replays_after, &w_after);
-    let fit_before = part(&before_params, (all, &replays_before), fit_recs)?;
-    let fit_after = part(&current.params, (all, &replays_after), fit_recs)?;
+    let fit_before = part(&before_params, &replays_before, fit_recs)?;
+    let fit_after = part(&current.params, &replays_after, fit_recs)?;
     let error_training = stage_errors(fit_recs, &fit_before, &fit_after);
     // Nominal is the preset as it is: without the per-record Cd of a drift.
     let plain: Vec<_> = val_recs
@@ -450,9 +439,9 @@ pub fn report(
             ..r.clone()
         })
         .collect();
-    let val_nominal = part(params, (all, &found.nominal.replays), &plain)?;
-    let val_before = part(&before_params, (all, &replays_before), val_recs)?;
-    let val_after = part(&current.params, (all, &replays_after), val_recs)?;
+    let val_nominal = part(params, &found.nominal.replays, &plain)?;
+    let val_before = part(&before_params, &replays_before, val_recs)?;
+    let val_after = part(&current.params, &replays_after, val_recs)?;
     let error_validation = stage_errors(val_recs, &val_before, &val_after);
     let raw_nrmse = RawNrmse {
         definition: RAW_NRMSE.into(),
