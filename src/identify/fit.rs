@@ -540,6 +540,13 @@ impl Bic {
     }
 }
 
+/// The residual's variance per independent residual, `s2 = RSS/(n − p)/(n_eff/n)`, of a
+/// fit of `p` parameters to `n` residuals with `n_eff_ratio` = n_eff/n: the scale of the
+/// covariance ([`fit`]) and of a profile's Δχ² ([`super::profile`]).
+pub fn residual_variance(rss: f64, n: usize, p: usize, n_eff_ratio: f64) -> f64 {
+    rss / (n.saturating_sub(p).max(1)) as f64 / n_eff_ratio.clamp(1e-6, 1.0)
+}
+
 /// The parameters' covariance `s2·(JᵀJ)⁻¹` from the Jacobian `jac`, with each parameter the
 /// residual does not respond to at all (a zero column: a knob held at its bound, as a sensor
 /// lag at 0 or a Stribeck velocity at its floor, where the one-sided difference moves
@@ -687,7 +694,7 @@ pub fn fit_steered(
     };
     let n = jac.nrows();
     let p = knobs.len();
-    let s2 = rss / (n.saturating_sub(p).max(1)) as f64 / n_eff_ratio.clamp(1e-6, 1.0);
+    let s2 = residual_variance(rss, n, p, n_eff_ratio);
     let cov = covariance(&jac, s2);
     let params = params_at(start, knobs, &theta);
     let mut values = Vec::with_capacity(p);

@@ -103,8 +103,7 @@ pub fn hose_split(
             .map(|p| fit::fit(ev, p, &others, max_jacobians, n_eff_ratio))
             .collect()
     };
-    let dof = fit.n.saturating_sub(knobs.len()).max(1) as f64;
-    let s2 = fit.rss / dof / n_eff_ratio.clamp(1e-6, 1.0);
+    let s2 = fit::residual_variance(fit.rss, fit.n, knobs.len(), n_eff_ratio);
     let mut sides = fits.into_iter().collect::<Result<Vec<_>, _>>()?;
     // A side at least as deep as the fit is another valley: the fit is done again in full
     // from the deepest, and the first end point becomes one of the profile's points.
@@ -276,8 +275,7 @@ pub fn mass_trade(
         fit::fit(ev, &p, &others, max_jacobians, n_eff_ratio)
     };
     let (up, down) = rayon::join(|| held(mass + step), || held(mass - step));
-    let dof = fit.n.saturating_sub(knobs.len()).max(1) as f64;
-    let s2 = fit.rss / dof / n_eff_ratio.clamp(1e-6, 1.0);
+    let s2 = fit::residual_variance(fit.rss, fit.n, knobs.len(), n_eff_ratio);
     let mut widened = local;
     let mut points = Vec::with_capacity(2);
     for side in [up?, down?] {
