@@ -252,6 +252,7 @@ pub(super) fn insufficient_report(
         proposed: Vec::new(),
         proposed_calibrated: Vec::new(),
         proposed_candidates: Vec::new(),
+        proposed_leaves_out: Vec::new(),
         raw_error_proposed: None,
         drifts: Vec::new(),
         verdict: Verdict::InsufficientData,

@@ -45,8 +45,11 @@
 //!    floor, a family of physically meaningful corrections ([`proposed::CorrectionId`]: Cd
 //!    against spool opening, flow gain per direction and per metering edge, a spring,
 //!    quadratic damping, a turbulent leakage) is searched the same way (ΔBIC, share of the
-//!    residual, held-out records). What is kept is *proposed*: described in physical words,
-//!    carried by `calibrated.toml`, never counted by the verdict. Then each drift candidate
+//!    residual, held-out records), until the kept terms bring the raw error to its floor. An
+//!    effect the library added that no longer earns its parameters beside the kept terms (it
+//!    followed the effect the library lacks) is left out of the proposed twin. What is kept
+//!    is *proposed*: described in physical words, carried by `calibrated.toml`, never
+//!    counted by the verdict. Then each drift candidate
 //!    ([`drift`]) is fitted on every record alone and reported when it changes with the
 //!    record order beyond its uncertainty. A drift of Cd calibrates the campaign again with
 //!    each record at its own Cd ([`replay::PreparedRecord::cd_factor`], taken at the declared

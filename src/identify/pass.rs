@@ -131,5 +131,13 @@ fn beyond_the_library(
     if context::raw_error_at(cx, campaign, params, &search.current.params)?.at_floor() {
         return Ok(None);
     }
-    proposed::search(cx, &search.current, &search.knobs)
+    let library: Vec<_> = search.added.iter().map(|a| a.effect).collect();
+    proposed::search(
+        cx,
+        campaign,
+        params,
+        &search.current,
+        &search.knobs,
+        &library,
+    )
 }

@@ -40,6 +40,12 @@ pub enum Stage {
         /// Round (1 = first).
         round: usize,
     },
+    /// An effect the library added, switched off beside the proposed terms and the rest
+    /// fitted again ([`super::proposed::LeftOut`]).
+    LeftOut {
+        /// The effect.
+        effect: EffectId,
+    },
     /// Every drift candidate fitted on each record alone ([`super::drift`]).
     Drifts,
     /// The mass or the oil's stiffness searched again for the oil column's ringing
@@ -57,7 +63,7 @@ impl Stage {
     fn counts_jacobians(self) -> bool {
         matches!(
             self,
-            Stage::DeclaredFit | Stage::Refit { .. } | Stage::RecordRate
+            Stage::DeclaredFit | Stage::Refit { .. } | Stage::LeftOut { .. } | Stage::RecordRate
         )
     }
 }
@@ -73,6 +79,11 @@ impl fmt::Display for Stage {
             Stage::Proposed { round } => {
                 write!(f, "corrections beyond the library (round {round})")
             }
+            Stage::LeftOut { effect } => write!(
+                f,
+                "{} switched off beside the proposed terms",
+                effect.name()
+            ),
             Stage::Drifts => f.write_str("parameters record by record (drifts)"),
             Stage::Ringing => {
                 f.write_str("the mass or the oil's stiffness against the oil column's ringing")

@@ -5,16 +5,22 @@
 //! on the fit records, and the best is re-fitted with every knob and kept only when it removes
 //! at least [`CalibrationOptions::min_relative_gain`] of the residual *and* lowers the
 //! weighted error on the held-out records by [`CalibrationOptions::min_validation_gain`].
-//! Rounds repeat up to [`CalibrationOptions::max_proposed`] terms. What is kept is
+//! Rounds repeat up to [`CalibrationOptions::max_proposed`] terms, and stop once the twin with
+//! the kept terms is at its raw-error floor (the search's own condition to run). Then each
+//! effect the library added is switched off and the rest fitted again: one that no longer
+//! earns its parameters beside the proposed terms (the library had added it to follow the
+//! effect it lacks: a supply sag beside a quadratic damping) is left out of the proposed
+//! twin ([`Proposal::left_out`]). What is kept is
 //! *proposed*: the verdict stays the library's, and the report says in physical words what the
 //! terms are and whether they bring every raw channel to its floor.
 
-use super::context::{SearchContext, validation_rms};
+use super::context::{SearchContext, raw_error_at, validation_rms};
+use super::data::Campaign;
 use super::fit::{self, FitResult, Knob};
 use super::progress::Stage;
-use super::result::{ProposedScore, ProposedTerm};
+use super::result::{LeftOut, ProposedScore, ProposedTerm};
 use super::starts::best_of;
-use super::{CalibrationOptions, IdentifyError};
+use super::{CalibrationOptions, EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -175,6 +181,8 @@ pub struct Proposal {
     pub kept: Vec<(CorrectionId, f64, f64, [f64; 2])>,
     /// Every candidate's score, per round.
     pub candidates: Vec<ProposedScore>,
+    /// The library's effects the proposed twin leaves out ([`leave_out_followers`]).
+    pub left_out: Vec<LeftOut>,
     /// Notes (rejected terms).
     pub notes: Vec<String>,
 }
@@ -221,11 +229,16 @@ fn multi_start(
 }
 
 /// Rounds of ranking and re-fitting corrections from the library's final fit `start` (of
-/// `knobs`), as described in the [module docs](self). `None` when nothing was kept.
+/// `knobs`, with the effects `library` added), as described in the [module docs](self): the
+/// raw error is taken on `campaign`'s records at `preset`'s step. `None` when nothing was
+/// kept.
 pub fn search(
     cx: &SearchContext<'_>,
+    campaign: &Campaign,
+    preset: &Params,
     start: &FitResult,
     knobs: &[Knob],
+    library: &[EffectId],
 ) -> Result<Option<Proposal>, IdentifyError> {
     let (ev, options): (_, &CalibrationOptions) = (cx.ev, cx.options);
     let mut current = start.clone();
@@ -302,14 +315,106 @@ pub fn search(
         knobs = trial_knobs;
         current = refit;
         current_val = val;
+        // The search runs because the library's twin is above its raw-error floor; once the
+        // kept terms bring it there, a further round has nothing left to explain.
+        let raw = raw_error_at(cx, campaign, preset, &current.params)?;
+        if raw.at_floor() && !remaining.is_empty() && kept.len() < options.max_proposed {
+            notes.push(format!(
+                "proposed round {round}: with `{}` every raw channel of every record is at its \
+                 noise floor ({}): no further round",
+                c.name(),
+                raw.summary()
+            ));
+            break;
+        }
     }
-    Ok((!kept.is_empty()).then_some(Proposal {
+    if kept.is_empty() {
+        return Ok(None);
+    }
+    let left_out = leave_out_followers(
+        cx,
+        campaign,
+        preset,
+        library,
+        (&mut current, &mut knobs, &mut current_val),
+        &mut notes,
+    )?;
+    Ok(Some(Proposal {
         fit: current,
         knobs,
         kept,
         candidates,
+        left_out,
         notes,
     }))
+}
+
+/// Each effect of `library` (the last added first) switched off in the proposed fit and every
+/// other knob fitted again: it is left out of the proposed twin when keeping it beside the
+/// proposed terms has a ΔBIC ≥ 0, the held-out weighted RMS without it rises by less than
+/// [`CalibrationOptions::min_validation_gain`], and the raw error's worst band does not
+/// rise (nor leave its floor, where it was there). The library's own twin and verdict keep
+/// it: they judge the library.
+fn leave_out_followers(
+    cx: &SearchContext<'_>,
+    campaign: &Campaign,
+    preset: &Params,
+    library: &[EffectId],
+    (current, knobs, current_val): (&mut FitResult, &mut Vec<Knob>, &mut f64),
+    notes: &mut Vec<String>,
+) -> Result<Vec<LeftOut>, IdentifyError> {
+    let (ev, options) = (cx.ev, cx.options);
+    let mut left_out = Vec::new();
+    let mut current_raw = None;
+    for &effect in library.iter().rev() {
+        ev.monitor
+            .enter(Stage::LeftOut { effect }, options.max_iterations + 1);
+        let without: Vec<Knob> = knobs
+            .iter()
+            .copied()
+            .filter(|k| !effect.knobs().contains(k))
+            .collect();
+        let mut p = current.params;
+        effect.disable(&mut p);
+        let again = fit::fit(ev, &p, &without, options.max_iterations, cx.bic.ratio())?;
+        ev.monitor.advance();
+        let score = cx.bic.value(current.rss, knobs.len()) - cx.bic.value(again.rss, without.len());
+        let val = validation_rms(&again.params, cx.validation)?;
+        let held = val < (1.0 + options.min_validation_gain) * *current_val;
+        let raw_ok = if score >= 0.0 && held {
+            let before = match current_raw {
+                Some(w) => w,
+                None => raw_error_at(cx, campaign, preset, &current.params)?,
+            };
+            let after = raw_error_at(cx, campaign, preset, &again.params)?;
+            let ratio =
+                |r: &super::raw_error::RawErrorReport| r.worst.as_ref().map_or(0.0, |w| w.ratio);
+            let ok = (after.at_floor() || !before.at_floor())
+                && ratio(&after) <= ratio(&before).max(options.raw_error_limit);
+            current_raw = Some(if ok { after } else { before });
+            ok
+        } else {
+            false
+        };
+        if !(score >= 0.0 && held && raw_ok) {
+            continue;
+        }
+        notes.push(format!(
+            "beside the proposed terms the library's `{}` no longer earns its parameters (ΔBIC \
+             {score:+.1} for keeping it; held-out weighted RMS {:.3} → {val:.3} without it, the \
+             raw error's worst band no higher): the library had added it to follow the effect \
+             it lacks, and the proposed twin leaves it out",
+            effect.name(),
+            *current_val,
+        ));
+        left_out.push(LeftOut {
+            name: effect.name().into(),
+            score,
+            validation: [*current_val, val],
+        });
+        (*current, *knobs, *current_val) = (again, without, val);
+    }
+    Ok(left_out)
 }
 
 /// The kept terms of `proposal` as reported, with the values of its final fit `fit`.

@@ -86,6 +86,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             .map(|v| (v.name.clone(), json!({"value": json_number(v.value), "uncertainty": json_number(v.std)})))
             .collect::<serde_json::Map<_, _>>(),
         "proposed_candidates": r.proposed_candidates,
+        "proposed_leaves_out": r.proposed_leaves_out,
         "drifts": r.drifts,
         "sensors": r.sensors,
         "calibrated_uncertainties": unc,
@@ -256,6 +257,35 @@ With {}: {}. The verdict stays `{}`: it judges the library. `calibrated.toml`   
         r.verdict.name(),
         declared.join(", ")
     );
+    if !r.proposed_leaves_out.is_empty() {
+        let names: Vec<String> = r
+            .proposed_leaves_out
+            .iter()
+            .map(|l| {
+                format!(
+                    "`{}` (ΔBIC {:+.1} for keeping it; held-out weighted RMS {:.3} → {:.3} \
+                     without it)",
+                    l.name, l.score, l.validation[0], l.validation[1]
+                )
+            })
+            .collect();
+        let one = names.len() == 1;
+        let _ = writeln!(
+            s,
+            "Beside the proposed terms the library's {} no longer {}: the library had added \
+             {} to follow the effect it lacks. The twin with the proposed terms \
+             (`calibrated.toml`) leaves {2} out; the effects listed below are the library's \
+             twin, which the verdict judges.
+",
+            names.join(" and "),
+            if one {
+                "earns its parameters"
+            } else {
+                "earn their parameters"
+            },
+            if one { "it" } else { "them" },
+        );
+    }
 }
 
 /// The Markdown report.

@@ -153,6 +153,18 @@ pub struct ProposedScore {
     pub value: f64,
 }
 
+/// An effect the library added that the twin with the proposed terms leaves out: beside them
+/// it no longer earns its parameters (`report.json`'s `proposed_leaves_out` list).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LeftOut {
+    /// The effect's name (`supply_sag`, …).
+    pub name: String,
+    /// ΔBIC of keeping it beside the proposed terms (≥ 0: the criterion does not favour it).
+    pub score: f64,
+    /// Held-out weighted RMS `[with it, without it]`.
+    pub validation: [f64; 2],
+}
+
 /// A parameter that changes from record to record (`report.json`'s `drifts` list).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Drift {
@@ -188,6 +200,9 @@ pub struct CalibrationReport {
     pub proposed_calibrated: Vec<FittedValue>,
     /// Every candidate correction's score, per round (empty when the search did not run).
     pub proposed_candidates: Vec<ProposedScore>,
+    /// The library's effects the twin with the proposed terms leaves out (empty without
+    /// proposed terms): [`Self::effects`] keeps them, as the library's twin does.
+    pub proposed_leaves_out: Vec<LeftOut>,
     /// The raw error measure with the proposed terms (`calibrated.toml`), if any.
     pub raw_error_proposed: Option<RawErrorReport>,
     /// Parameters that change from record to record ([`super::drift`]), empty when none.

@@ -306,6 +306,7 @@ struct Beyond {
     terms: Vec<super::result::ProposedTerm>,
     calibrated: Vec<FittedValue>,
     candidates: Vec<super::result::ProposedScore>,
+    left_out: Vec<super::result::LeftOut>,
     raw: RawErrorReport,
     nrmse: std::collections::BTreeMap<String, f64>,
     val: std::collections::BTreeMap<String, f64>,
@@ -412,6 +413,7 @@ pub fn report(
                 terms: super::proposed::terms(prop, &fit),
                 calibrated: declared_values(&fit),
                 candidates: prop.candidates.clone(),
+                left_out: prop.left_out.clone(),
                 raw,
                 nrmse,
                 val,
@@ -540,17 +542,38 @@ pub fn report(
             .validation
             .insert("proposed".into(), b.val.clone());
     }
-    let (out_params, proposed, proposed_calibrated, proposed_candidates, raw_error_proposed) =
-        match beyond {
-            Some(b) => (b.params, b.terms, b.calibrated, b.candidates, Some(b.raw)),
-            None => (current.params, Vec::new(), Vec::new(), Vec::new(), None),
-        };
+    let (
+        out_params,
+        proposed,
+        proposed_calibrated,
+        proposed_candidates,
+        proposed_leaves_out,
+        raw_error_proposed,
+    ) = match beyond {
+        Some(b) => (
+            b.params,
+            b.terms,
+            b.calibrated,
+            b.candidates,
+            b.left_out,
+            Some(b.raw),
+        ),
+        None => (
+            current.params,
+            Vec::new(),
+            Vec::new(),
+            Vec::new(),
+            Vec::new(),
+            None,
+        ),
+    };
     Ok(CalibrationReport {
         nominal: *params,
         params: out_params,
         proposed,
         proposed_calibrated,
         proposed_candidates,
+        proposed_leaves_out,
         raw_error_proposed,
         drifts: found.drifts,
         verdict,
