@@ -396,7 +396,7 @@ fn randomised_rigs_confusion_table() {
         let verdict_ok = r.verdict == c.class.right_verdict();
         let fx_ok = effects_right(c, &r);
         eprintln!(
-            "case {i:2} {:<30} {:<45} verdict {:<18} {} effects {:?} proposed {:?} drifts {:?} sensors {:?}; u {:.1}→{:.1} µm, ÿ {:.3}→{:.3} m/s² above noise{stops}; {secs:.1} s",
+            "case {i:2} {:<30} {:<45} verdict {:<18} {} effects {:?} proposed {:?} (leaving out {:?}) drifts {:?} sensors {:?}; u {:.1}→{:.1} µm, ÿ {:.3}→{:.3} m/s² above noise{stops}; {secs:.1} s",
             c.class.name(),
             c.label,
             r.verdict.name(),
@@ -407,7 +407,19 @@ fn randomised_rigs_confusion_table() {
                 .collect::<Vec<_>>(),
             r.proposed
                 .iter()
-                .map(|t| t.name.as_str())
+                .map(|t| {
+                    // Its size (the direction term also has the travel it builds over).
+                    let (k, v) = t
+                        .params
+                        .iter()
+                        .find(|(k, _)| !k.contains("width"))
+                        .expect("a sizing parameter");
+                    format!("{} {v:.4e} ± {:.1e}", t.name, t.uncertainties[k])
+                })
+                .collect::<Vec<_>>(),
+            r.proposed_leaves_out
+                .iter()
+                .map(|l| l.name.as_str())
                 .collect::<Vec<_>>(),
             r.drifts
                 .iter()
