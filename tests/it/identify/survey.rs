@@ -130,25 +130,34 @@ pub(super) fn cases(seed: u64) -> Vec<Case> {
             }
             Class::Outside => match (i / 6) % 5 {
                 0 => {
-                    fx.cd_spool = Some(rng.random_range(0.08..0.2));
-                    label.push("Cd per direction".into());
+                    let a = rng.random_range(0.08..0.2);
+                    fx.cd_spool = Some(a);
+                    label.push(format!("Cd per direction ±{:.1} %", 100.0 * a));
                 }
                 1 => {
-                    fx.cd_opening = Some(rng.random_range(0.1..0.2));
-                    label.push("Cd rising with opening".into());
+                    let a = rng.random_range(0.1..0.2);
+                    fx.cd_opening = Some(a);
+                    label.push(format!("Cd rising with opening {:.1} %", 100.0 * a));
                 }
                 2 => {
-                    fx.quadratic_damping = Some(rng.random_range(1500.0..3000.0));
-                    label.push("quadratic damping".into());
+                    let c = rng.random_range(1500.0..3000.0);
+                    fx.quadratic_damping = Some(c);
+                    label.push(format!("quadratic damping {c:.0} N·s²/m²"));
                 }
                 3 => {
-                    fx.null_drift_v_per_s = Some(rng.random_range(1e-3..3e-3));
-                    label.push("valve null drifting".into());
+                    let d = rng.random_range(1e-3..3e-3);
+                    fx.null_drift_v_per_s = Some(d);
+                    label.push(format!("valve null drifting {:.2} mV/s", 1e3 * d));
                 }
                 _ => {
-                    fx.cd_spool = Some(rng.random_range(0.08..0.15));
-                    fx.quadratic_damping = Some(rng.random_range(1500.0..3000.0));
-                    label.push("Cd per direction + quadratic damping".into());
+                    let a = rng.random_range(0.08..0.15);
+                    let c = rng.random_range(1500.0..3000.0);
+                    fx.cd_spool = Some(a);
+                    fx.quadratic_damping = Some(c);
+                    label.push(format!(
+                        "Cd per direction ±{:.1} % + damping {c:.0}",
+                        100.0 * a
+                    ));
                 }
             },
             Class::Sensor => {
