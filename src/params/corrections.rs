@@ -19,8 +19,9 @@ use serde::{Deserialize, Serialize};
 ///   of the pressure difference (a turbulent gap), `c_t·sign(Δp)·√|Δp|`.
 /// * Valve command, Eq. (10): a first-order lag `T_cmd·v̇ = v_in − v` between the command as
 ///   sent and the one the valve acts on (a servo amplifier's or a proportional magnet's),
-///   beside the pure delay τ; and a null that drifts during each record, `+ r·t` with `t`
-///   from the record's start (a torque motor or an amplifier warming up). Applied by the
+///   beside the pure delay τ; and a null that drifts during each record, `+ r·t` at the
+///   valve, after the delay, with `t` from the record's start (a torque motor or an
+///   amplifier warming up). Applied by the
 ///   replay of measured records (`seat-twin replay`, `seat-twin calibrate`: the record's
 ///   command is filtered, then offset, before it drives the valve, [`Self::acted_command`]);
 ///   the twin's own closed-loop simulation does not apply them.
@@ -79,10 +80,14 @@ impl CorrectionParams {
         )
     }
 
-    /// The command \[V\] the valve acts on, sampled every `dt` \[s\], for the command as sent
-    /// `v_in` sampled at the same instants: [`Self::lagged_command`], plus the null's drift
-    /// `r·t` from the first sample. `None` when neither term is on (the valve acts on `v_in`).
-    pub fn acted_command(&self, v_in: &[f64], dt: f64) -> Option<Vec<f64>> {
+    /// The command \[V\] that drives the valve's delay `delay_s` \[s\] (τ), sampled every `dt`
+    /// \[s\], for the command as sent `v_in` sampled at the same instants:
+    /// [`Self::lagged_command`], plus the null's drift taken `delay_s` ahead, `r·(t + τ)`, so
+    /// that the valve, acting on this command τ later, sees its null at `r·t` from the
+    /// record's start (the null is the valve's own, after the delay; from the first sample on
+    /// with a drift of `r·τ` at most in the first τ, where the valve acts on the command held
+    /// before the record). `None` when neither term is on (the valve acts on `v_in`).
+    pub fn acted_command(&self, v_in: &[f64], dt: f64, delay_s: f64) -> Option<Vec<f64>> {
         let r = self.command_drift_v_per_s;
         if self.command_lag_s <= 0.0 && r == 0.0 {
             return None;
@@ -90,7 +95,7 @@ impl CorrectionParams {
         let mut v = self.lagged_command(v_in, dt);
         if r != 0.0 {
             for (i, x) in v.iter_mut().enumerate() {
-                *x += r * (i as f64 * dt);
+                *x += r * (i as f64 * dt + delay_s);
             }
         }
         Some(v)
@@ -201,29 +206,36 @@ mod tests {
         assert_eq!(CorrectionParams::default().lagged_command(&sine, dt), sine);
     }
 
-    /// The command the valve acts on: none without a term; the drift alone adds `r·t` from
-    /// the first sample; with the lag too, the lagged command plus the same ramp.
+    /// The command that drives the valve's delay: none without a term; the drift alone adds
+    /// `r·(t + τ)`, so that τ later the valve's null is at `r·t` from the record's start;
+    /// with the lag too, the lagged command plus the same ramp.
     #[test]
     fn a_drifting_null_adds_its_ramp_to_the_command() {
-        let dt = 1e-3;
+        let (dt, tau) = (1e-3, 0.019);
         let v_in: Vec<f64> = (0..500).map(|i| (0.05 * i as f64).sin()).collect();
-        assert_eq!(CorrectionParams::default().acted_command(&v_in, dt), None);
+        assert_eq!(
+            CorrectionParams::default().acted_command(&v_in, dt, tau),
+            None
+        );
         let drift = CorrectionParams {
             command_drift_v_per_s: 2e-3,
             ..Default::default()
         };
-        let v = drift.acted_command(&v_in, dt).expect("a drift");
+        let v = drift.acted_command(&v_in, dt, tau).expect("a drift");
+        // The valve acts on sample i at t = i·dt + τ, its null then at r·(i·dt + τ).
         for (i, (a, b)) in v.iter().zip(&v_in).enumerate() {
-            assert!((a - b - 2e-3 * i as f64 * dt).abs() < 1e-15, "{i}");
+            assert!((a - b - 2e-3 * (i as f64 * dt + tau)).abs() < 1e-15, "{i}");
         }
         let both = CorrectionParams {
             command_lag_s: 4e-3,
             ..drift
         };
         let lagged = both.lagged_command(&v_in, dt);
-        let v = both.acted_command(&v_in, dt).expect("a lag and a drift");
+        let v = both
+            .acted_command(&v_in, dt, tau)
+            .expect("a lag and a drift");
         for (i, (a, b)) in v.iter().zip(&lagged).enumerate() {
-            assert!((a - b - 2e-3 * i as f64 * dt).abs() < 1e-15, "{i}");
+            assert!((a - b - 2e-3 * (i as f64 * dt + tau)).abs() < 1e-15, "{i}");
         }
     }
 }

@@ -245,7 +245,11 @@ fn replay_samples(
     let h = step_for_rate(rule.largest_step_s(params), 1.0 / dt);
     // A proposed lag of the valve command filters the command as sent, a proposed drift of
     // the valve's null offsets it.
-    let values = match params.plant.corrections.acted_command(&v_in, dt) {
+    let values = match params
+        .plant
+        .corrections
+        .acted_command(&v_in, dt, params.plant.valve.tau_s)
+    {
         Some(v) => Arc::new(v),
         None => v_in,
     };
