@@ -81,10 +81,7 @@ fn a_slow_stroke_drift_outside_the_library_is_unexplained() {
         .unwrap_or_default();
     assert!(left.contains(&format!("{} u ", worst.file)), "{left}");
     let term = proposed(&r, "command_drift");
-    let (v, sd) = (
-        term.params["command_drift_v_per_s"],
-        term.uncertainties["command_drift_v_per_s"],
-    );
+    let (v, sd) = size(term, "command_drift_v_per_s");
     assert!((v - 2e-3).abs() < 3.0 * sd, "{v} ± {sd}");
     assert!(
         term.description.contains("null drifts"),
@@ -268,10 +265,9 @@ fn a_quadratic_damping_is_proposed_without_the_effects_that_followed_it() {
             .collect::<Vec<_>>(),
     );
     assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
-    let t = proposed(&r, "quadratic_damping");
-    let (c, sc) = (
-        t.params["quadratic_damping_n_s2_per_m2"],
-        t.uncertainties["quadratic_damping_n_s2_per_m2"],
+    let (c, sc) = size(
+        proposed(&r, "quadratic_damping"),
+        "quadratic_damping_n_s2_per_m2",
     );
     assert!(
         (c - truth).abs() < 3.0 * sc && (c / truth - 1.0).abs() < 0.05,
@@ -319,10 +315,7 @@ fn a_lag_of_the_valve_command_is_proposed() {
     );
     assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
     let term = proposed(&r, "command_lag");
-    let (v, sd) = (
-        term.params["command_lag_s"],
-        term.uncertainties["command_lag_s"],
-    );
+    let (v, sd) = size(term, "command_lag_s");
     assert!(
         (v - 4e-3).abs() <= (3.0 * sd).max(0.2 * 4e-3),
         "{v} ± {sd}: {}",
@@ -356,4 +349,9 @@ fn proposed<'a>(
         .iter()
         .find(|t| t.name == name)
         .unwrap_or_else(|| panic!("no `{name}` proposed: {:?}", r.proposed))
+}
+
+/// The value and 1-σ of the proposed term `t`'s parameter `key` (SI).
+fn size(t: &seat_twin::identify::result::ProposedTerm, key: &str) -> (f64, f64) {
+    (t.params[key], t.uncertainties[key])
 }
