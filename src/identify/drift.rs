@@ -132,6 +132,51 @@ fn not_one_record(values: &[f64], stds: &[f64]) -> bool {
         })
 }
 
+/// `knob` fitted on each of `records` alone (in parallel, [`PER_RECORD_JACOBIANS`] Jacobians),
+/// every other parameter held at `params`: its value and 1-σ on each record, in their order.
+/// A record replayed with its own Cd factor ([`give_records_their_cd`]) has Cd times it.
+pub fn per_record(
+    params: &Params,
+    records: &[PreparedRecord],
+    knob: Knob,
+    n_eff_ratio: f64,
+    monitor: &Monitor<'_>,
+) -> Result<(Vec<f64>, Vec<f64>), IdentifyError> {
+    per_record_beside(params, records, &[knob], n_eff_ratio, monitor)
+}
+
+/// [`per_record`] of `knobs[0]`, fitted beside the other `knobs` on each record.
+pub fn per_record_beside(
+    params: &Params,
+    records: &[PreparedRecord],
+    knobs: &[Knob],
+    n_eff_ratio: f64,
+    monitor: &Monitor<'_>,
+) -> Result<(Vec<f64>, Vec<f64>), IdentifyError> {
+    let knob = knobs[0];
+    let fits: Vec<Result<(f64, f64), IdentifyError>> = records
+        .par_iter()
+        .map(|rec| {
+            let ev = Evaluator {
+                records: std::slice::from_ref(rec),
+                monitor,
+                step: StepRule::Resolving,
+            };
+            let f = fit::fit(&ev, params, knobs, PER_RECORD_JACOBIANS, n_eff_ratio)?;
+            let k = if knob == Knob::Cd { rec.cd_factor } else { 1.0 };
+            Ok((k * f.values[0].value, k * f.values[0].std))
+        })
+        .collect();
+    let mut values = Vec::with_capacity(fits.len());
+    let mut stds = Vec::with_capacity(fits.len());
+    for f in fits {
+        let (v, s) = f?;
+        values.push(v);
+        stds.push(s);
+    }
+    Ok((values, stds))
+}
+
 /// Per-record fits of every drift candidate of `params` on `records` (whole records, in the
 /// campaign's order), and the drifts found, with notes for scatters that are not drifts.
 pub fn find(
@@ -145,28 +190,7 @@ pub fn find(
         return Ok((drifts, notes));
     }
     for knob in drift_knobs(params) {
-        let fits: Vec<Result<(f64, f64), IdentifyError>> = records
-            .par_iter()
-            .map(|rec| {
-                let ev = Evaluator {
-                    records: std::slice::from_ref(rec),
-                    monitor,
-                    step: StepRule::Resolving,
-                };
-                let f = fit::fit(&ev, params, &[knob], PER_RECORD_JACOBIANS, n_eff_ratio)?;
-                // A record replayed with its own Cd ([`give_records_their_cd`]) has the fitted
-                // value times its factor.
-                let k = if knob == Knob::Cd { rec.cd_factor } else { 1.0 };
-                Ok((k * f.values[0].value, k * f.values[0].std))
-            })
-            .collect();
-        let mut values = Vec::with_capacity(fits.len());
-        let mut stds = Vec::with_capacity(fits.len());
-        for f in fits {
-            let (v, s) = f?;
-            values.push(v);
-            stds.push(s);
-        }
+        let (values, stds) = per_record(params, records, knob, n_eff_ratio, monitor)?;
         let name = knob.name().to_string();
         let by_file = |x: &[f64]| -> BTreeMap<String, f64> {
             records

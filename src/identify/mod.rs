@@ -49,7 +49,9 @@
 //!    effect the library added that no longer earns its parameters beside the kept terms (it
 //!    followed the effect the library lacks) is left out of the proposed twin. What is kept
 //!    is *proposed*: described in physical words, carried by `calibrated.toml`, never
-//!    counted by the verdict. Then each drift candidate
+//!    counted by the verdict. Where the records, each fitted alone, disagree on a term's size
+//!    beyond their noise, its 1-σ is scaled by √(χ²/dof) and the report says so
+//!    ([`term_form`]). Then each drift candidate
 //!    ([`drift`]) is fitted on every record alone and reported when it changes with the
 //!    record order beyond its uncertainty. A drift of Cd calibrates the campaign again with
 //!    each record at its own Cd ([`replay::PreparedRecord::cd_factor`], taken at the declared
@@ -114,6 +116,7 @@ pub mod search_rate;
 mod sensors;
 pub mod stages;
 pub mod starts;
+pub mod term_form;
 pub mod testdata;
 pub mod units;
 

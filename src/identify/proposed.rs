@@ -20,6 +20,7 @@ use super::fit::{self, FitResult, Knob};
 use super::progress::Stage;
 use super::result::{LeftOut, ProposedScore, ProposedTerm};
 use super::starts::best_of;
+use super::term_form::Agreement;
 use super::{CalibrationOptions, EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
@@ -417,17 +418,29 @@ fn leave_out_followers(
     Ok(left_out)
 }
 
-/// The kept terms of `proposal` as reported, with the values of its final fit `fit`.
-pub fn terms(proposal: &Proposal, fit: &FitResult) -> Vec<ProposedTerm> {
+/// The kept terms of `proposal` as reported, with the values of its final fit `fit` and, for
+/// each, the records' agreement on its size (`agreements`, in the order of the kept terms;
+/// [`super::term_form`]): where they disagree beyond their noise, its 1-σ is scaled and the
+/// description says why.
+pub fn terms(
+    proposal: &Proposal,
+    fit: &FitResult,
+    agreements: &[Option<Agreement>],
+) -> Vec<ProposedTerm> {
     proposal
         .kept
         .iter()
-        .map(|&(c, score, gain, [v0, v1])| {
+        .zip(agreements.iter().chain(std::iter::repeat(&None)))
+        .map(|(&(c, score, gain, [v0, v1]), agreement)| {
+            let scaled = agreement.as_ref().filter(|a| a.scale > 1.0);
             let value = |k: Knob| {
+                let scale = scaled.filter(|_| k == c.knob()).map_or(1.0, |a| a.scale);
                 fit.values
                     .iter()
                     .find(|x| x.knob == k)
-                    .map_or((k.value(&fit.params), f64::NAN), |x| (x.value, x.std))
+                    .map_or((k.value(&fit.params), f64::NAN), |x| {
+                        (x.value, scale * x.std)
+                    })
             };
             let (v, s) = value(c.knob());
             let mut description = c.describe(v, s, &fit.params);
@@ -439,9 +452,29 @@ pub fn terms(proposal: &Proposal, fit: &FitResult) -> Vec<ProposedTerm> {
                     1e6 * sw
                 ));
             }
+            if let Some(a) = scaled {
+                let (lo, hi) = a.range();
+                let unit = super::units::format_value;
+                description.push_str(&format!(
+                    "; fitted on each record alone it ranges from {} to {} (χ²/dof = {:.1} over \
+                     {} records): the records disagree on its size beyond their noise, so its \
+                     form is not quite the rig's effect's, and its uncertainty is scaled by \
+                     √(χ²/dof) = {:.1}",
+                    unit(c.knob().name(), lo),
+                    unit(c.knob().name(), hi),
+                    a.chi2_per_dof,
+                    a.per_record.len(),
+                    a.scale,
+                ));
+            }
             ProposedTerm {
                 name: c.name().into(),
                 description,
+                per_record: agreement
+                    .as_ref()
+                    .map(|a| a.per_record.clone())
+                    .unwrap_or_default(),
+                uncertainty_scale: agreement.as_ref().map_or(1.0, |a| a.scale),
                 params: c
                     .knobs()
                     .iter()

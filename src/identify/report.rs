@@ -80,6 +80,8 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             "uncertainties": t.uncertainties.iter()
                 .map(|(k, v)| (k.clone(), json_number(*v))).collect::<serde_json::Map<_, _>>(),
             "evidence": t.evidence,
+            "per_record": t.per_record,
+            "uncertainty_scale": t.uncertainty_scale,
         })).collect::<Vec<_>>(),
         "proposed_explains": r.raw_error_proposed.as_ref().map(|e| e.at_floor()),
         "proposed_calibrated_parameters": r.proposed_calibrated.iter()

@@ -136,6 +136,12 @@ pub struct ProposedTerm {
     pub uncertainties: BTreeMap<String, f64>,
     /// Why it was kept: ΔBIC, share of the residual removed, held-out error.
     pub evidence: String,
+    /// Its size fitted on each record alone \[SI\], by file name ([`super::term_form`]); empty
+    /// with fewer than three records that determine it.
+    pub per_record: BTreeMap<String, f64>,
+    /// The factor its size's 1-σ was scaled by for the records' disagreement, `√(χ²/dof)`
+    /// where that is above 2 [-] (1: they agree within twice their noise).
+    pub uncertainty_scale: f64,
 }
 
 /// One candidate correction's score in one round.

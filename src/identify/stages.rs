@@ -409,8 +409,22 @@ pub fn report(
             let raw = raw_error_report(all, &sims, options.raw_error_limit);
             let nrmse = raw_pooled(&reps);
             let val = raw_pooled(&replays_of(&fit.params, all, &reps, val_recs)?);
+            // Whether the records agree on each term's size ([`super::term_form`]).
+            let agreements = prop
+                .kept
+                .iter()
+                .map(|&(c, ..)| {
+                    super::term_form::agreement(
+                        &fit.params,
+                        all,
+                        c.knob(),
+                        found.bic.ratio(),
+                        monitor,
+                    )
+                })
+                .collect::<Result<Vec<_>, _>>()?;
             Some(Beyond {
-                terms: super::proposed::terms(prop, &fit),
+                terms: super::proposed::terms(prop, &fit, &agreements),
                 calibrated: declared_values(&fit),
                 candidates: prop.candidates.clone(),
                 left_out: prop.left_out.clone(),

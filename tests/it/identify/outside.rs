@@ -147,6 +147,10 @@ fn three_effects_outside_the_library_are_proposed() {
             .into_iter()
             .find(|k| t.params.contains_key(*k))
             .expect("a sizing parameter");
+            eprintln!(
+                "{}: per record {:?}, scale {}",
+                t.name, t.per_record, t.uncertainty_scale
+            );
             (t.name.as_str(), t.params[k], t.uncertainties[k])
         })
         .collect();
