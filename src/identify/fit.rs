@@ -8,6 +8,7 @@
 //! because the residual samples are correlated (`n_eff` from the lag-1 autocorrelation).
 
 use super::IdentifyError;
+use super::memo::ResidualMemo;
 use super::progress::{Monitor, StopReason};
 use super::replay::{PreparedRecord, StepRule};
 use crate::params::{ParamSpec, Params, spec};
@@ -353,6 +354,10 @@ impl Evaluator<'_> {
         if self.monitor.is_cancelled() {
             return None;
         }
+        let key = ResidualMemo::key(params, self.records, self.step);
+        if let Some(r) = self.monitor.residuals.get(&key) {
+            return Some(r);
+        }
         let parts: Vec<Vec<f64>> = self
             .records
             .par_iter()
@@ -369,7 +374,9 @@ impl Evaluator<'_> {
         if self.monitor.is_cancelled() {
             return None;
         }
-        Some(parts.concat())
+        let r = parts.concat();
+        self.monitor.residuals.put(key, &r);
+        Some(r)
     }
 }
 

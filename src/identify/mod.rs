@@ -101,6 +101,7 @@ mod error;
 mod evaluate;
 pub mod figures;
 pub mod fit;
+pub mod memo;
 pub mod paper;
 mod pass;
 pub mod profile;

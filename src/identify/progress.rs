@@ -6,6 +6,7 @@
 //! the next replay with [`super::IdentifyError::Cancelled`]. The [`Monitor`] holds both for
 //! the stages and the fits. Why a Levenberg–Marquardt fit stopped is a [`StopReason`].
 
+use super::memo::ResidualMemo;
 use super::{EffectId, IdentifyError};
 use std::fmt;
 use std::sync::Mutex;
@@ -142,13 +143,15 @@ struct StageState {
     total: usize,
 }
 
-/// The cancel flag, the observer and the replay count of one running calibration, shared by
-/// its stages and fits.
+/// The cancel flag, the observer, the replay count and the kept replays
+/// ([`ResidualMemo`]) of one running calibration, shared by its stages and fits.
 pub struct Monitor<'a> {
     cancel: &'a AtomicBool,
     observer: &'a dyn CalibrationObserver,
     evaluations: AtomicUsize,
     state: Mutex<StageState>,
+    /// The weighted residuals of the last replays, for the fits' evaluators.
+    pub(super) residuals: ResidualMemo,
 }
 
 impl<'a> Monitor<'a> {
@@ -163,6 +166,7 @@ impl<'a> Monitor<'a> {
                 done: 0,
                 total: 1,
             }),
+            residuals: ResidualMemo::default(),
         }
     }
 

@@ -247,6 +247,8 @@ pub fn search(
     let mut current_val = validation_rms(&current.params, cx.validation)?;
     let mut remaining = CorrectionId::ALL.to_vec();
     let (mut kept, mut candidates, mut notes) = (Vec::new(), Vec::new(), Vec::new());
+    // The raw error of `current` once a term is kept: the leaving-out starts from it.
+    let mut current_raw = None;
     let mut round = 0;
     while !remaining.is_empty() && kept.len() < options.max_proposed && round < 6 {
         round += 1;
@@ -319,13 +321,17 @@ pub fn search(
         // The search runs because the library's twin is above its raw-error floor; once the
         // kept terms bring it there, a further round has nothing left to explain.
         let raw = raw_error_at(cx, campaign, preset, &current.params)?;
-        if raw.at_floor() && !remaining.is_empty() && kept.len() < options.max_proposed {
+        let at_floor = raw.at_floor();
+        if at_floor && !remaining.is_empty() && kept.len() < options.max_proposed {
             notes.push(format!(
                 "proposed round {round}: with `{}` every raw channel of every record is at its \
                  noise floor ({}): no further round",
                 c.name(),
                 raw.summary()
             ));
+        }
+        current_raw = Some(raw);
+        if at_floor {
             break;
         }
     }
@@ -338,7 +344,7 @@ pub fn search(
         preset,
         library,
         (&mut current, &mut knobs, &mut current_val),
-        &mut notes,
+        current_raw,
     )?;
     Ok(Some(Proposal {
         fit: current,
@@ -355,18 +361,19 @@ pub fn search(
 /// proposed terms has a ΔBIC ≥ 0, the held-out weighted RMS without it rises by less than
 /// [`CalibrationOptions::min_validation_gain`], and the raw error's worst band does not
 /// rise (nor leave its floor, where it was there). The library's own twin and verdict keep
-/// it: they judge the library.
+/// it: they judge the library. `current_raw` is the raw error of `current`, where the search
+/// took it already. The report says what is left out ([`LeftOut`]), in its section on the
+/// proposed terms.
 fn leave_out_followers(
     cx: &SearchContext<'_>,
     campaign: &Campaign,
     preset: &Params,
     library: &[EffectId],
     (current, knobs, current_val): (&mut FitResult, &mut Vec<Knob>, &mut f64),
-    notes: &mut Vec<String>,
+    mut current_raw: Option<super::raw_error::RawErrorReport>,
 ) -> Result<Vec<LeftOut>, IdentifyError> {
     let (ev, options) = (cx.ev, cx.options);
     let mut left_out = Vec::new();
-    let mut current_raw = None;
     for &effect in library.iter().rev() {
         ev.monitor
             .enter(Stage::LeftOut { effect }, options.max_iterations + 1);
@@ -383,7 +390,7 @@ fn leave_out_followers(
         let val = validation_rms(&again.params, cx.validation)?;
         let held = val < (1.0 + options.min_validation_gain) * *current_val;
         let raw_ok = if score >= 0.0 && held {
-            let before = match current_raw {
+            let before = match current_raw.take() {
                 Some(w) => w,
                 None => raw_error_at(cx, campaign, preset, &current.params)?,
             };
@@ -397,17 +404,10 @@ fn leave_out_followers(
         } else {
             false
         };
-        if !(score >= 0.0 && held && raw_ok) {
+        // `raw_ok` is false unless the criterion and the held-out records allow it too.
+        if !raw_ok {
             continue;
         }
-        notes.push(format!(
-            "beside the proposed terms the library's `{}` no longer earns its parameters (ΔBIC \
-             {score:+.1} for keeping it; held-out weighted RMS {:.3} → {val:.3} without it, the \
-             raw error's worst band no higher): the library had added it to follow the effect \
-             it lacks, and the proposed twin leaves it out",
-            effect.name(),
-            *current_val,
-        ));
         left_out.push(LeftOut {
             name: effect.name().into(),
             score,

@@ -266,7 +266,7 @@ With {}: {}. The verdict stays `{}`: it judges the library. `calibrated.toml`   
             .map(|l| {
                 format!(
                     "`{}` (ΔBIC {:+.1} for keeping it; held-out weighted RMS {:.3} → {:.3} \
-                     without it)",
+                     without it, the raw error's worst band no higher)",
                     l.name, l.score, l.validation[0], l.validation[1]
                 )
             })

@@ -129,6 +129,10 @@ pub fn orifice(gain: f64, delta: f64, core_sq: f64) -> f64 {
     (gain * delta / s) * s.sqrt()
 }
 
+/// `r²` from which `exp(−r²)` is exactly 0 in `f64` (`exp(−745.2)` is under half the smallest
+/// subnormal, 4.9·10⁻³²⁴).
+const STRIBECK_UNDERFLOW: f64 = 746.0;
+
 /// `tanh x` from one `exp`: `sign(x)·(1 − e)/(1 + e)` with `e = exp(−2|x|)`.
 ///
 /// The friction law's smoothing calls it at every stage of every step, and libm's `tanh` (an
@@ -138,6 +142,11 @@ pub fn orifice(gain: f64, delta: f64, core_sq: f64) -> f64 {
 /// (`tanh_by_exp_matches_tanh` checks it). Odd, and exactly ±1 beyond |x| ≈ 19.
 #[inline(always)]
 pub fn tanh_by_exp(x: f64) -> f64 {
+    // Beyond |x| = 20, e < 4.3·10⁻¹⁸ rounds away in both 1 − e and 1 + e: the result is ±1
+    // bit for bit, without the `exp` (most of a ride's steps, away from the reversals).
+    if x.abs() > 20.0 {
+        return 1.0f64.copysign(x);
+    }
     let e = (-2.0 * x.abs()).exp();
     ((1.0 - e) / (1.0 + e)).copysign(x)
 }
@@ -274,7 +283,14 @@ impl Twin {
             return 0.0;
         }
         let r = du / f.stribeck_velocity_m_s;
-        (f.coulomb_n + f.stribeck_n * (-r * r).exp()) * tanh_by_exp(du / f.smoothing_velocity_m_s)
+        // exp(−r²) is exactly 0 below −745.2 (under the smallest subnormal), and libm reaches
+        // that 0 through its slow underflow path: a few per cent of a calibration's time.
+        let peak = if r * r < STRIBECK_UNDERFLOW {
+            (-r * r).exp()
+        } else {
+            0.0
+        };
+        (f.coulomb_n + f.stribeck_n * peak) * tanh_by_exp(du / f.smoothing_velocity_m_s)
             + f.viscous_n_s_per_m * du
     }
 
@@ -445,6 +461,26 @@ mod tests {
             let (x, y) = orifice_pair(gains, a, b, core);
             assert_eq!(x.to_bits(), orifice(gains.0, a, core).to_bits());
             assert_eq!(y.to_bits(), orifice(gains.1, b, core).to_bits());
+        }
+    }
+
+    /// The two short cuts past the `exp` give what the formulas give, bit for bit: `tanh` past
+    /// |x| = 20 and the Stribeck peak `exp(−r²)` past r² = 746, on a fine grid across both.
+    #[test]
+    fn the_short_cuts_past_exp_change_no_bit() {
+        let formula = |x: f64| {
+            let e = (-2.0 * x.abs()).exp();
+            ((1.0 - e) / (1.0 + e)).copysign(x)
+        };
+        for k in 0..40_000 {
+            let x = 15.0 + 1e-3 * f64::from(k);
+            for x in [x, -x] {
+                assert_eq!(tanh_by_exp(x).to_bits(), formula(x).to_bits(), "x = {x}");
+            }
+            let r2 = 700.0 + 5e-3 * f64::from(k);
+            if r2 >= STRIBECK_UNDERFLOW {
+                assert_eq!((-r2).exp(), 0.0, "r² = {r2}");
+            }
         }
     }
 
