@@ -110,6 +110,21 @@ impl ResidualMemo {
 mod tests {
     use super::*;
 
+    /// The key tells apart parameters one unit in the last place apart, and the step rules.
+    #[test]
+    fn the_key_holds_every_bit_of_the_parameters() {
+        let p = Params::paper();
+        let mut q = p;
+        q.plant.valve.cd = q.plant.valve.cd.next_up();
+        let key = |p: &Params, s| ResidualMemo::key(p, &[], s);
+        assert_eq!(
+            key(&p, StepRule::Resolving),
+            key(&Params::paper(), StepRule::Resolving)
+        );
+        assert_ne!(key(&p, StepRule::Resolving), key(&q, StepRule::Resolving));
+        assert_ne!(key(&p, StepRule::Resolving), key(&p, StepRule::Screening));
+    }
+
     #[test]
     fn the_oldest_go_first_and_a_key_gives_back_its_own() {
         let memo = ResidualMemo::default();
