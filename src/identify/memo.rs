@@ -66,8 +66,10 @@ impl ResidualMemo {
 
     /// The residuals kept under `key`, if any.
     pub fn get(&self, key: &str) -> Option<Vec<f64>> {
-        let kept = self.kept.lock().ok()?;
-        kept.by_key.get(key).map(|r| r.as_ref().clone())
+        // The copy is made after the lock is released: the other threads' replays wait for
+        // the lock only while the map is read.
+        let kept = self.kept.lock().ok()?.by_key.get(key).cloned()?;
+        Some(kept.as_ref().clone())
     }
 
     /// Keeps `residuals` under `key`, dropping the oldest while more than [`KEPT_VALUES`]
