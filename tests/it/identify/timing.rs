@@ -13,7 +13,8 @@
 //! 10 mm/s, viscous 80 N·s/m), `overlap` (40 µm), `compliance` (hoses 0.6 GPa, chambers
 //! 1.2 GPa), `leakage_compliance` (3.5·10⁻¹² m³/(s·Pa) beside hoses at 0.68 GPa), or one
 //! outside the library: `quadratic_damping` (2250 N·s²/m²) or `null_drift` (the valve's null
-//! drifting 2 mV/s); the rig's declared mismatch is the campaign tests' (Cd −5 %, τ +1.5 ms).
+//! drifting 2 mV/s), or `friction_null_drift` (that friction beside that drift); the rig's
+//! declared mismatch is the campaign tests' (Cd −5 %, τ +1.5 ms).
 //! `CAMPAIGN_ACC_NOISE` sets the accelerometers' noise RMS [m/s²] (default the rig's 0.08).
 
 use super::rig::{Rig, RigEffects, Test};
@@ -45,9 +46,15 @@ fn effects(name: &str) -> RigEffects {
         // Outside the library (the survey's middle magnitudes).
         "quadratic_damping" => fx.quadratic_damping = Some(2250.0),
         "null_drift" => fx.null_drift_v_per_s = Some(2e-3),
+        // The library's friction beside an effect outside it: the search beyond the library
+        // then ranks its terms on a twin with a friction.
+        "friction_null_drift" => {
+            fx.friction = Some((40.0, 15.0, 0.01, 80.0));
+            fx.null_drift_v_per_s = Some(2e-3);
+        }
         other => panic!(
             "CAMPAIGN_EFFECT={other}: one of null, friction, overlap, compliance, \
-             leakage_compliance, quadratic_damping, null_drift"
+             leakage_compliance, quadratic_damping, null_drift, friction_null_drift"
         ),
     }
     fx
