@@ -32,11 +32,16 @@ const SINES: [(f64, f64); 8] = [
     (20.0, 0.72),
 ];
 
+/// The timing campaigns' friction: Coulomb 40 N, Stribeck 15 N at 10 mm/s, viscous 80 N·s/m.
+const FRICTION: (f64, f64, f64, f64) = (40.0, 15.0, 0.01, 80.0);
+/// The timing campaigns' drift of the valve's null [V/s].
+const NULL_DRIFT_V_PER_S: f64 = 2e-3;
+
 fn effects(name: &str) -> RigEffects {
     let mut fx = RigEffects::default();
     match name {
         "null" => {}
-        "friction" => fx.friction = Some((40.0, 15.0, 0.01, 80.0)),
+        "friction" => fx.friction = Some(FRICTION),
         "overlap" => fx.overlap = Some(40e-6),
         "compliance" => fx.compliance = Some((0.6e9, 1.2e9)),
         "leakage_compliance" => {
@@ -45,12 +50,11 @@ fn effects(name: &str) -> RigEffects {
         }
         // Outside the library (the survey's middle magnitudes).
         "quadratic_damping" => fx.quadratic_damping = Some(2250.0),
-        "null_drift" => fx.null_drift_v_per_s = Some(2e-3),
-        // The library's friction beside an effect outside it: the search beyond the library
-        // then ranks its terms on a twin with a friction.
+        "null_drift" => fx.null_drift_v_per_s = Some(NULL_DRIFT_V_PER_S),
+        // A library effect beside one outside it (the survey never draws the two together).
         "friction_null_drift" => {
-            fx.friction = Some((40.0, 15.0, 0.01, 80.0));
-            fx.null_drift_v_per_s = Some(2e-3);
+            fx.friction = Some(FRICTION);
+            fx.null_drift_v_per_s = Some(NULL_DRIFT_V_PER_S);
         }
         other => panic!(
             "CAMPAIGN_EFFECT={other}: one of null, friction, overlap, compliance, \
