@@ -251,6 +251,7 @@ pub(super) fn insufficient_report(
         params: *params,
         proposed: Vec::new(),
         proposed_calibrated: Vec::new(),
+        proposed_adds: Vec::new(),
         proposed_candidates: Vec::new(),
         proposed_leaves_out: Vec::new(),
         raw_error_proposed: None,

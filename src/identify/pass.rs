@@ -51,7 +51,13 @@ pub(super) fn library_pass(
         validation: &campaign.validation,
         options,
     };
-    let search = effects::search(&cx, campaign, params, &declared.fit, &declared.knobs)?;
+    let search = effects::search(
+        &cx,
+        campaign,
+        params,
+        (&declared.fit, &declared.knobs),
+        (&[], true),
+    )?;
     if !declared.undetermined.is_empty() {
         // An effect can hide Cd and τ from the declared fit (an overlap as wide as the small
         // tests' spool travel): they count as determined only if the search added an effect

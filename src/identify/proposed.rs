@@ -6,7 +6,10 @@
 //! at least [`CalibrationOptions::min_relative_gain`] of the residual *and* lowers the
 //! weighted error on the held-out records by [`CalibrationOptions::min_validation_gain`].
 //! Rounds repeat up to [`CalibrationOptions::max_proposed`] terms, and stop once the twin with
-//! the kept terms is at its raw-error floor (the search's own condition to run). Then each
+//! the kept terms is at its raw-error floor (the search's own condition to run). Where the
+//! twin with them is still above that floor, the library is searched again beside them
+//! ([`library_beside`]): an effect of the library that the one it lacks had hidden (a friction
+//! under a drifting null) goes into the proposed twin ([`Proposal::beside`]). Then each
 //! effect the library added is switched off and the rest fitted again: one that no longer
 //! earns its parameters beside the proposed terms (the library had added it to follow the
 //! effect it lacks: a supply sag beside a quadratic damping) is left out of the proposed
@@ -16,12 +19,13 @@
 
 use super::context::{SearchContext, raw_error_at, validation_rms};
 use super::data::Campaign;
+use super::effects::{self, Added};
 use super::fit::{self, FitResult, Knob};
 use super::progress::Stage;
 use super::result::{LeftOut, ProposedScore, ProposedTerm};
 use super::starts::best_of;
 use super::term_form::Agreement;
-use super::{CalibrationOptions, EffectId, IdentifyError};
+use super::{CalibrationOptions, CandidateScore, EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -182,6 +186,12 @@ pub struct Proposal {
     pub kept: Vec<(CorrectionId, f64, f64, [f64; 2])>,
     /// Every candidate's score, per round.
     pub candidates: Vec<ProposedScore>,
+    /// Effects of the library found only beside the kept terms ([`library_beside`]), in the
+    /// order added: the proposed twin carries them, the library's twin does not.
+    pub beside: Vec<Added>,
+    /// Every library candidate's score beside the kept terms, per round (empty when that
+    /// search did not run).
+    pub beside_candidates: Vec<CandidateScore>,
     /// The library's effects the proposed twin leaves out ([`leave_out_followers`]).
     pub left_out: Vec<LeftOut>,
     /// Notes (rejected terms).
@@ -338,6 +348,15 @@ pub fn search(
     if kept.is_empty() {
         return Ok(None);
     }
+    let (beside, beside_candidates, beside_notes) = library_beside(
+        cx,
+        campaign,
+        preset,
+        library,
+        (&mut current, &mut knobs, &mut current_val),
+        &mut current_raw,
+    )?;
+    notes.extend(beside_notes);
     let left_out = leave_out_followers(
         cx,
         campaign,
@@ -351,10 +370,67 @@ pub fn search(
         knobs,
         kept,
         candidates,
+        beside,
+        beside_candidates,
         left_out,
         notes,
     }))
 }
+
+/// The library searched again beside the kept terms ([`effects::search`], the library's
+/// effects `library` already on), where the twin with them is still above its raw-error
+/// floor: an effect the library has may not earn its parameters under the residual of the
+/// one it lacks (a friction beside a drifting null screens at ΔBIC +26 under the drift) and
+/// earn them once a proposed term takes that residual. What it adds goes into the proposed
+/// twin only; the library's twin and its verdict are left as they are. Only the criterion's
+/// bars admit an effect here, never the raw error's ([`effects::search`]). Returns the effects
+/// added, every candidate's score and the search's notes; `current_raw` (the raw error of
+/// `current`) is kept where nothing was added.
+fn library_beside(
+    cx: &SearchContext<'_>,
+    campaign: &Campaign,
+    preset: &Params,
+    library: &[EffectId],
+    (current, knobs, current_val): (&mut FitResult, &mut Vec<Knob>, &mut f64),
+    current_raw: &mut Option<super::raw_error::RawErrorReport>,
+) -> Result<BesideFound, IdentifyError> {
+    let raw = match current_raw.take() {
+        Some(r) => r,
+        None => raw_error_at(cx, campaign, preset, &current.params)?,
+    };
+    let mut options = cx.options.clone();
+    options.max_effects = options.max_effects.saturating_sub(library.len());
+    if raw.at_floor() || options.max_effects == 0 {
+        *current_raw = Some(raw);
+        return Ok((Vec::new(), Vec::new(), Vec::new()));
+    }
+    let beside_cx = SearchContext {
+        options: &options,
+        ..*cx
+    };
+    let found = effects::search(
+        &beside_cx,
+        campaign,
+        preset,
+        (current, knobs),
+        (library, false),
+    )?;
+    let notes = found
+        .notes
+        .iter()
+        .map(|n| format!("beside the proposed terms, the library again: {n}"))
+        .collect();
+    if found.added.is_empty() {
+        *current_raw = Some(raw);
+    } else {
+        *current_val = validation_rms(&found.current.params, cx.validation)?;
+        (*current, *knobs) = (found.current, found.knobs);
+    }
+    Ok((found.added, found.candidates, notes))
+}
+
+/// What [`library_beside`] found: the effects added, every candidate's score, notes.
+type BesideFound = (Vec<Added>, Vec<CandidateScore>, Vec<String>);
 
 /// Each effect of `library` (the last added first) switched off in the proposed fit and every
 /// other knob fitted again: it is left out of the proposed twin when keeping it beside the

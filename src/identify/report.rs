@@ -13,6 +13,10 @@ use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::Path;
 
+mod proposed;
+use proposed::proposed_markdown;
+pub use proposed::proposed_twin_effects;
+
 /// Why the report could not be written (the error of every output writer,
 /// [`crate::output::OutputError`]).
 pub type ReportError = OutputError;
@@ -60,13 +64,7 @@ pub fn report_json(r: &CalibrationReport) -> Value {
     json!({
         "verdict": r.verdict.name(),
         "missing": r.missing,
-        "effects": r.effects.iter().map(|e| json!({
-            "name": e.effect.name(),
-            "params": e.params,
-            "uncertainties": e.uncertainties.iter()
-                .map(|(k, v)| (k.clone(), json_number(*v))).collect::<serde_json::Map<_, _>>(),
-            "evidence": e.evidence,
-        })).collect::<Vec<_>>(),
+        "effects": r.effects.iter().map(effect_json).collect::<Vec<_>>(),
         "candidates": first_round,
         "candidate_rounds": r.candidates.iter().map(|c| json!({
             "round": c.round, "name": c.effect.name(), "score": c.score,
@@ -89,6 +87,8 @@ pub fn report_json(r: &CalibrationReport) -> Value {
             .collect::<serde_json::Map<_, _>>(),
         "proposed_candidates": r.proposed_candidates,
         "proposed_leaves_out": r.proposed_leaves_out,
+        "proposed_adds": r.proposed_adds.iter().map(effect_json).collect::<Vec<_>>(),
+        "proposed_twin_effects": r.raw_error_proposed.as_ref().map(|_| proposed_twin_effects(r)),
         "drifts": r.drifts,
         "sensors": r.sensors,
         "calibrated_uncertainties": unc,
@@ -221,73 +221,15 @@ fn raw_error_markdown(s: &mut String, r: &CalibrationReport) {
     let _ = writeln!(s);
 }
 
-/// The terms proposed beyond the library, in words, and what they leave.
-fn proposed_markdown(s: &mut String, r: &CalibrationReport) {
-    let Some(raw) = &r.raw_error_proposed else {
-        return;
-    };
-    let _ = writeln!(
-        s,
-        "## Proposed beyond the library
-
-The library's effects leave a residual above the          noise; a search over corrections outside the library (Cd against spool opening, flow          gain per direction and per metering edge, a spring, quadratic damping, a turbulent          leakage; ranked by ΔBIC, each kept only if it lowers the held-out error) proposes:
-"
-    );
-    for t in &r.proposed {
-        let _ = writeln!(s, "- **{}**: {}. {}.", t.name, t.description, t.evidence);
-    }
-    let declared: Vec<String> = r
-        .proposed_calibrated
-        .iter()
-        .map(|v| format_parameter(&v.name, v.value, v.std))
-        .collect();
-    let _ = writeln!(
-        s,
-        "
-With {}: {}. The verdict stays `{}`: it judges the library. `calibrated.toml`          carries the proposed terms, with the declared parameters re-fitted alongside them          ({}), and `seat-twin replay` applies them.
-",
-        if r.proposed.len() == 1 {
-            "this term"
-        } else {
-            "these terms"
-        },
-        if raw.at_floor() {
-            format!("every raw channel of every record is at its noise floor ({})", raw.summary())
-        } else {
-            format!("the residual is smaller but not at the floor everywhere: {}", raw.summary())
-        },
-        r.verdict.name(),
-        declared.join(", ")
-    );
-    if !r.proposed_leaves_out.is_empty() {
-        let names: Vec<String> = r
-            .proposed_leaves_out
-            .iter()
-            .map(|l| {
-                format!(
-                    "`{}` (ΔBIC {:+.1} for keeping it; held-out weighted RMS {:.3} → {:.3} \
-                     without it, the raw error's worst band no higher)",
-                    l.name, l.score, l.validation[0], l.validation[1]
-                )
-            })
-            .collect();
-        let one = names.len() == 1;
-        let _ = writeln!(
-            s,
-            "Beside the proposed terms the library's {} no longer {}: the library had added \
-             {} to follow the effect it lacks. The twin with the proposed terms \
-             (`calibrated.toml`) leaves {2} out; the effects listed below are the library's \
-             twin, which the verdict judges.
-",
-            names.join(" and "),
-            if one {
-                "earns its parameters"
-            } else {
-                "earn their parameters"
-            },
-            if one { "it" } else { "them" },
-        );
-    }
+/// An added effect in report.json.
+fn effect_json(e: &super::AddedEffect) -> serde_json::Value {
+    json!({
+        "name": e.effect.name(),
+        "params": e.params,
+        "uncertainties": e.uncertainties.iter()
+            .map(|(k, v)| (k.clone(), json_number(*v))).collect::<serde_json::Map<_, _>>(),
+        "evidence": e.evidence,
+    })
 }
 
 /// The Markdown report.

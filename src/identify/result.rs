@@ -209,6 +209,10 @@ pub struct CalibrationReport {
     /// The library's effects the twin with the proposed terms leaves out (empty without
     /// proposed terms): [`Self::effects`] keeps them, as the library's twin does.
     pub proposed_leaves_out: Vec<LeftOut>,
+    /// Effects of the library found only beside the proposed terms (empty without them): the
+    /// twin with the proposed terms carries them; [`Self::effects`], the library's twin, does
+    /// not, as the library alone did not find them.
+    pub proposed_adds: Vec<AddedEffect>,
     /// The raw error measure with the proposed terms (`calibrated.toml`), if any.
     pub raw_error_proposed: Option<RawErrorReport>,
     /// Parameters that change from record to record ([`super::drift`]), empty when none.

@@ -301,12 +301,46 @@ fn declared_values(fit: &FitResult) -> Vec<FittedValue> {
         .collect()
 }
 
+/// The effect `a` as reported, with its values among `values` (the fit's) and `signature`
+/// (its evidence from the diagnostics, empty where there is none).
+fn added_effect(a: &super::effects::Added, values: &[FittedValue], signature: &str) -> AddedEffect {
+    let vals: Vec<_> = values
+        .iter()
+        .filter(|v| a.effect.knobs().contains(&v.knob))
+        .collect();
+    AddedEffect {
+        effect: a.effect,
+        params: vals.iter().map(|v| (v.name.clone(), v.value)).collect(),
+        uncertainties: vals.iter().map(|v| (v.name.clone(), v.std)).collect(),
+        evidence: format!(
+            "ΔBIC = {:.1} when added; removed {:.1} % of the remaining weighted residual sum of \
+             squares on the fit records; validation weighted RMS {:.3} → {:.3} on the held-out \
+             records{signature}{}",
+            a.score,
+            100.0 * a.gain,
+            a.validation[0],
+            a.validation[1],
+            a.raw.map_or(String::new(), |r| format!(
+                "; added on the raw error's terms, under the criterion's bars: the raw error's \
+                 worst band {:.1}× → {:.1}× its floor{}",
+                r.worst[0],
+                r.worst[1],
+                r.without.map_or(String::new(), |w| format!(
+                    ", {w:.1}× with the effect fitted out again from the other parameters: its \
+                     sizes trade off, the effect as a whole is determined"
+                ))
+            ))
+        ),
+    }
+}
+
 /// The proposed fit beyond the library, as the report needs it.
 struct Beyond {
     terms: Vec<super::result::ProposedTerm>,
     calibrated: Vec<FittedValue>,
     candidates: Vec<super::result::ProposedScore>,
     left_out: Vec<super::result::LeftOut>,
+    adds: Vec<AddedEffect>,
     raw: RawErrorReport,
     nrmse: std::collections::BTreeMap<String, f64>,
     val: std::collections::BTreeMap<String, f64>,
@@ -428,6 +462,11 @@ pub fn report(
                 calibrated: declared_values(&fit),
                 candidates: prop.candidates.clone(),
                 left_out: prop.left_out.clone(),
+                adds: prop
+                    .beside
+                    .iter()
+                    .map(|a| added_effect(a, &fit.values, ""))
+                    .collect(),
                 raw,
                 nrmse,
                 val,
@@ -492,15 +531,11 @@ pub fn report(
         );
         left
     });
-    let effects = found.search
+    let effects = found
+        .search
         .added
         .iter()
         .map(|a| {
-            let vals: Vec<_> = current
-                .values
-                .iter()
-                .filter(|v| a.effect.knobs().contains(&v.knob))
-                .collect();
             let feature = |d: &super::result::Diagnostics| {
                 d.correlations
                     .iter()
@@ -522,30 +557,7 @@ pub fn report(
                     diagnostics_before.high_frequency_share, diagnostics_after.high_frequency_share
                 ),
             };
-            AddedEffect {
-                effect: a.effect,
-                params: vals.iter().map(|v| (v.name.clone(), v.value)).collect(),
-                uncertainties: vals.iter().map(|v| (v.name.clone(), v.std)).collect(),
-                evidence: format!(
-                    "ΔBIC = {:.1} when added; removed {:.1} % of the remaining weighted \
-                     residual sum of squares on the fit records; validation weighted RMS \
-                     {:.3} → {:.3} on the held-out records{sig}{}",
-                    a.score,
-                    100.0 * a.gain,
-                    a.validation[0],
-                    a.validation[1],
-                    a.raw.map_or(String::new(), |r| format!(
-                        "; added on the raw error's terms, under the criterion's bars: the \
-                         raw error's worst band {:.1}× → {:.1}× its floor{}",
-                        r.worst[0],
-                        r.worst[1],
-                        r.without.map_or(String::new(), |w| format!(
-                            ", {w:.1}× with the effect fitted out again from the other \
-                             parameters: its sizes trade off, the effect as a whole is determined"
-                        ))
-                    ))
-                ),
-            }
+            added_effect(a, &current.values, &sig)
         })
         .collect();
     let calibrated = declared_values(&current);
@@ -562,6 +574,7 @@ pub fn report(
         proposed_calibrated,
         proposed_candidates,
         proposed_leaves_out,
+        proposed_adds,
         raw_error_proposed,
     ) = match beyond {
         Some(b) => (
@@ -570,10 +583,12 @@ pub fn report(
             b.calibrated,
             b.candidates,
             b.left_out,
+            b.adds,
             Some(b.raw),
         ),
         None => (
             current.params,
+            Vec::new(),
             Vec::new(),
             Vec::new(),
             Vec::new(),
@@ -588,6 +603,7 @@ pub fn report(
         proposed_calibrated,
         proposed_candidates,
         proposed_leaves_out,
+        proposed_adds,
         raw_error_proposed,
         drifts: found.drifts,
         verdict,

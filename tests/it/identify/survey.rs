@@ -1,6 +1,6 @@
-//! Issue 20, items 4 and 7: the loop over 30 randomised rigs of our own — in-library effects
-//! singly and in pairs, effects outside the library, sensor artefacts, a drifting Cd, the
-//! null case — each with its own declared mismatch (Cd ± 6 %, τ ± 2 ms) and noise seed.
+//! Issue 20, items 4 and 7: the loop over 36 randomised rigs of our own — in-library effects
+//! singly and in pairs, effects outside the library, a library effect beside one outside it,
+//! sensor artefacts, a drifting Cd, the null case — each with its own declared mismatch (Cd ± 6 %, τ ± 2 ms) and noise seed.
 //! It prints the verdict/effects confusion table, the share of fitted parameters whose
 //! truth lies within 3σ, and the replayed raw error of each calibrated.toml against the
 //! nominal one, and fails below the issue's bars (see the end of the test). Slow (about two
@@ -21,14 +21,26 @@ enum Class {
     Outside,
     Sensor,
     Drift,
+    Mixed,
 }
 
 impl Class {
-    const ALL: [Class; 6] = [
+    /// The classes of the first 30 rigs, in turn.
+    const DRAWN: [Class; 6] = [
         Class::Null,
         Class::Single,
         Class::Pair,
         Class::Outside,
+        Class::Sensor,
+        Class::Drift,
+    ];
+    /// Every class, as the table lists them.
+    const ALL: [Class; 7] = [
+        Class::Null,
+        Class::Single,
+        Class::Pair,
+        Class::Outside,
+        Class::Mixed,
         Class::Sensor,
         Class::Drift,
     ];
@@ -41,6 +53,7 @@ impl Class {
             Class::Outside => "effect(s) outside the library",
             Class::Sensor => "sensor artefacts only",
             Class::Drift => "Cd drifting record to record",
+            Class::Mixed => "a library effect beside one outside it",
         }
     }
 
@@ -49,7 +62,7 @@ impl Class {
         match self {
             Class::Null | Class::Sensor => Verdict::NoMissingEffect,
             Class::Single | Class::Pair => Verdict::Explained,
-            Class::Outside | Class::Drift => Verdict::Unexplained,
+            Class::Outside | Class::Mixed | Class::Drift => Verdict::Unexplained,
         }
     }
 }
@@ -97,13 +110,14 @@ fn library_effect(e: EffectId, rng: &mut impl Rng, fx: &mut RigEffects) -> Strin
     }
 }
 
-/// The 30 rigs drawn from `seed` (2020: the README's table).
+/// The 30 rigs drawn from `seed` (2020: the README's table), then the six of
+/// [`mixed_cases`].
 pub(super) fn cases(seed: u64) -> Vec<Case> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let lib = EffectId::ALL;
     let mut out = Vec::new();
     for i in 0..30 {
-        let class = Class::ALL[i % 6];
+        let class = Class::DRAWN[i % 6];
         let mut fx = RigEffects::default();
         let mut library = Vec::new();
         let mut label = Vec::new();
@@ -179,6 +193,7 @@ pub(super) fn cases(seed: u64) -> Vec<Case> {
                 fx.cd_drift_per_test = Some(d);
                 label.push(format!("Cd +{:.1} %/record", 100.0 * d));
             }
+            Class::Mixed => unreachable!("drawn by `mixed_cases`"),
         }
         let pressures = library.contains(&EffectId::SupplySag);
         out.push(Case {
@@ -195,7 +210,63 @@ pub(super) fn cases(seed: u64) -> Vec<Case> {
             tau: 0.0175 + rng.random_range(-0.002..0.002),
         });
     }
+    out.extend(mixed_cases(seed));
     out
+}
+
+/// Six rigs with a library effect beside one outside the library, drawn from `seed` on a
+/// generator of their own, so that the first 30 rigs of a draw stay as they were drawn
+/// before these were added (2026-12-03). Right: `unexplained` (the library cannot explain
+/// them), the outside effect proposed as its term, and the twin with the proposed terms
+/// carrying the library effect and no other.
+fn mixed_cases(seed: u64) -> Vec<Case> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x6d69_7865_6400);
+    let pairs = [
+        (EffectId::Friction, "drift"),
+        (EffectId::ValveOverlap, "damping"),
+        (EffectId::Leakage, "direction"),
+        (EffectId::Compliance, "drift"),
+        (EffectId::ValveOffset, "damping"),
+        (EffectId::SupplySag, "opening"),
+    ];
+    pairs
+        .iter()
+        .map(|&(e, outside)| {
+            let mut fx = RigEffects::default();
+            let mut label = vec![library_effect(e, &mut rng, &mut fx)];
+            label.push(match outside {
+                "drift" => {
+                    let d = rng.random_range(1e-3..3e-3);
+                    fx.null_drift_v_per_s = Some(d);
+                    format!("null drift {:.2} mV/s", 1e3 * d)
+                }
+                "damping" => {
+                    let c = rng.random_range(1500.0..3000.0);
+                    fx.quadratic_damping = Some(c);
+                    format!("damping {c:.0} N·s²/m²")
+                }
+                "direction" => {
+                    let a = rng.random_range(0.08..0.2);
+                    fx.cd_spool = Some(a);
+                    format!("Cd per direction ±{:.1} %", 100.0 * a)
+                }
+                _ => {
+                    let a = rng.random_range(0.1..0.2);
+                    fx.cd_opening = Some(a);
+                    format!("Cd rising {:.1} %", 100.0 * a)
+                }
+            });
+            Case {
+                class: Class::Mixed,
+                label: label.join(" + "),
+                fx,
+                library: vec![e],
+                pressures: e == EffectId::SupplySag,
+                cd: 0.1506 * rng.random_range(0.94..1.06),
+                tau: 0.0175 + rng.random_range(-0.002..0.002),
+            }
+        })
+        .collect()
 }
 
 /// Fitted parameters whose truth is known in the library's own form: (name, value, σ, truth).
@@ -292,10 +363,17 @@ pub(super) fn effects_right(c: &Case, r: &CalibrationReport) -> bool {
                 .filter(|(_, _, v)| v.is_some())
                 .all(|(ch, k, _)| r.sensors.iter().any(|s| s.channel == *ch && s.kind == *k))
         }
-        Class::Outside => {
+        Class::Outside | Class::Mixed => {
             // Each of the rig's effects outside the library proposed as the term that
             // describes it (more terms may come with it): Cd per direction as the
-            // direction difference, Cd rising with the opening as the opening term.
+            // direction difference, Cd rising with the opening as the opening term. The twin
+            // with the proposed terms (calibrated.toml) carries the rig's library effects and
+            // no other: none where the rig has none (a valve offset kept beside a direction
+            // term stands in for part of it, and is wrong).
+            let mut twin = identify::report::proposed_twin_effects(r);
+            twin.sort();
+            let mut names: Vec<&str> = truth.iter().map(|e| e.name()).collect();
+            names.sort();
             let expected = [
                 (c.fx.cd_spool.is_some(), "flow_direction"),
                 (c.fx.cd_opening.is_some(), "cd_opening"),
@@ -303,6 +381,7 @@ pub(super) fn effects_right(c: &Case, r: &CalibrationReport) -> bool {
                 (c.fx.null_drift_v_per_s.is_some(), "command_drift"),
             ];
             !r.proposed.is_empty()
+                && twin == names
                 && expected
                     .iter()
                     .filter(|(present, _)| *present)
@@ -313,7 +392,7 @@ pub(super) fn effects_right(c: &Case, r: &CalibrationReport) -> bool {
 }
 
 #[test]
-#[ignore = "slow: 30 calibrations; run with --ignored --nocapture to print the table"]
+#[ignore = "slow: 36 calibrations; run with --ignored --nocapture to print the table"]
 fn randomised_rigs_confusion_table() {
     // `SURVEY_SEED=2021` draws another 30 rigs (magnitudes, mismatches, noise) of the same
     // classes: rigs the development did not see.
@@ -405,7 +484,7 @@ fn randomised_rigs_confusion_table() {
         let verdict_ok = r.verdict == c.class.right_verdict();
         let fx_ok = effects_right(c, &r);
         eprintln!(
-            "case {i:2} {:<30} {:<45} verdict {:<18} {} effects {:?} proposed {:?} (leaving out {:?}) drifts {:?} sensors {:?}; u {:.1}→{:.1} µm, ÿ {:.3}→{:.3} m/s² above noise{stops}; {secs:.1} s",
+            "case {i:2} {:<30} {:<45} verdict {:<18} {} effects {:?} proposed {:?} (leaving out {:?}, adding {:?}) drifts {:?} sensors {:?}; u {:.1}→{:.1} µm, ÿ {:.3}→{:.3} m/s² above noise{stops}; {secs:.1} s",
             c.class.name(),
             c.label,
             r.verdict.name(),
@@ -429,6 +508,10 @@ fn randomised_rigs_confusion_table() {
             r.proposed_leaves_out
                 .iter()
                 .map(|l| l.name.as_str())
+                .collect::<Vec<_>>(),
+            r.proposed_adds
+                .iter()
+                .map(|e| e.effect.name())
                 .collect::<Vec<_>>(),
             r.drifts
                 .iter()
@@ -498,25 +581,34 @@ fn randomised_rigs_confusion_table() {
     // whole survey, the issue's bars: at least 90 % of the fitted parameters within 3σ of
     // the truth, and (what the survey reached on 2026-11-27: 30/30, 72 of 72, 30/30) at most
     // one wrong verdict and one calibrated.toml that does not halve the nominal error.
+    //
+    // The six rigs with a library effect beside one outside it (added 2026-12-03) count for
+    // the parameters' bar but not for the verdicts' and replays' bars, which guard what the
+    // first 30 reached: on the development draw their replay falls short in two of six
+    // (case 30, ÿ above 25 Hz; case 33, compliance and the drift both missed) — a known
+    // failure the README lists, printed in the table above.
     if only.is_none() {
         assert!(
             10 * params_in >= 9 * params_total,
             "truth within 3σ: {params_in}/{params_total}"
         );
+        let drawn: Vec<_> = rows.iter().filter(|r| r.0 != Class::Mixed).collect();
+        let right = drawn.iter().filter(|r| r.2).count();
         assert!(
-            right + 1 >= rows.len(),
+            right + 1 >= drawn.len(),
             "verdict right: {right}/{}",
-            rows.len()
+            drawn.len()
         );
+        let halved = drawn.iter().filter(|r| r.4).count();
         assert!(
-            replay_ok + 1 >= rows.len(),
-            "replay halved: {replay_ok}/{}",
-            rows.len()
+            halved + 1 >= drawn.len(),
+            "replay halved: {halved}/{} (the first 30 rigs)",
+            drawn.len()
         );
     }
     for r in &rows {
         assert!(
-            !(r.0 == Class::Outside && r.1 == Verdict::Explained),
+            !(matches!(r.0, Class::Outside | Class::Mixed) && r.1 == Verdict::Explained),
             "{}: an effect outside the library was called explained",
             r.5
         );

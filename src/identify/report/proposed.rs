@@ -1,0 +1,193 @@
+//! The report's section on the terms proposed beyond the library
+//! ([`crate::identify::proposed`]): the terms in words, the library's effects found beside
+//! them and those the twin with them leaves out.
+
+use super::super::CalibrationReport;
+use super::super::units::format_parameter;
+use std::fmt::Write as _;
+
+/// The library's effects the twin with the proposed terms (`calibrated.toml`) carries: the
+/// library's twin's, but those it leaves out, and those found beside the terms.
+pub fn proposed_twin_effects(r: &CalibrationReport) -> Vec<&'static str> {
+    r.effects
+        .iter()
+        .filter(|e| {
+            !r.proposed_leaves_out
+                .iter()
+                .any(|l| l.name == e.effect.name())
+        })
+        .chain(&r.proposed_adds)
+        .map(|e| e.effect.name())
+        .collect()
+}
+
+/// The terms proposed beyond the library, in words, and what they leave.
+pub(super) fn proposed_markdown(s: &mut String, r: &CalibrationReport) {
+    let Some(raw) = &r.raw_error_proposed else {
+        return;
+    };
+    let _ = writeln!(
+        s,
+        "## Proposed beyond the library\n\n\
+         The library's effects leave a residual above the noise; a search over corrections \
+         outside the library (Cd against spool opening, flow gain per direction and per \
+         metering edge, a spring, quadratic damping, a turbulent leakage, a lag and a drift of \
+         the valve command; ranked by ΔBIC, each kept only if it lowers the held-out error) \
+         proposes:\n"
+    );
+    for t in &r.proposed {
+        let _ = writeln!(s, "- **{}**: {}. {}.", t.name, t.description, t.evidence);
+    }
+    let declared: Vec<String> = r
+        .proposed_calibrated
+        .iter()
+        .map(|v| format_parameter(&v.name, v.value, v.std))
+        .collect();
+    let _ = writeln!(
+        s,
+        "\nWith {}: {}. The verdict stays `{}`: it judges the library. `calibrated.toml` \
+         carries the proposed terms, with the declared parameters re-fitted alongside them \
+         ({}), and `seat-twin replay` applies them.\n",
+        if r.proposed.len() == 1 {
+            "this term"
+        } else {
+            "these terms"
+        },
+        if raw.at_floor() {
+            format!(
+                "every raw channel of every record is at its noise floor ({})",
+                raw.summary()
+            )
+        } else {
+            format!(
+                "the residual is smaller but not at the floor everywhere: {}",
+                raw.summary()
+            )
+        },
+        r.verdict.name(),
+        declared.join(", ")
+    );
+    if !r.proposed_adds.is_empty() {
+        let _ = writeln!(
+            s,
+            "Beside the proposed terms the library was searched again, and found what the \
+             effect it lacks had hidden from it:\n"
+        );
+        for e in &r.proposed_adds {
+            let _ = writeln!(
+                s,
+                "- **{}** ({}): {}.",
+                e.effect.name(),
+                e.params
+                    .iter()
+                    .map(|(k, v)| {
+                        let std = e.uncertainties.get(k).copied().unwrap_or(f64::NAN);
+                        format_parameter(k, *v, std)
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                e.evidence
+            );
+        }
+        let _ = writeln!(
+            s,
+            "\nThe twin with the proposed terms (`calibrated.toml`) carries {}; the library's \
+             twin, which the verdict judges and the effects below list, does not: alone, the \
+             library did not find {}.\n",
+            if r.proposed_adds.len() == 1 {
+                "it"
+            } else {
+                "them"
+            },
+            if r.proposed_adds.len() == 1 {
+                "it"
+            } else {
+                "them"
+            },
+        );
+    }
+    if !r.proposed_leaves_out.is_empty() {
+        let names: Vec<String> = r
+            .proposed_leaves_out
+            .iter()
+            .map(|l| {
+                format!(
+                    "`{}` (ΔBIC {:+.1} for keeping it; held-out weighted RMS {:.3} → {:.3} \
+                     without it, the raw error's worst band no higher)",
+                    l.name, l.score, l.validation[0], l.validation[1]
+                )
+            })
+            .collect();
+        let one = names.len() == 1;
+        let _ = writeln!(
+            s,
+            "Beside the proposed terms the library's {} no longer {}: the library had added \
+             {} to follow the effect it lacks. The twin with the proposed terms \
+             (`calibrated.toml`) leaves {2} out; the effects listed below are the library's \
+             twin, which the verdict judges.
+",
+            names.join(" and "),
+            if one {
+                "earns its parameters"
+            } else {
+                "earn their parameters"
+            },
+            if one { "it" } else { "them" },
+        );
+    }
+    let _ = writeln!(
+        s,
+        "Library effects of the twin with the proposed terms: {}.\n",
+        match proposed_twin_effects(r) {
+            names if names.is_empty() => "none".to_string(),
+            names => names
+                .iter()
+                .map(|n| format!("`{n}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+        }
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::result::{AddedEffect, LeftOut};
+    use crate::identify::{EffectId, data};
+    use crate::params::Params;
+
+    fn added(effect: EffectId) -> AddedEffect {
+        AddedEffect {
+            effect,
+            params: Default::default(),
+            uncertainties: Default::default(),
+            evidence: String::new(),
+        }
+    }
+
+    /// The twin with the proposed terms carries the library's effects but those it leaves
+    /// out, and those found beside the terms (the library's twin does not).
+    #[test]
+    fn the_proposed_twin_leaves_out_the_followers_and_adds_what_was_found_beside() {
+        let empty = data::DataCheck {
+            records: Vec::new(),
+            notes: Vec::new(),
+            missing: Vec::new(),
+        };
+        let mut r = data::insufficient_data(&Params::paper(), empty);
+        r.effects = vec![added(EffectId::ValveOffset), added(EffectId::Leakage)];
+        r.proposed_leaves_out = vec![LeftOut {
+            name: "valve_offset".into(),
+            score: 5.7,
+            validation: [0.545, 0.544],
+        }];
+        assert_eq!(proposed_twin_effects(&r), ["leakage"]);
+        r.proposed_adds = vec![added(EffectId::Friction)];
+        assert_eq!(proposed_twin_effects(&r), ["leakage", "friction"]);
+        r.proposed_leaves_out.clear();
+        assert_eq!(
+            proposed_twin_effects(&r),
+            ["valve_offset", "leakage", "friction"]
+        );
+    }
+}
