@@ -156,10 +156,7 @@ fn three_effects_outside_the_library_are_proposed() {
         .collect();
     eprintln!(
         "three outside: {s}; proposed {proposed:?}; {:?}; candidates {:?}; notes {:?}; with them: {}",
-        r.proposed
-            .iter()
-            .map(|t| &t.description)
-            .collect::<Vec<_>>(),
+        proposed_words(&r),
         r.proposed_candidates,
         r.notes,
         r.raw_error_proposed
@@ -258,15 +255,9 @@ fn a_quadratic_damping_is_proposed_without_the_effects_that_followed_it() {
     let s = summary(&r);
     eprintln!(
         "quadratic damping: {s}; library {:?}; left out {:?}; proposed {:?}",
-        r.effects
-            .iter()
-            .map(|e| e.effect.name())
-            .collect::<Vec<_>>(),
+        effect_names(&r),
         r.proposed_leaves_out,
-        r.proposed
-            .iter()
-            .map(|t| &t.description)
-            .collect::<Vec<_>>(),
+        proposed_words(&r),
     );
     assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
     let (c, sc) = size(
@@ -366,14 +357,8 @@ fn a_friction_under_a_drifting_null_is_found_beside_the_proposed_drift() {
     eprintln!(
         "friction beside a null drift: {s}; library {:?}; proposed {:?}; beside them {:?}; \
          left out {:?}; notes {:?}",
-        r.effects
-            .iter()
-            .map(|e| e.effect.name())
-            .collect::<Vec<_>>(),
-        r.proposed
-            .iter()
-            .map(|t| &t.description)
-            .collect::<Vec<_>>(),
+        effect_names(&r),
+        proposed_words(&r),
         r.proposed_adds,
         r.proposed_leaves_out,
         r.notes

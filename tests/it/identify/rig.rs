@@ -519,6 +519,16 @@ pub(super) fn reported_sensor<'a>(
         })
 }
 
+/// The names of the library effects `r` lists (its library's twin).
+pub(super) fn effect_names(r: &CalibrationReport) -> Vec<&'static str> {
+    r.effects.iter().map(|e| e.effect.name()).collect()
+}
+
+/// The proposed terms of `r` in words.
+pub(super) fn proposed_words(r: &CalibrationReport) -> Vec<&str> {
+    r.proposed.iter().map(|t| t.description.as_str()).collect()
+}
+
 pub(super) fn summary(r: &CalibrationReport) -> String {
     let c: Vec<String> = r
         .candidates

@@ -7,7 +7,7 @@
 //! minutes): run it with
 //! `cargo test --no-default-features --test it identify::survey -- --ignored --nocapture`.
 
-use super::rig::{RigEffects, above_noise, calibrate_paper, campaign_of};
+use super::rig::{RigEffects, above_noise, calibrate_paper, campaign_of, effect_names};
 use rand::{Rng, SeedableRng};
 use seat_twin::identify::{self, CalibrationReport, EffectId, Verdict};
 use seat_twin::preset::Preset;
@@ -489,10 +489,7 @@ fn randomised_rigs_confusion_table() {
             c.label,
             r.verdict.name(),
             if verdict_ok && fx_ok { "ok" } else { "WRONG" },
-            r.effects
-                .iter()
-                .map(|e| e.effect.name())
-                .collect::<Vec<_>>(),
+            effect_names(&r),
             r.proposed
                 .iter()
                 .map(|t| {
