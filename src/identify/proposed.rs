@@ -25,7 +25,7 @@ use super::progress::Stage;
 use super::result::{LeftOut, ProposedScore, ProposedTerm};
 use super::starts::best_of;
 use super::term_form::Agreement;
-use super::{CalibrationOptions, CandidateScore, EffectId, IdentifyError};
+use super::{CalibrationOptions, EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -189,9 +189,6 @@ pub struct Proposal {
     /// Effects of the library found only beside the kept terms ([`library_beside`]), in the
     /// order added: the proposed twin carries them, the library's twin does not.
     pub beside: Vec<Added>,
-    /// Every library candidate's score beside the kept terms, per round (empty when that
-    /// search did not run).
-    pub beside_candidates: Vec<CandidateScore>,
     /// The library's effects the proposed twin leaves out ([`leave_out_followers`]).
     pub left_out: Vec<LeftOut>,
     /// Notes (rejected terms).
@@ -348,7 +345,7 @@ pub fn search(
     if kept.is_empty() {
         return Ok(None);
     }
-    let (beside, beside_candidates, beside_notes) = library_beside(
+    let (beside, beside_notes) = library_beside(
         cx,
         campaign,
         preset,
@@ -371,7 +368,6 @@ pub fn search(
         kept,
         candidates,
         beside,
-        beside_candidates,
         left_out,
         notes,
     }))
@@ -384,8 +380,8 @@ pub fn search(
 /// earn them once a proposed term takes that residual. What it adds goes into the proposed
 /// twin only; the library's twin and its verdict are left as they are. Only the criterion's
 /// bars admit an effect here, never the raw error's ([`effects::search`]). Returns the effects
-/// added, every candidate's score and the search's notes; `current_raw` (the raw error of
-/// `current`) is kept where nothing was added.
+/// added and the search's notes; `current_raw` (the raw error of `current`) is kept where
+/// nothing was added.
 fn library_beside(
     cx: &SearchContext<'_>,
     campaign: &Campaign,
@@ -393,7 +389,7 @@ fn library_beside(
     library: &[EffectId],
     (current, knobs, current_val): (&mut FitResult, &mut Vec<Knob>, &mut f64),
     current_raw: &mut Option<super::raw_error::RawErrorReport>,
-) -> Result<BesideFound, IdentifyError> {
+) -> Result<(Vec<Added>, Vec<String>), IdentifyError> {
     let raw = match current_raw.take() {
         Some(r) => r,
         None => raw_error_at(cx, campaign, preset, &current.params)?,
@@ -402,7 +398,7 @@ fn library_beside(
     options.max_effects = options.max_effects.saturating_sub(library.len());
     if raw.at_floor() || options.max_effects == 0 {
         *current_raw = Some(raw);
-        return Ok((Vec::new(), Vec::new(), Vec::new()));
+        return Ok((Vec::new(), Vec::new()));
     }
     let beside_cx = SearchContext {
         options: &options,
@@ -426,11 +422,8 @@ fn library_beside(
         *current_val = validation_rms(&found.current.params, cx.validation)?;
         (*current, *knobs) = (found.current, found.knobs);
     }
-    Ok((found.added, found.candidates, notes))
+    Ok((found.added, notes))
 }
-
-/// What [`library_beside`] found: the effects added, every candidate's score, notes.
-type BesideFound = (Vec<Added>, Vec<CandidateScore>, Vec<String>);
 
 /// Each effect of `library` (the last added first) switched off in the proposed fit and every
 /// other knob fitted again: it is left out of the proposed twin when keeping it beside the

@@ -68,6 +68,11 @@ pub(super) fn proposed_markdown(s: &mut String, r: &CalibrationReport) {
         declared.join(", ")
     );
     if !r.proposed_adds.is_empty() {
+        let it = if r.proposed_adds.len() == 1 {
+            "it"
+        } else {
+            "them"
+        };
         let _ = writeln!(
             s,
             "Beside the proposed terms the library was searched again, and found what the \
@@ -91,19 +96,9 @@ pub(super) fn proposed_markdown(s: &mut String, r: &CalibrationReport) {
         }
         let _ = writeln!(
             s,
-            "\nThe twin with the proposed terms (`calibrated.toml`) carries {}; the library's \
+            "\nThe twin with the proposed terms (`calibrated.toml`) carries {it}; the library's \
              twin, which the verdict judges and the effects below list, does not: alone, the \
-             library did not find {}.\n",
-            if r.proposed_adds.len() == 1 {
-                "it"
-            } else {
-                "them"
-            },
-            if r.proposed_adds.len() == 1 {
-                "it"
-            } else {
-                "them"
-            },
+             library did not find {it}.\n",
         );
     }
     if !r.proposed_leaves_out.is_empty() {
