@@ -242,25 +242,12 @@ pub struct EffectSearch {
     pub notes: Vec<String>,
 }
 
-/// Why the re-fit `refit` leaves `effect` at no size of its own, if it does: none of its
-/// sizes determined (a 1-σ of at most half its value) and more than 2σ from "off". Compliance
-/// has two sizes, the chambers' modulus and the hoses' (soft hoses beside stiff chambers leave
-/// the first at "off"); friction three, its Coulomb, viscous and Stribeck forces (a rig's
-/// friction may be mostly one of them).
-pub fn unsized_effect(refit: &FitResult, effect: EffectId) -> Option<String> {
-    let size_of = |k: Knob| {
-        let off = {
-            let mut p = refit.params;
-            k.set(&mut p, 0.0);
-            k.value(&p)
-        };
-        refit
-            .values
-            .iter()
-            .find(|v| v.knob == k)
-            .map(|v| (v, v.is_determined() && (v.value - off).abs() > 2.0 * v.std))
-    };
-    let sizes: &[Knob] = match effect {
+/// The knobs that size `effect` (its others shape it): compliance has two, the chambers'
+/// modulus and the hoses' (soft hoses beside stiff chambers leave the first at "off");
+/// friction three, its Coulomb, viscous and Stribeck forces (a rig's friction may be mostly
+/// one of them); every other effect its first.
+pub fn size_knobs(effect: EffectId) -> &'static [Knob] {
+    match effect {
         EffectId::Compliance => &[Knob::Compliance, Knob::HoseCompliance],
         EffectId::Friction => &[
             Knob::FrictionCoulomb,
@@ -268,8 +255,32 @@ pub fn unsized_effect(refit: &FitResult, effect: EffectId) -> Option<String> {
             Knob::FrictionStribeck,
         ],
         e => &e.knobs()[..1],
+    }
+}
+
+/// The value of size knob `k` that means "none" (θ = 0) in `params` \[SI\].
+pub fn size_off(k: Knob, params: &Params) -> f64 {
+    let mut p = *params;
+    k.set(&mut p, 0.0);
+    k.value(&p)
+}
+
+/// Why the re-fit `refit` leaves `effect` at no size of its own, if it does: none of its
+/// sizes ([`size_knobs`]) determined (a 1-σ of at most half its value) and more than 2σ from
+/// "off".
+pub fn unsized_effect(refit: &FitResult, effect: EffectId) -> Option<String> {
+    let size_of = |k: Knob| {
+        let off = size_off(k, &refit.params);
+        refit
+            .values
+            .iter()
+            .find(|v| v.knob == k)
+            .map(|v| (v, v.is_determined() && (v.value - off).abs() > 2.0 * v.std))
     };
-    let sized: Vec<_> = sizes.iter().filter_map(|&k| size_of(k)).collect();
+    let sized: Vec<_> = size_knobs(effect)
+        .iter()
+        .filter_map(|&k| size_of(k))
+        .collect();
     if sized.iter().any(|(_, ok)| *ok) {
         return None;
     }

@@ -22,7 +22,7 @@ use super::data::Campaign;
 use super::effects::{self, Added};
 use super::fit::{self, FitResult, Knob};
 use super::progress::Stage;
-use super::result::{LeftOut, ProposedScore, ProposedTerm};
+use super::result::{LeftOut, ProposedScore, ProposedTerm, SizeByRecord};
 use super::starts::best_of;
 use super::term_form::Agreement;
 use super::{CalibrationOptions, EffectId, IdentifyError};
@@ -425,14 +425,27 @@ fn library_beside(
     Ok((found.added, notes))
 }
 
+/// How much higher the raw error's worst band may come out without an effect for the effect
+/// to be left out [-]: a twentieth of a band's level, below what the RMS of a band over a
+/// window of a few seconds resolves (the 0–0.5 Hz band of a 5 s window has about five
+/// independent samples; the relative 1-σ of an RMS over n of them is 1/√(2n), 30 %).
+pub const LEAVE_OUT_RAW_TOLERANCE: f64 = 0.05;
+
 /// Each effect of `library` (the last added first) switched off in the proposed fit and every
-/// other knob fitted again: it is left out of the proposed twin when keeping it beside the
-/// proposed terms has a ΔBIC ≥ 0, the held-out weighted RMS without it rises by less than
-/// [`CalibrationOptions::min_validation_gain`], and the raw error's worst band does not
-/// rise (nor leave its floor, where it was there). The library's own twin and verdict keep
-/// it: they judge the library. `current_raw` is the raw error of `current`, where the search
-/// took it already. The report says what is left out ([`LeftOut`]), in its section on the
-/// proposed terms.
+/// other knob fitted again. It is left out of the proposed twin
+/// - when keeping it beside the proposed terms has a ΔBIC ≥ 0, the held-out weighted RMS
+///   without it rises by less than [`CalibrationOptions::min_validation_gain`], and the raw
+///   error's worst band rises by at most [`LEAVE_OUT_RAW_TOLERANCE`] (and does not leave its
+///   floor, where it was there); or
+/// - when the records, each fitted alone, do not say it is there
+///   ([`super::term_form::support`]: its size's per-record mean within
+///   [`super::term_form::SUPPORT_SIGMAS`] of none): the joint fit keeps it to take up what
+///   a proposed term's form misses, and the fit without it is the worse for that, which the
+///   report says.
+///
+/// The library's own twin and verdict keep it: they judge the library. `current_raw` is the
+/// raw error of `current`, where the search took it already. The report says what is left
+/// out ([`LeftOut`]), in its section on the proposed terms.
 fn leave_out_followers(
     cx: &SearchContext<'_>,
     campaign: &Campaign,
@@ -442,6 +455,7 @@ fn leave_out_followers(
     mut current_raw: Option<super::raw_error::RawErrorReport>,
 ) -> Result<Vec<LeftOut>, IdentifyError> {
     let (ev, options) = (cx.ev, cx.options);
+    let ratio = |r: &super::raw_error::RawErrorReport| r.worst.as_ref().map_or(0.0, |w| w.ratio);
     let mut left_out = Vec::new();
     for &effect in library.iter().rev() {
         ev.monitor
@@ -457,31 +471,53 @@ fn leave_out_followers(
         ev.monitor.advance();
         let score = cx.bic.value(current.rss, knobs.len()) - cx.bic.value(again.rss, without.len());
         let val = validation_rms(&again.params, cx.validation)?;
-        let held = val < (1.0 + options.min_validation_gain) * *current_val;
-        let raw_ok = if score >= 0.0 && held {
-            let before = match current_raw.take() {
-                Some(w) => w,
-                None => raw_error_at(cx, campaign, preset, &current.params)?,
-            };
-            let after = raw_error_at(cx, campaign, preset, &again.params)?;
-            let ratio =
-                |r: &super::raw_error::RawErrorReport| r.worst.as_ref().map_or(0.0, |w| w.ratio);
-            let ok = (after.at_floor() || !before.at_floor())
-                && ratio(&after) <= ratio(&before).max(options.raw_error_limit);
-            current_raw = Some(if ok { after } else { before });
-            ok
-        } else {
-            false
+        if !val.is_finite() {
+            continue;
+        }
+        let before = match current_raw.take() {
+            Some(w) => w,
+            None => raw_error_at(cx, campaign, preset, &current.params)?,
         };
-        // `raw_ok` is false unless the criterion and the held-out records allow it too.
-        if !raw_ok {
+        let after = raw_error_at(cx, campaign, preset, &again.params)?;
+        let by_criterion = score >= 0.0
+            && val < (1.0 + options.min_validation_gain) * *current_val
+            && (after.at_floor() || !before.at_floor())
+            && ratio(&after)
+                <= (ratio(&before) * (1.0 + LEAVE_OUT_RAW_TOLERANCE)).max(options.raw_error_limit);
+        let by_records = if by_criterion {
+            None
+        } else {
+            super::term_form::support(
+                &current.params,
+                &campaign.all,
+                effect,
+                cx.bic.ratio(),
+                ev.monitor,
+            )?
+            .filter(|s| s.sigmas < super::term_form::SUPPORT_SIGMAS)
+        };
+        if !by_criterion && by_records.is_none() {
+            current_raw = Some(before);
             continue;
         }
         left_out.push(LeftOut {
             name: effect.name().into(),
             score,
             validation: [*current_val, val],
+            raw_worst: [ratio(&before), ratio(&after)],
+            by_records: by_records.map(|s| {
+                let (mean, mean_uncertainty) = s.agreement.mean();
+                SizeByRecord {
+                    parameter: s.knob.name().into(),
+                    none: s.off,
+                    per_record: s.agreement.per_record,
+                    mean,
+                    mean_uncertainty,
+                    chi2_per_dof: s.agreement.chi2_per_dof,
+                }
+            }),
         });
+        current_raw = Some(after);
         (*current, *knobs, *current_val) = (again, without, val);
     }
     Ok(left_out)

@@ -160,7 +160,8 @@ pub struct ProposedScore {
 }
 
 /// An effect the library added that the twin with the proposed terms leaves out: beside them
-/// it no longer earns its parameters (`report.json`'s `proposed_leaves_out` list).
+/// it no longer earns its parameters, or the records, each fitted alone, do not say it is
+/// there (`report.json`'s `proposed_leaves_out` list).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LeftOut {
     /// The effect's name (`supply_sag`, …).
@@ -169,6 +170,27 @@ pub struct LeftOut {
     pub score: f64,
     /// Held-out weighted RMS `[with it, without it]`.
     pub validation: [f64; 2],
+    /// The raw error's worst band, as a multiple of its noise floor, `[with it, without it]`.
+    pub raw_worst: [f64; 2],
+    /// Where the records left it out, though the criterion kept it: their say on its size.
+    pub by_records: Option<SizeByRecord>,
+}
+
+/// A library effect's size fitted on each record alone (`proposed_leaves_out[].by_records`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SizeByRecord {
+    /// The size, by preset-key name (`effects.valve_offset.bias_v`, …).
+    pub parameter: String,
+    /// Its value meaning none \[SI\].
+    pub none: f64,
+    /// Its value fitted on each record alone \[SI\], by file name.
+    pub per_record: BTreeMap<String, f64>,
+    /// Their weighted mean \[SI\].
+    pub mean: f64,
+    /// The mean's 1-σ \[SI\], scaled by √(χ²/dof) where the records disagree.
+    pub mean_uncertainty: f64,
+    /// χ² of the per-record values about their mean, per degree of freedom [-].
+    pub chi2_per_dof: f64,
 }
 
 /// A parameter that changes from record to record (`report.json`'s `drifts` list).

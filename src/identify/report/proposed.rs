@@ -3,6 +3,7 @@
 //! them and those the twin with them leaves out.
 
 use super::super::CalibrationReport;
+use super::super::result::LeftOut;
 use super::super::units::format_parameter;
 use std::fmt::Write as _;
 
@@ -101,35 +102,7 @@ pub(super) fn proposed_markdown(s: &mut String, r: &CalibrationReport) {
              library did not find {it}.\n",
         );
     }
-    if !r.proposed_leaves_out.is_empty() {
-        let names: Vec<String> = r
-            .proposed_leaves_out
-            .iter()
-            .map(|l| {
-                format!(
-                    "`{}` (ΔBIC {:+.1} for keeping it; held-out weighted RMS {:.3} → {:.3} \
-                     without it, the raw error's worst band no higher)",
-                    l.name, l.score, l.validation[0], l.validation[1]
-                )
-            })
-            .collect();
-        let one = names.len() == 1;
-        let _ = writeln!(
-            s,
-            "Beside the proposed terms the library's {} no longer {}: the library had added \
-             {} to follow the effect it lacks. The twin with the proposed terms \
-             (`calibrated.toml`) leaves {2} out; the effects listed below are the library's \
-             twin, which the verdict judges.
-",
-            names.join(" and "),
-            if one {
-                "earns its parameters"
-            } else {
-                "earn their parameters"
-            },
-            if one { "it" } else { "them" },
-        );
-    }
+    left_out_markdown(s, r);
     let _ = writeln!(
         s,
         "Library effects of the twin with the proposed terms: {}.\n",
@@ -142,6 +115,82 @@ pub(super) fn proposed_markdown(s: &mut String, r: &CalibrationReport) {
                 .join(", "),
         }
     );
+}
+
+/// The library's effects the twin with the proposed terms leaves out, by the reason: the
+/// criterion's (they no longer earn their parameters) and the records' (each record fitted
+/// alone does not say the effect is there).
+fn left_out_markdown(s: &mut String, r: &CalibrationReport) {
+    let (by_records, by_criterion): (Vec<&LeftOut>, Vec<&LeftOut>) = r
+        .proposed_leaves_out
+        .iter()
+        .partition(|l| l.by_records.is_some());
+    if !by_criterion.is_empty() {
+        let names: Vec<String> = by_criterion
+            .iter()
+            .map(|l| {
+                format!(
+                    "`{}` (ΔBIC {:+.1} for keeping it; held-out weighted RMS {:.3} → {:.3} and \
+                     the raw error's worst band {:.1}× → {:.1}× its floor without it)",
+                    l.name,
+                    l.score,
+                    l.validation[0],
+                    l.validation[1],
+                    l.raw_worst[0],
+                    l.raw_worst[1]
+                )
+            })
+            .collect();
+        let one = names.len() == 1;
+        let _ = writeln!(
+            s,
+            "Beside the proposed terms the library's {} no longer {}: the library had added \
+             {} to follow the effect it lacks. The twin with the proposed terms \
+             (`calibrated.toml`) leaves {2} out; the effects listed below are the library's \
+             twin, which the verdict judges.\n",
+            names.join(" and "),
+            if one {
+                "earns its parameters"
+            } else {
+                "earn their parameters"
+            },
+            if one { "it" } else { "them" },
+        );
+    }
+    for l in by_records {
+        let Some(b) = &l.by_records else { continue };
+        let unit = super::super::units::format_value;
+        let values: Vec<String> = b
+            .per_record
+            .iter()
+            .map(|(file, v)| format!("{file} {}", unit(&b.parameter, *v)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "The joint fit keeps the library's `{}` beside the proposed terms (ΔBIC {:+.1} for \
+             keeping it), but the records, each fitted alone (beside its own Cd and τ), do not \
+             say it is there: `{}` comes out at {} (χ²/dof = {:.1}), a mean of {} ± {}, \
+             {:.1}σ from none ({}). An effect of the hardware is the same on every record; \
+             this one takes the size each record asks for, to take up what a proposed term's \
+             form misses. The twin with the proposed terms (`calibrated.toml`) leaves it out, \
+             and is the worse for it on these records: held-out weighted RMS {:.3} → {:.3}, \
+             the raw error's worst band {:.1}× → {:.1}× its floor. The effects listed below \
+             are the library's twin, which the verdict judges.\n",
+            l.name,
+            l.score,
+            b.parameter,
+            values.join(", "),
+            b.chi2_per_dof,
+            unit(&b.parameter, b.mean),
+            unit(&b.parameter, b.mean_uncertainty),
+            (b.mean - b.none).abs() / b.mean_uncertainty,
+            unit(&b.parameter, b.none),
+            l.validation[0],
+            l.validation[1],
+            l.raw_worst[0],
+            l.raw_worst[1]
+        );
+    }
 }
 
 #[cfg(test)]
@@ -175,6 +224,8 @@ mod tests {
             name: "valve_offset".into(),
             score: 5.7,
             validation: [0.545, 0.544],
+            raw_worst: [1.45, 1.44],
+            by_records: None,
         }];
         assert_eq!(proposed_twin_effects(&r), ["leakage"]);
         r.proposed_adds = vec![added(EffectId::Friction)];
@@ -184,5 +235,58 @@ mod tests {
             proposed_twin_effects(&r),
             ["valve_offset", "leakage", "friction"]
         );
+    }
+
+    /// An effect left out by the criterion and one left out by the records are told apart in
+    /// words, the second with each record's size, the mean's distance from none and what
+    /// leaving it out costs the fit.
+    #[test]
+    fn effects_left_out_by_the_records_are_said_to_be_so_with_each_records_size() {
+        let empty = data::DataCheck {
+            records: Vec::new(),
+            notes: Vec::new(),
+            missing: Vec::new(),
+        };
+        let mut r = data::insufficient_data(&Params::paper(), empty);
+        let by_criterion = LeftOut {
+            name: "supply_sag".into(),
+            score: 4.4,
+            validation: [0.707, 0.707],
+            raw_worst: [1.47, 1.47],
+            by_records: None,
+        };
+        let by_records = LeftOut {
+            name: "valve_offset".into(),
+            score: -7.2,
+            validation: [0.783, 0.825],
+            raw_worst: [11.6, 12.3],
+            by_records: Some(crate::identify::result::SizeByRecord {
+                parameter: "effects.valve_offset.bias_v".into(),
+                none: 0.0,
+                per_record: [
+                    ("a.csv".to_string(), -1.7e-3),
+                    ("b.csv".to_string(), 3.5e-3),
+                ]
+                .into_iter()
+                .collect(),
+                mean: 2e-4,
+                mean_uncertainty: 1e-3,
+                chi2_per_dof: 14.4,
+            }),
+        };
+        r.proposed_leaves_out = vec![by_criterion, by_records];
+        let mut s = String::new();
+        left_out_markdown(&mut s, &r);
+        assert!(s.contains("library's `supply_sag` (ΔBIC +4.4"), "{s}");
+        assert!(s.contains("no longer earns its parameters"), "{s}");
+        assert!(s.contains("keeps the library's `valve_offset`"), "{s}");
+        assert!(s.contains("do not say it is there"), "{s}");
+        assert!(
+            s.contains("a.csv") && s.contains("b.csv") && s.contains("χ²/dof = 14.4"),
+            "{s}"
+        );
+        assert!(s.contains("0.2σ from none"), "{s}");
+        assert!(s.contains("11.6× → 12.3×"), "{s}");
+        assert!(!s.contains("  "), "{s}");
     }
 }
