@@ -179,7 +179,7 @@ pub struct LeftOut {
 /// A library effect's size fitted on each record alone (`proposed_leaves_out[].by_records`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SizeByRecord {
-    /// The size, by preset-key name (`effects.valve_offset.bias_v`, …).
+    /// The size, by the name `calibrated_parameters` gives it (`bias_v`, `overlap_m`, …).
     pub parameter: String,
     /// Its value meaning none \[SI\].
     pub none: f64,
