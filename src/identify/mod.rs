@@ -105,6 +105,7 @@ mod evaluate;
 pub mod figures;
 pub mod fit;
 pub mod memo;
+pub mod pair;
 pub mod paper;
 mod pass;
 pub mod profile;
@@ -538,6 +539,7 @@ fn calibrate_campaign(
         declared: pass.declared,
         search: pass.search,
         proposal: pass.proposal,
+        proposed_candidates: pass.proposed_candidates,
         drifts: pass.drifts,
         bic: pass.bic,
         notes,

@@ -17,6 +17,8 @@ pub(super) struct LibraryPass {
     pub(super) bic: fit::Bic,
     pub(super) search: effects::EffectSearch,
     pub(super) proposal: Option<proposed::Proposal>,
+    /// The scores of the terms the search beyond the library tried (kept or not).
+    pub(super) proposed_candidates: Vec<result::ProposedScore>,
     /// The parameters the drifts were judged at (the proposal's, else the search's).
     pub(super) final_params: Params,
     pub(super) drifts: Vec<result::Drift>,
@@ -74,10 +76,9 @@ pub(super) fn library_pass(
         ));
     }
     notes.extend(search.notes.iter().cloned());
-    let proposal = beyond_the_library(params, &cx, campaign, &search)?;
-    if let Some(p) = &proposal {
-        notes.extend(p.notes.iter().cloned());
-    }
+    let beyond = beyond_the_library(params, &cx, campaign, &search)?;
+    notes.extend(beyond.notes);
+    let proposal = beyond.proposal;
     monitor.enter(Stage::Drifts, 1);
     let final_params = proposal
         .as_ref()
@@ -116,6 +117,7 @@ pub(super) fn library_pass(
         bic,
         search,
         proposal,
+        proposed_candidates: beyond.candidates,
         final_params,
         drifts,
         notes,
@@ -130,20 +132,20 @@ fn beyond_the_library(
     cx: &context::SearchContext<'_>,
     campaign: &data::Campaign,
     search: &effects::EffectSearch,
-) -> Result<Option<proposed::Proposal>, IdentifyError> {
-    if cx.options.max_proposed == 0 {
-        return Ok(None);
-    }
-    if context::raw_error_at(cx, campaign, params, &search.current.params)?.at_floor() {
-        return Ok(None);
+) -> Result<proposed::Searched, IdentifyError> {
+    if cx.options.max_proposed == 0
+        || context::raw_error_at(cx, campaign, params, &search.current.params)?.at_floor()
+    {
+        return Ok(proposed::Searched::default());
     }
     let library: Vec<_> = search.added.iter().map(|a| a.effect).collect();
+    let partners = super::pair::partners(search);
     proposed::search(
         cx,
         campaign,
         params,
         &search.current,
         &search.knobs,
-        &library,
+        (&library, &partners),
     )
 }

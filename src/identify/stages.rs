@@ -338,7 +338,6 @@ fn added_effect(a: &super::effects::Added, values: &[FittedValue], signature: &s
 struct Beyond {
     terms: Vec<super::result::ProposedTerm>,
     calibrated: Vec<FittedValue>,
-    candidates: Vec<super::result::ProposedScore>,
     left_out: Vec<super::result::LeftOut>,
     adds: Vec<AddedEffect>,
     raw: RawErrorReport,
@@ -361,6 +360,8 @@ pub struct Findings {
     pub search: EffectSearch,
     /// The corrections proposed beyond the library, if any were kept.
     pub proposal: Option<super::proposed::Proposal>,
+    /// The scores of the terms the search beyond the library tried, kept or not.
+    pub proposed_candidates: Vec<super::result::ProposedScore>,
     /// Parameters that change from record to record.
     pub drifts: Vec<super::result::Drift>,
     /// BIC counts of the declared fit.
@@ -460,7 +461,6 @@ pub fn report(
             Some(Beyond {
                 terms: super::proposed::terms(prop, &fit, &agreements),
                 calibrated: declared_values(&fit),
-                candidates: prop.candidates.clone(),
                 left_out: prop.left_out.clone(),
                 adds: prop
                     .beside
@@ -572,7 +572,6 @@ pub fn report(
         out_params,
         proposed,
         proposed_calibrated,
-        proposed_candidates,
         proposed_leaves_out,
         proposed_adds,
         raw_error_proposed,
@@ -581,14 +580,12 @@ pub fn report(
             b.params,
             b.terms,
             b.calibrated,
-            b.candidates,
             b.left_out,
             b.adds,
             Some(b.raw),
         ),
         None => (
             current.params,
-            Vec::new(),
             Vec::new(),
             Vec::new(),
             Vec::new(),
@@ -601,7 +598,7 @@ pub fn report(
         params: out_params,
         proposed,
         proposed_calibrated,
-        proposed_candidates,
+        proposed_candidates: found.proposed_candidates,
         proposed_leaves_out,
         proposed_adds,
         raw_error_proposed,

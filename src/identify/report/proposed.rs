@@ -144,7 +144,9 @@ fn left_out_markdown(s: &mut String, r: &CalibrationReport) {
         let one = names.len() == 1;
         let _ = writeln!(
             s,
-            "Beside the proposed terms the library's {} no longer {}: the library had added \
+            "Beside the proposed terms the library's {} no longer {} (an effect is added \
+             only where the criterion and the held-out records both favour it, and is kept \
+             where the raw error needs it): the library had added \
              {} to follow the effect it lacks. The twin with the proposed terms \
              (`calibrated.toml`) leaves {2} out; the effects listed below are the library's \
              twin, which the verdict judges.\n",

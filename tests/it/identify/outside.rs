@@ -8,6 +8,7 @@ use seat_twin::identify::{self, CalibrationReport, Verdict};
 /// An effect the library cannot imitate (Cd depending on the spool position): the verdict is
 /// `unexplained`, never `explained`; effects that helped keep their evidence, and the report
 /// says what is left — which records and channels, which band, what it correlates with.
+/// Beyond the library the direction difference is proposed, with no library effect beside it.
 #[test]
 fn effect_outside_the_library_is_unexplained() {
     let fx = RigEffects {
@@ -39,6 +40,22 @@ fn effect_outside_the_library_is_unexplained() {
     );
     let md = identify::report::report_markdown(&r, None);
     assert!(md.contains("## What is left"), "{md}");
+    // Beyond the library, the direction difference is proposed, and the twin with it
+    // carries no library effect: the valve offset the library's twin needs (15.7 mV) comes
+    // out at 0.12 mV beside the term, and does not earn its parameter there (ΔBIC +2.4 for
+    // keeping it, the raw error at its floor without it).
+    assert!(
+        r.proposed.iter().any(|t| t.name == "flow_direction"),
+        "{:?}",
+        r.proposed
+    );
+    assert_eq!(
+        identify::report::proposed_twin_effects(&r),
+        Vec::<&str>::new(),
+        "{:?}",
+        r.proposed_leaves_out
+    );
+    assert!(!r.params.plant.effects.valve_offset.enabled);
 }
 
 /// Issue 20: an effect outside the library that makes the stroke drift slowly (the valve's
@@ -335,6 +352,57 @@ fn a_lag_of_the_valve_command_is_proposed() {
     );
 }
 
+/// Issue 20, item 3 (any two effects at once): a soft hose (0.6 GPa beside 0.9 GPa chambers)
+/// under a valve null drifting 1.1 mV/s, each hiding the other. Alone, the library's
+/// compliance raises the held-out error under the drift, and the drift term removes too
+/// little of the residual under the missing compliance (on the survey's case 33, 8 % against
+/// the 10 % a term needs), so neither was found and the mass stood in for the oil column's
+/// stiffness (18.0 kg against 11.7). Fitted together (`identify::pair`) they clear the bars
+/// and each earns its place: the drift is proposed at the rig's rate, the twin with it
+/// carries the compliance at the rig's hose modulus, and its raw error is at its floor. The
+/// library's twin, which the verdict judges, stays `unexplained`.
+#[test]
+fn a_soft_hose_under_a_drifting_null_is_found_with_it() {
+    let (hose, drift) = (0.6e9, 1.1e-3);
+    let fx = RigEffects {
+        compliance: Some((hose, 0.9e9)),
+        null_drift_v_per_s: Some(drift),
+        ..Default::default()
+    };
+    let r = run(fx, 61);
+    let s = summary(&r);
+    eprintln!(
+        "hose under a null drift: {s}; proposed {:?}; beside them {:?}; left out {:?}; notes {:?}",
+        proposed_words(&r),
+        r.proposed_adds,
+        r.proposed_leaves_out,
+        r.notes
+    );
+    drift_proposed_beside(&r, drift, "compliance", &s);
+    let c = &r.params.plant.effects.compliance;
+    assert!(c.enabled, "calibrated.toml; {s}");
+    assert!(
+        (c.hose_bulk_modulus_pa - hose).abs() < 0.1 * hose,
+        "hose {} Pa; {s}",
+        c.hose_bulk_modulus_pa
+    );
+    assert!(
+        (r.params.plant.body.mass_kg - 11.7).abs() < 0.5,
+        "mass {}; {s}",
+        r.params.plant.body.mass_kg
+    );
+    let with = r.raw_error_proposed.as_ref().expect("a proposed twin");
+    assert!(with.at_floor(), "{}", with.summary());
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.contains("fitted together")
+                && n.contains("kept, each hiding the other alone")),
+        "{:?}",
+        r.notes
+    );
+}
+
 /// Issue 20, items 2 and 3: a library effect beside one outside it — a friction (Coulomb
 /// 40 N, Stribeck 15 N, viscous 80 N·s/m) beside the valve's null drifting 2 mV/s. Under the
 /// drift's residual the friction does not earn its parameters (on the ten-record timing
@@ -363,14 +431,7 @@ fn a_friction_under_a_drifting_null_is_found_beside_the_proposed_drift() {
         r.proposed_leaves_out,
         r.notes
     );
-    assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
-    let (v, sd) = size(proposed(&r, "command_drift"), "command_drift_v_per_s");
-    assert!((v - drift).abs() < 3.0 * sd, "{v} ± {sd}; {s}");
-    assert_eq!(
-        identify::report::proposed_twin_effects(&r),
-        ["friction"],
-        "{s}"
-    );
+    drift_proposed_beside(&r, drift, "friction", &s);
     let friction = r
         .effects
         .iter()
@@ -415,4 +476,13 @@ fn proposed<'a>(
 /// The value and 1-σ of the proposed term `t`'s parameter `key` (SI).
 fn size(t: &seat_twin::identify::result::ProposedTerm, key: &str) -> (f64, f64) {
     (t.params[key], t.uncertainties[key])
+}
+
+/// The library's verdict `unexplained`, the null drift proposed within 3σ of the rig's
+/// `drift`, and the twin with it carrying the library's `effect` and no other.
+fn drift_proposed_beside(r: &CalibrationReport, drift: f64, effect: &str, s: &str) {
+    assert_eq!(r.verdict, Verdict::Unexplained, "{s}");
+    let (v, sd) = size(proposed(r, "command_drift"), "command_drift_v_per_s");
+    assert!((v - drift).abs() < 3.0 * sd, "{v} ± {sd}; {s}");
+    assert_eq!(identify::report::proposed_twin_effects(r), [effect], "{s}");
 }
