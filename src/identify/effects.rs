@@ -12,7 +12,7 @@ use super::progress::Stage;
 use super::refine::{self, REFINEMENT_MAX_RAW_RATIO, REFINEMENT_MIN_DBIC};
 use super::replay::{PreparedRecord, StepRule};
 use super::result::CandidateScore;
-use super::starts::multi_start;
+use super::starts::best_screened;
 use super::{EffectId, IdentifyError};
 use crate::params::Params;
 use crate::simulation::step_for_rate;
@@ -97,13 +97,7 @@ pub fn rank_candidates(
             let mut ks = screen_knobs.clone();
             ks.extend_from_slice(e.knobs());
             // From each start, keeping the fit with the smallest residual.
-            let mut best: Option<Screened> = None;
-            for p0 in multi_start(ev, &reference.params, e)? {
-                let f = fit::screen(ev, &p0, &ks, options.screen_iterations)?;
-                if best.as_ref().is_none_or(|b| f.rss < b.rss) {
-                    best = Some(f);
-                }
-            }
+            let best = best_screened(ev, &reference.params, e, &ks, options.screen_iterations)?;
             ev.monitor.advance();
             best.map(|f| (e, f)).ok_or(IdentifyError::Cancelled)
         })
@@ -198,6 +192,20 @@ pub fn try_effect(
         validation_rms,
         pinned,
     })
+}
+
+/// The add rule's two bars for a model part already fitted both ways: the criterion favours
+/// it (`score`, the ΔBIC of keeping it, < 0) and the held-out weighted RMS
+/// `[with, without]` is lower with it by [`CalibrationOptions::min_validation_gain`] (a NaN
+/// does not pass). What a library effect beside the proposed terms
+/// ([`super::leave_out::criterion_leaves_out`]) and each member of a pair
+/// ([`super::pair`]) must show to stay.
+pub fn earns_place(
+    score: f64,
+    [with, without]: [f64; 2],
+    options: &super::CalibrationOptions,
+) -> bool {
+    score < 0.0 && with < (1.0 - options.min_validation_gain) * without
 }
 
 /// An effect the search added.

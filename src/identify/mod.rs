@@ -104,6 +104,7 @@ mod error;
 mod evaluate;
 pub mod figures;
 pub mod fit;
+pub mod leave_out;
 pub mod memo;
 pub mod pair;
 pub mod paper;

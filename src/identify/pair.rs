@@ -18,10 +18,10 @@
 //! the library's twin and its verdict are left as they are.
 
 use super::context::{SearchContext, validation_rms};
-use super::effects::{Added, EffectSearch};
+use super::effects::{self, Added, EffectSearch};
 use super::fit::{self, FitResult, Knob, Screened};
 use super::proposed::CorrectionId;
-use super::starts::multi_start;
+use super::starts::best_screened;
 use super::{CalibrationOptions, EffectId, IdentifyError};
 use crate::params::Params;
 
@@ -73,8 +73,8 @@ fn earns(
     (with, k_with, val_with): (&FitResult, usize, f64),
     (without, k_without, val_without): (&FitResult, usize, f64),
 ) -> bool {
-    cx.bic.value(with.rss, k_with) < cx.bic.value(without.rss, k_without)
-        && val_with < (1.0 - cx.options.min_validation_gain) * val_without
+    let score = cx.bic.value(with.rss, k_with) - cx.bic.value(without.rss, k_without);
+    effects::earns_place(score, [val_with, val_without], cx.options)
 }
 
 /// `term` (its screening fit `screened` on top of `current`, of `knobs`, whose held-out RMS
@@ -100,14 +100,11 @@ pub fn try_pairs(
         }
         let mut ks = screen_knobs.clone();
         ks.extend_from_slice(effect.knobs());
-        let mut start: Option<Screened> = None;
-        for p0 in multi_start(ev, &screened.params, effect)? {
-            let f = fit::screen(ev, &p0, &ks, options.screen_iterations)?;
-            if start.as_ref().is_none_or(|b| f.rss < b.rss) {
-                start = Some(f);
-            }
-        }
-        let Some(start) = start else { continue };
+        let Some(start) =
+            best_screened(ev, &screened.params, effect, &ks, options.screen_iterations)?
+        else {
+            continue;
+        };
         let mut all: Vec<Knob> = knobs.to_vec();
         all.extend_from_slice(term.knobs());
         all.extend_from_slice(effect.knobs());
@@ -121,9 +118,8 @@ pub fn try_pairs(
         let val = validation_rms(&joint.params, cx.validation)?;
         let score = cx.bic.value(joint.rss, all.len()) - cx.bic.value(current.rss, knobs.len());
         let gain = 1.0 - joint.rss / current.rss;
-        let clears = score < 0.0
-            && gain >= options.min_relative_gain
-            && val < (1.0 - options.min_validation_gain) * current_val;
+        let clears = gain >= options.min_relative_gain
+            && effects::earns_place(score, [val, current_val], options);
         // Each member earns its place: the pair fitted again without it.
         let mut members = String::new();
         let mut each = clears;

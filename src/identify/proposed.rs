@@ -22,7 +22,7 @@ use super::data::Campaign;
 use super::effects::{self, Added};
 use super::fit::{self, FitResult, Knob};
 use super::progress::Stage;
-use super::result::{LeftOut, ProposedScore, ProposedTerm, SizeByRecord};
+use super::result::{LeftOut, ProposedScore, ProposedTerm};
 use super::starts::best_of;
 use super::term_form::Agreement;
 use super::{CalibrationOptions, EffectId, IdentifyError};
@@ -187,7 +187,8 @@ pub struct Proposal {
     /// Effects of the library found only beside the kept terms ([`library_beside`]), in the
     /// order added: the proposed twin carries them, the library's twin does not.
     pub beside: Vec<Added>,
-    /// The library's effects the proposed twin leaves out ([`leave_out_followers`]).
+    /// The library's effects the proposed twin leaves out
+    /// ([`super::leave_out::leave_out_followers`]).
     pub left_out: Vec<LeftOut>,
 }
 
@@ -307,70 +308,72 @@ pub fn search(
         // Only before any term is kept: the partners are what the library's last round
         // favoured against the library's own twin, and once a term takes its residual the
         // library is searched again beside it ([`library_beside`]).
+        let mut pair = None;
         if kept.is_empty()
             && score < 0.0
             && gain < options.min_relative_gain
             && !partners.is_empty()
         {
-            let (pair, pair_notes) = super::pair::try_pairs(
+            let (found, pair_notes) = super::pair::try_pairs(
                 cx,
                 (&current, &knobs, current_val),
                 (c, &screened),
                 partners,
             )?;
             notes.extend(pair_notes);
-            if let Some(pair) = pair {
+            pair = found;
+        }
+        // The term kept (its evidence, fit and knobs): with its pair's library effect, or
+        // alone where it clears the bars and the held-out records.
+        let (entry, refit, trial_knobs) = match pair {
+            Some(pair) => {
                 remaining.retain(|r| *r != c);
-                kept.push(pair.term);
                 paired.push(pair.effect);
-                (current, knobs, current_val) = (pair.fit, pair.knobs, pair.term.3[1]);
-                let raw = raw_error_at(cx, campaign, preset, &current.params)?;
-                let at_floor = raw.at_floor();
-                current_raw = Some(raw);
-                if at_floor {
+                (pair.term, pair.fit, pair.knobs)
+            }
+            None => {
+                if !(score < 0.0 && gain >= options.min_relative_gain) {
+                    notes.push(format!(
+                        "proposed round {round}: no term clears the bars (ΔBIC < 0 and {:.0} % \
+                         of the residual); the criterion's best, `{}`, has ΔBIC {score:.1} and \
+                         removes {:.1} %",
+                        100.0 * options.min_relative_gain,
+                        c.name(),
+                        100.0 * gain
+                    ));
                     break;
                 }
-                continue;
+                remaining.retain(|r| *r != c);
+                let mut trial_knobs = knobs.clone();
+                trial_knobs.extend_from_slice(c.knobs());
+                let refit = fit::fit(
+                    ev,
+                    &screened.params,
+                    &trial_knobs,
+                    options.max_iterations,
+                    cx.bic.ratio(),
+                )?;
+                let val = validation_rms(&refit.params, cx.validation)?;
+                ev.monitor.advance();
+                // A NaN held-out error does not improve it either.
+                let improves = val < (1.0 - options.min_validation_gain) * current_val;
+                if !improves {
+                    notes.push(format!(
+                        "proposed round {round}: `{}` improved the fit records (ΔBIC \
+                         {score:.1}, {:.1} % of the residual) but not the held-out ones \
+                         (validation weighted RMS {current_val:.3} → {val:.3}): not proposed",
+                        c.name(),
+                        100.0 * gain
+                    ));
+                    continue;
+                }
+                ((c, score, gain, [current_val, val]), refit, trial_knobs)
             }
-        }
-        if !(score < 0.0 && gain >= options.min_relative_gain) {
-            notes.push(format!(
-                "proposed round {round}: no term clears the bars (ΔBIC < 0 and {:.0} % of the \
-                 residual); the criterion's best, `{}`, has ΔBIC {score:.1} and removes {:.1} %",
-                100.0 * options.min_relative_gain,
-                c.name(),
-                100.0 * gain
-            ));
-            break;
-        }
-        remaining.retain(|r| *r != c);
-        let mut trial_knobs = knobs.clone();
-        trial_knobs.extend_from_slice(c.knobs());
-        let refit = fit::fit(
-            ev,
-            &screened.params,
-            &trial_knobs,
-            options.max_iterations,
-            cx.bic.ratio(),
-        )?;
-        let val = validation_rms(&refit.params, cx.validation)?;
-        ev.monitor.advance();
-        // A NaN held-out error does not improve it either.
-        let improves = val < (1.0 - options.min_validation_gain) * current_val;
-        if !improves {
-            notes.push(format!(
-                "proposed round {round}: `{}` improved the fit records (ΔBIC {score:.1}, {:.1} % \
-                 of the residual) but not the held-out ones (validation weighted RMS \
-                 {current_val:.3} → {val:.3}): not proposed",
-                c.name(),
-                100.0 * gain
-            ));
-            continue;
-        }
-        kept.push((c, score, gain, [current_val, val]));
+        };
+        kept.push(entry);
         knobs = trial_knobs;
         current = refit;
-        current_val = val;
+        current_val = entry.3[1];
         // The search runs because the library's twin is above its raw-error floor; once the
         // kept terms bring it there, a further round has nothing left to explain.
         let raw = raw_error_at(cx, campaign, preset, &current.params)?;
@@ -405,7 +408,7 @@ pub fn search(
     )?;
     notes.extend(beside_notes);
     let beside = paired.into_iter().chain(found_beside).collect();
-    let left_out = leave_out_followers(
+    let left_out = super::leave_out::leave_out_followers(
         cx,
         campaign,
         preset,
@@ -476,128 +479,6 @@ fn library_beside(
         (*current, *knobs) = (found.current, found.knobs);
     }
     Ok((found.added, notes))
-}
-
-/// How much higher the raw error's worst band may come out without an effect for the effect
-/// to be left out [-]: a twentieth of a band's level, below what the RMS of a band over a
-/// window of a few seconds resolves (the 0–0.5 Hz band of a 5 s window has about five
-/// independent samples; the relative 1-σ of an RMS over n of them is 1/√(2n), 30 %).
-pub const LEAVE_OUT_RAW_TOLERANCE: f64 = 0.05;
-
-/// Whether the criterion leaves a library effect out of the proposed twin: when it would not
-/// be added there by the add rule's own two bars ([`super::effects`]: a ΔBIC < 0 for keeping
-/// it, `score`, and a held-out weighted RMS `validation = [with, without]` lower with it by
-/// [`CalibrationOptions::min_validation_gain`]; one bar failing is enough), and the raw error
-/// does not need it: `raw = [with, without]`, each (at its floor, worst band's ratio), does
-/// not leave its floor without it and its worst band rises by at most
-/// [`LEAVE_OUT_RAW_TOLERANCE`] (or stays within [`CalibrationOptions::raw_error_limit`]).
-/// Until 2026-12-04 both bars had to fail, so an effect the held-out records favoured by
-/// 2 % stayed though the criterion said it does not earn its parameter.
-pub fn criterion_leaves_out(
-    score: f64,
-    [with, without]: [f64; 2],
-    [(floor_with, ratio_with), (floor_without, ratio_without)]: [(bool, f64); 2],
-    options: &CalibrationOptions,
-) -> bool {
-    let earns = score < 0.0 && with < (1.0 - options.min_validation_gain) * without;
-    let raw_needs = (floor_with && !floor_without)
-        || ratio_without
-            > (ratio_with * (1.0 + LEAVE_OUT_RAW_TOLERANCE)).max(options.raw_error_limit);
-    !earns && !raw_needs
-}
-
-/// Each effect of `library` (the last added first) switched off in the proposed fit and every
-/// other knob fitted again. It is left out of the proposed twin
-/// - when the criterion leaves it out ([`criterion_leaves_out`]: it would not be added beside
-///   the proposed terms, and the raw error does not need it); or
-/// - when the records, each fitted alone, do not say it is there
-///   ([`super::term_form::support`]: its size's per-record mean within
-///   [`super::term_form::SUPPORT_SIGMAS`] of none): the joint fit keeps it to take up what
-///   a proposed term's form misses, and the fit without it is the worse for that, which the
-///   report says.
-///
-/// The library's own twin and verdict keep it: they judge the library. `current_raw` is the
-/// raw error of `current`, where the search took it already. The report says what is left
-/// out ([`LeftOut`]), in its section on the proposed terms.
-fn leave_out_followers(
-    cx: &SearchContext<'_>,
-    campaign: &Campaign,
-    preset: &Params,
-    library: &[EffectId],
-    (current, knobs, current_val): (&mut FitResult, &mut Vec<Knob>, &mut f64),
-    mut current_raw: Option<super::raw_error::RawErrorReport>,
-) -> Result<Vec<LeftOut>, IdentifyError> {
-    let (ev, options) = (cx.ev, cx.options);
-    let ratio = |r: &super::raw_error::RawErrorReport| r.worst.as_ref().map_or(0.0, |w| w.ratio);
-    let mut left_out = Vec::new();
-    for &effect in library.iter().rev() {
-        ev.monitor
-            .enter(Stage::LeftOut { effect }, options.max_iterations + 1);
-        let without: Vec<Knob> = knobs
-            .iter()
-            .copied()
-            .filter(|k| !effect.knobs().contains(k))
-            .collect();
-        let mut p = current.params;
-        effect.disable(&mut p);
-        let again = fit::fit(ev, &p, &without, options.max_iterations, cx.bic.ratio())?;
-        ev.monitor.advance();
-        let score = cx.bic.value(current.rss, knobs.len()) - cx.bic.value(again.rss, without.len());
-        let val = validation_rms(&again.params, cx.validation)?;
-        if !val.is_finite() {
-            continue;
-        }
-        let before = match current_raw.take() {
-            Some(w) => w,
-            None => raw_error_at(cx, campaign, preset, &current.params)?,
-        };
-        let after = raw_error_at(cx, campaign, preset, &again.params)?;
-        let by_criterion = criterion_leaves_out(
-            score,
-            [*current_val, val],
-            [
-                (before.at_floor(), ratio(&before)),
-                (after.at_floor(), ratio(&after)),
-            ],
-            options,
-        );
-        let by_records = if by_criterion {
-            None
-        } else {
-            super::term_form::support(
-                &current.params,
-                &campaign.all,
-                effect,
-                cx.bic.ratio(),
-                ev.monitor,
-            )?
-            .filter(|s| s.sigmas < super::term_form::SUPPORT_SIGMAS)
-        };
-        if !by_criterion && by_records.is_none() {
-            current_raw = Some(before);
-            continue;
-        }
-        left_out.push(LeftOut {
-            name: effect.name().into(),
-            score,
-            validation: [*current_val, val],
-            raw_worst: [ratio(&before), ratio(&after)],
-            by_records: by_records.map(|s| {
-                let (mean, mean_uncertainty) = s.agreement.mean();
-                SizeByRecord {
-                    parameter: s.knob.name().into(),
-                    none: s.off,
-                    per_record: s.agreement.per_record,
-                    mean,
-                    mean_uncertainty,
-                    chi2_per_dof: s.agreement.chi2_per_dof,
-                }
-            }),
-        });
-        current_raw = Some(after);
-        (*current, *knobs, *current_val) = (again, without, val);
-    }
-    Ok(left_out)
 }
 
 /// The kept terms of `proposal` as reported, with the values of its final fit `fit` and, for
@@ -681,57 +562,6 @@ pub fn terms(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The criterion's leave-out mirrors the add rule: an effect stays only where both bars
-    /// (ΔBIC < 0 for keeping it, held-out RMS 1 % lower with it) favour it, or where the raw
-    /// error needs it. The figures are the integration rigs': a valve offset of 0.12 mV
-    /// beside a flow gain per direction (ΔBIC +2.4 for keeping it, held-out 0.779 with it
-    /// and 0.798 without, the raw error at its floor either way) goes; the same offset with
-    /// the raw error leaving its floor without it, or its worst band rising by a fifth above
-    /// the limit, stays; an offset both bars favour (ΔBIC −9.9, held-out 0.877 → 0.918)
-    /// stays.
-    #[test]
-    fn an_effect_stays_beside_the_proposed_terms_only_where_it_would_be_added() {
-        let o = CalibrationOptions::default();
-        let floor = |r: f64| (r <= o.raw_error_limit, r);
-        assert!(criterion_leaves_out(
-            2.35,
-            [0.779, 0.798],
-            [floor(1.845), floor(2.196)],
-            &o
-        ));
-        assert!(!criterion_leaves_out(
-            2.35,
-            [0.779, 0.798],
-            [floor(1.845), floor(3.2)],
-            &o
-        ));
-        assert!(!criterion_leaves_out(
-            2.35,
-            [0.779, 0.798],
-            [floor(4.0), floor(4.8)],
-            &o
-        ));
-        assert!(criterion_leaves_out(
-            2.35,
-            [0.779, 0.798],
-            [floor(4.0), floor(4.1)],
-            &o
-        ));
-        assert!(!criterion_leaves_out(
-            -9.93,
-            [0.877, 0.918],
-            [floor(30.85), floor(30.87)],
-            &o
-        ));
-        // The criterion favouring it, the held-out records not (0.5 % lower with it): out.
-        assert!(criterion_leaves_out(
-            -9.93,
-            [0.877, 0.881],
-            [floor(30.85), floor(30.87)],
-            &o
-        ));
-    }
 
     /// calibrated.toml carries the proposed terms (`[corrections]`, read back exactly), and
     /// the twin a replay builds from it applies them: at rest pressures and 1 cm of stroke, a

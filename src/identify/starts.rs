@@ -3,7 +3,7 @@
 //! whose residuals are rough along their sizes; and the best of a set of starts on the fit
 //! records ([`best_of`]).
 
-use super::fit::{Evaluator, Knob};
+use super::fit::{self, Evaluator, Knob, Screened};
 use super::{EffectId, IdentifyError};
 use crate::params::Params;
 use rayon::prelude::*;
@@ -244,6 +244,26 @@ pub fn best_of(ev: &Evaluator<'_>, starts: &[Params]) -> Result<Option<Params>, 
     Ok((0..starts.len())
         .min_by(|&a, &b| costs[a].total_cmp(&costs[b]))
         .map(|i| starts[i]))
+}
+
+/// `e`'s starts from `current` ([`multi_start`]), each screened on `knobs`
+/// ([`fit::screen`], `iterations` Jacobians at most); the fit with the smallest residual
+/// (`None` for no starts).
+pub fn best_screened(
+    ev: &Evaluator<'_>,
+    current: &Params,
+    e: EffectId,
+    knobs: &[Knob],
+    iterations: usize,
+) -> Result<Option<Screened>, IdentifyError> {
+    let mut best: Option<Screened> = None;
+    for p0 in multi_start(ev, current, e)? {
+        let f = fit::screen(ev, &p0, knobs, iterations)?;
+        if best.as_ref().is_none_or(|b| f.rss < b.rss) {
+            best = Some(f);
+        }
+    }
+    Ok(best)
 }
 
 #[cfg(test)]
